@@ -1,0 +1,27 @@
+# stereovar: cross-view Monte Carlo variance correlation in path-traced stereo.
+# Wiring only: configuration, validation and target lists live in workflow/rules/common.smk,
+# every number is computed in src/stereovar.
+from snakemake.utils import min_version
+
+min_version("8.20")
+
+
+configfile: "config.yaml"
+
+
+report: "workflow/report/workflow.rst"
+
+
+include: "workflow/rules/common.smk"
+
+
+rule all:
+    input:
+        all_targets(),
+    default_target: True
+    localrule: True
+
+
+include: "workflow/rules/scenes.smk"
+include: "workflow/rules/ground_truth.smk"
+include: "workflow/rules/preview.smk"

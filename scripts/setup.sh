@@ -1,0 +1,134 @@
+#!/usr/bin/env bash
+# Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
+# `pip install -e ".[test]"` (skipped while pyproject.toml is unchanged).
+# Called by `make setup`, `make run` and `make test`; safe to run again.
+#
+# Environment:
+#   PYTHON                      interpreter used to create .venv (default: python3)
+#   DRJIT_LIBLLVM_PATH          use this libLLVM instead of searching
+#   STEREOVAR_LLVM_SEARCH_DIRS  directories to search for libLLVM (os.pathsep-separated)
+#   STEREOVAR_ALLOW_SCALAR=1    continue without libLLVM (slow scalar Mitsuba variant)
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+PYTHON="${PYTHON:-python3}"
+VENV=.venv
+STAMP="$VENV/.stereovar-setup"
+
+say() { echo "stereovar setup: $*"; }
+die() { echo "stereovar setup: error: $*" >&2; exit 1; }
+
+# --- Python ------------------------------------------------------------------
+command -v "$PYTHON" >/dev/null 2>&1 \
+    || die "'$PYTHON' not found; install Python >= 3.10 (Debian/Ubuntu: sudo apt-get install python3 python3-venv) or set PYTHON=/path/to/python3"
+"$PYTHON" -c 'import sys; sys.exit(sys.version_info < (3, 10))' \
+    || die "Python >= 3.10 is needed, '$PYTHON' is $("$PYTHON" -c 'import platform; print(platform.python_version())'); install a newer one or set PYTHON=/path/to/python3.10+"
+
+# --- libLLVM for Dr.Jit's LLVM backend ---------------------------------------
+# Reuses stereovar.backend (importable without any dependency installed).
+find_llvm() {
+    "$PYTHON" - <<'EOF'
+import os, sys
+sys.path.insert(0, "src")
+from stereovar.backend import configure_llvm
+from stereovar.errors import BackendError
+try:
+    path = configure_llvm()
+except BackendError as err:
+    print(f"stereovar setup: error: {err}", file=sys.stderr)
+    sys.exit(2)
+if path is not None and not path.is_file():
+    print(f"stereovar setup: error: DRJIT_LIBLLVM_PATH={path} does not exist; point it at a "
+          "libLLVM >= 16 or unset it", file=sys.stderr)
+    sys.exit(2)
+print(path or "")
+EOF
+}
+
+LLVM_FIX="fix: sudo apt-get install libllvm19 (Debian/Ubuntu), or set DRJIT_LIBLLVM_PATH=/path/to/libLLVM-19.so; or set STEREOVAR_ALLOW_SCALAR=1 to continue with the slow scalar Mitsuba backend"
+
+apt_candidate() {  # prints the candidate version of a package, or nothing
+    apt-cache policy "$1" 2>/dev/null | awk '/Candidate:/ { if ($2 != "(none)") print $2 }'
+}
+
+apt_install_llvm() {  # $@: command prefix (nothing, or sudo -n)
+    local v
+    for v in 19 18 17 16; do
+        if [ -n "$(apt_candidate "libllvm$v")" ]; then
+            say "installing libllvm$v with apt-get"
+            "$@" env DEBIAN_FRONTEND=noninteractive \
+                apt-get install -y -q --no-install-recommends "libllvm$v" >/dev/null
+            return
+        fi
+    done
+    return 1
+}
+
+install_llvm() {  # sets INSTALL_NOTE when it cannot or did not install
+    local prefix=()
+    if ! command -v apt-get >/dev/null 2>&1; then
+        INSTALL_NOTE="no apt-get here to install it automatically"
+        return 1
+    fi
+    if [ "$(id -u)" -ne 0 ]; then
+        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+            prefix=(sudo -n)
+        else
+            INSTALL_NOTE="not installed automatically (not root, no password-less sudo)"
+            return 1
+        fi
+    fi
+    local updated=0
+    if [ -z "$(apt_candidate libllvm19)" ]; then
+        say "apt-get update (libllvm19 not in the package lists)"
+        ${prefix[@]+"${prefix[@]}"} apt-get update -q >/dev/null && updated=1
+    fi
+    apt_install_llvm ${prefix[@]+"${prefix[@]}"} && return 0
+    if [ "$updated" -eq 0 ]; then
+        say "install failed; apt-get update and retry"
+        ${prefix[@]+"${prefix[@]}"} apt-get update -q >/dev/null \
+            && apt_install_llvm ${prefix[@]+"${prefix[@]}"} && return 0
+    fi
+    INSTALL_NOTE="apt-get could not install libllvm19/18/17/16"
+    return 1
+}
+
+INSTALL_NOTE=""
+llvm_status=0
+LLVM_PATH="$(find_llvm)" || llvm_status=$?
+[ "$llvm_status" -eq 2 ] && exit 1
+[ "$llvm_status" -eq 0 ] || die "could not run the libLLVM search with '$PYTHON'"
+
+if [ -z "$LLVM_PATH" ]; then
+    if [ "${STEREOVAR_ALLOW_SCALAR:-0}" = 1 ]; then
+        say "warning: no libLLVM >= 16; continuing with the slow scalar Mitsuba backend (STEREOVAR_ALLOW_SCALAR=1)"
+    elif install_llvm; then
+        LLVM_PATH="$(find_llvm)" || exit 1
+        [ -n "$LLVM_PATH" ] || die "installed libLLVM with apt-get but found no libLLVM >= 16 in the search path (STEREOVAR_LLVM_SEARCH_DIRS=${STEREOVAR_LLVM_SEARCH_DIRS-unset}); $LLVM_FIX"
+    else
+        die "no libLLVM >= 16 found (Dr.Jit's LLVM backend needs it; libLLVM 15 crashes Mitsuba), $INSTALL_NOTE; $LLVM_FIX"
+    fi
+fi
+[ -z "$LLVM_PATH" ] || say "libLLVM: $LLVM_PATH"
+
+# --- virtual environment -----------------------------------------------------
+if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c '' 2>/dev/null; then
+    "$PYTHON" -c 'import venv, ensurepip' 2>/dev/null \
+        || die "'$PYTHON' lacks the venv module (with ensurepip); install it with: sudo apt-get install python3-venv"
+    say "creating $VENV with $("$PYTHON" -c 'import sys; print(sys.executable)')"
+    "$PYTHON" -m venv --clear "$VENV" || die "'$PYTHON -m venv $VENV' failed; on Debian/Ubuntu: sudo apt-get install python3-venv"
+fi
+
+want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("pyproject.toml", "rb").read()).hexdigest(), os.getcwd())')"
+if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
+    say "dependencies up to date (pyproject.toml unchanged)"
+else
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test]\")"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test]" \
+        || die "pip install -e \".[test]\" failed (see the pip output above)"
+    echo "$want" >"$STAMP"
+fi
+
+variant="$("$VENV/bin/python" -c 'import stereovar.backend as b; print(b.select_variant())')" \
+    || die "Mitsuba could not start in $VENV (see the error above)"
+say "ready; Mitsuba variant: $variant"

@@ -1,0 +1,324 @@
+"""Validate the workflow config and report problems in one line.
+
+The JSON Schema ``workflow/schemas/config.schema.yaml`` defines the keys, types and
+defaults. :func:`validate_config` checks a config against it, adds the checks that span
+several keys, and raises :class:`~stereovar.errors.ConfigError` whose message names the
+full dotted key, the value given and what is allowed, e.g.::
+
+    config key 'rig.convention': 'left' is not allowed; use one of: paper, conventional
+
+In a Snakefile, :func:`validate_config_or_exit` prints that line and stops Snakemake
+without a Python traceback.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import jsonschema
+import yaml
+
+from stereovar.errors import ConfigError
+
+__all__ = ["load_config", "merge_configs", "validate_config", "validate_config_or_exit"]
+
+_TYPE_NAMES = {
+    "integer": "an integer",
+    "number": "a number",
+    "string": "a string",
+    "array": "a list",
+    "object": "a mapping of keys to values",
+    "boolean": "true or false",
+    "null": "null",
+}
+
+
+def _plain(value):
+    """Deep copy with mappings as dict and sequences as list (what JSON Schema expects)."""
+    if isinstance(value, Mapping):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(item) for item in value]
+    return copy.deepcopy(value)
+
+
+def _load_yaml(path, what: str):
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{what} '{path}' does not exist") from None
+    except OSError as err:
+        raise ConfigError(f"{what} '{path}' cannot be read: {err.strerror}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(err, "problem", None) or "syntax error"
+        raise ConfigError(f"{what} '{path}' is not valid YAML{where}: {problem}") from None
+
+
+def _load_schema(schema_path) -> dict:
+    schema_path = os.fspath(schema_path)
+    if schema_path.startswith("file://"):
+        schema_path = schema_path[len("file://") :]
+    schema = _load_yaml(schema_path, "config schema")
+    if not isinstance(schema, dict):
+        raise ConfigError(f"config schema '{schema_path}' is not a mapping")
+    return schema
+
+
+def _fill_defaults(instance: dict, schema: Mapping) -> None:
+    """Insert schema defaults for missing keys, recursively, in place."""
+    for key, subschema in schema.get("properties", {}).items():
+        if key not in instance and "default" in subschema:
+            instance[key] = copy.deepcopy(subschema["default"])
+        if isinstance(instance.get(key), dict) and "properties" in subschema:
+            _fill_defaults(instance[key], subschema)
+
+
+def _key(path) -> str:
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def _show(value) -> str:
+    if value is None:
+        text = "null"
+    elif isinstance(value, bool):
+        text = "true" if value else "false"
+    else:
+        text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _type_name(value) -> str:
+    for name, python_type in (
+        ("a boolean", bool),
+        ("an integer", int),
+        ("a number", float),
+        ("a string", str),
+        ("a list", list),
+        ("a mapping", dict),
+    ):
+        if isinstance(value, python_type):
+            return name
+    return "null" if value is None else type(value).__name__
+
+
+def _message(error: jsonschema.ValidationError) -> str:
+    """One line for one schema violation."""
+    path = list(error.absolute_path)
+    key = _key(path)
+    schema = error.schema if isinstance(error.schema, dict) else {}
+    value = error.instance
+    hint = schema.get("description", "")
+    validator = error.validator
+    if validator == "additionalProperties":
+        allowed = list(schema.get("properties", {}))
+        unknown = sorted(k for k in value if k not in allowed)
+        where = f"under '{key}'" if key else "at the top level"
+        return (
+            f"config key '{_key([*path, unknown[0]])}' is not known; allowed keys {where}: "
+            f"{', '.join(allowed)}"
+        )
+    prefix = f"config key '{key}'" if key else "config"
+    if validator == "type":
+        expected = error.validator_value
+        expected = expected if isinstance(expected, list) else [expected]
+        names = " or ".join(_TYPE_NAMES.get(t, t) for t in expected)
+        return f"{prefix}: expected {names}, got {_show(value)} ({_type_name(value)})"
+    if validator == "enum":
+        allowed = ", ".join(str(v) for v in error.validator_value)
+        return f"{prefix}: {_show(value)} is not allowed; use one of: {allowed}"
+    if validator in ("minimum", "exclusiveMinimum"):
+        relation = ">=" if validator == "minimum" else ">"
+        detail = f" ({hint})" if hint else ""
+        return f"{prefix}: {_show(value)} is too small; use a value {relation} " + (
+            f"{error.validator_value}{detail}"
+        )
+    if validator == "minItems":
+        count = error.validator_value
+        return (
+            f"{prefix}: give at least {count} item{'s' if count != 1 else ''}, got {_show(value)}"
+        )
+    if validator == "uniqueItems":
+        seen, repeated = [], []
+        for item in value:
+            (repeated if item in seen and item not in repeated else seen).append(item)
+        return f"{prefix}: {', '.join(map(_show, repeated))} listed more than once; list each once"
+    if validator == "pattern":
+        detail = hint or f"match the pattern {error.validator_value}"
+        return f"{prefix}: {_show(value)} is not allowed; use {detail}"
+    if hint:
+        return f"{prefix}: {_show(value)} is not allowed; expected {hint}"
+    return f"{prefix}: {error.message}"
+
+
+def _check_schema(config: dict, schema: dict) -> None:
+    base = jsonschema.validators.validator_for(schema)
+    # JSON Schema counts 64.0 as an integer; a sample count or a size must be a true integer.
+    strict_int = base.TYPE_CHECKER.redefine(
+        "integer", lambda _checker, v: isinstance(v, int) and not isinstance(v, bool)
+    )
+    validator_class = jsonschema.validators.extend(base, type_checker=strict_int)
+    errors = list(validator_class(schema).iter_errors(config))
+    if not errors:
+        return
+    errors.sort(key=lambda e: (len(e.absolute_path), [str(p) for p in e.absolute_path]))
+    extra = len(errors) - 1
+    more = f" (and {extra} more problem{'s' if extra > 1 else ''})" if extra else ""
+    raise ConfigError(_message(errors[0]) + more)
+
+
+def _check_cross_fields(config: dict) -> None:
+    render = config.get("render", {})
+    sweep = render.get("spp_sweep", {})
+    spp, sweep_spp = render.get("spp"), sweep.get("spp")
+    if spp is not None and sweep_spp is not None and spp not in sweep_spp:
+        listed = ", ".join(str(s) for s in sweep_spp)
+        raise ConfigError(
+            f"config key 'render.spp_sweep.spp': [{listed}] does not include render.spp = "
+            f"{spp}; add {spp} to render.spp_sweep.spp or set render.spp to one of: {listed}"
+        )
+    scenes, scene = config.get("scenes"), sweep.get("scene")
+    if scenes is not None and scene is not None and scene not in scenes:
+        raise ConfigError(
+            f"config key 'render.spp_sweep.scene': {scene!r} is not in scenes; use one of: "
+            f"{', '.join(scenes)} (or add it to scenes)"
+        )
+
+
+def validate_config(config: Mapping, schema_path) -> dict:
+    """Check a workflow config and return it with every default filled in.
+
+    Parameters
+    ----------
+    config : Mapping
+        The config as loaded from YAML (Snakemake's ``config``); it is not modified.
+    schema_path : str or os.PathLike
+        The JSON Schema (YAML), ``workflow/schemas/config.schema.yaml``.
+
+    Returns
+    -------
+    dict
+        A deep copy of ``config`` with the schema's defaults inserted for missing keys.
+
+    Raises
+    ------
+    ConfigError
+        With a one-line message naming the dotted key and what is allowed, when a key is
+        unknown, a value has the wrong type or is out of range, ``render.spp_sweep.spp``
+        lacks ``render.spp``, or ``render.spp_sweep.scene`` is not in ``scenes``.
+    """
+    schema = _load_schema(schema_path)
+    if config is None:
+        config = {}
+    if not isinstance(config, Mapping):
+        raise ConfigError(
+            f"config: expected a mapping of keys to values, got {_show(config)} "
+            f"({_type_name(config)})"
+        )
+    filled = _plain(config)
+    _fill_defaults(filled, schema)
+    _check_schema(filled, schema)
+    _check_cross_fields(filled)
+    return filled
+
+
+def validate_config_or_exit(config: Mapping, schema_path) -> dict:
+    """:func:`validate_config` for Snakefiles: on error print one line and exit.
+
+    Raising :class:`ConfigError` inside a Snakefile makes Snakemake print the error type,
+    the file and line and a traceback of workflow frames. ``SystemExit`` with a message
+    makes it print only the message (to stderr) and exit with status 1.
+
+    Parameters
+    ----------
+    config : Mapping
+        Snakemake's ``config``.
+    schema_path : str or os.PathLike
+        The JSON Schema (YAML), e.g. ``workflow.source_path("../schemas/config.schema.yaml")``.
+
+    Returns
+    -------
+    dict
+        See :func:`validate_config`.
+
+    Raises
+    ------
+    SystemExit
+        With the message ``stereovar: <one-line ConfigError message>``.
+    """
+    try:
+        return validate_config(config, schema_path)
+    except ConfigError as err:
+        raise SystemExit(f"stereovar: {err}") from None
+
+
+def merge_configs(base: Mapping, override: Mapping) -> dict:
+    """Merge two configs the way Snakemake merges ``--configfile`` files.
+
+    Parameters
+    ----------
+    base, override : Mapping
+        ``override`` wins; nested mappings are merged key by key, everything else
+        (lists included) is replaced.
+
+    Returns
+    -------
+    dict
+        A new config; the inputs are not modified.
+    """
+    merged = _plain(base)
+    for key, value in override.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), dict):
+            merged[key] = merge_configs(merged[key], value)
+        else:
+            merged[key] = _plain(value)
+    return merged
+
+
+def load_config(path, schema_path) -> dict:
+    """Load, merge and validate config files, for notebooks and tests.
+
+    Parameters
+    ----------
+    path : str, os.PathLike or sequence of them
+        A YAML config file, or several merged in order (later files win, as with
+        ``snakemake --configfile``), e.g. ``["config.yaml", "workflow/presets/paper.yaml"]``.
+    schema_path : str or os.PathLike
+        The JSON Schema (YAML).
+
+    Returns
+    -------
+    dict
+        The validated config with defaults filled in.
+
+    Raises
+    ------
+    ConfigError
+        If a file is missing, is not valid YAML, is not a mapping, or the merged config is
+        invalid (see :func:`validate_config`).
+    """
+    paths = [path] if isinstance(path, str | os.PathLike) else list(path)
+    if not paths:
+        raise ConfigError("load_config: give at least one config file")
+    merged: dict = {}
+    for one in paths:
+        loaded = _load_yaml(one, "config file")
+        if loaded is None:
+            loaded = {}
+        if not isinstance(loaded, Mapping):
+            raise ConfigError(
+                f"config file '{one}' must hold a mapping of keys to values, "
+                f"got {_type_name(loaded)}"
+            )
+        merged = merge_configs(merged, loaded)
+    return validate_config(merged, schema_path)

@@ -1,0 +1,21 @@
+"""Exception types whose message is a single line naming the problem and the fix."""
+
+
+class StereovarError(Exception):
+    """Base class for every error the tool reports to a user.
+
+    The message is one line: what is wrong, where, and how to fix it. Command-line entry
+    points and Snakemake scripts print it without a traceback.
+    """
+
+
+class ConfigError(StereovarError):
+    """A config key, type or value is invalid."""
+
+
+class SceneError(StereovarError):
+    """A scene spec or a referenced scene file is missing or invalid."""
+
+
+class BackendError(StereovarError):
+    """No usable Mitsuba variant, or a forced variant is unavailable."""

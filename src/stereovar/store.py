@@ -1,0 +1,74 @@
+"""Atomic writes of results: a finished path is either absent or complete.
+
+Every artefact is written to a hidden temporary sibling first and renamed into place, so a
+job killed mid-write leaves nothing that looks complete, and an existing result is replaced
+only by a complete new one.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import uuid
+from collections.abc import Callable
+from contextlib import contextmanager
+from pathlib import Path
+
+import xarray as xr
+
+ZARR_FORMAT = 2
+"""Zarr format of stored datasets (v2 stores with consolidated metadata, readable by
+zarr-python 2 and 3 alike)."""
+
+
+def _temporary_sibling(path: Path) -> Path:
+    return path.with_name(f".{path.name}.tmp-{os.getpid()}-{uuid.uuid4().hex[:8]}")
+
+
+def _replace(tmp: Path, path: Path) -> None:
+    """Move ``tmp`` onto ``path``; a directory already at ``path`` is removed only afterwards."""
+    if path.is_dir() and not path.is_symlink():
+        old = _temporary_sibling(path)
+        os.rename(path, old)
+        os.rename(tmp, path)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(tmp, path)
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path to write to; rename it onto ``path`` if the block succeeds.
+
+    On an exception the temporary file or directory is removed and ``path`` is untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _temporary_sibling(path)
+    try:
+        yield tmp
+        _replace(tmp, path)
+    finally:
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        elif tmp.exists():
+            tmp.unlink()
+
+
+def write_dataset(ds: xr.Dataset | xr.DataArray, path) -> Path:
+    """Write an xarray object to a Zarr store at ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        ds.to_zarr(tmp, mode="w", zarr_format=ZARR_FORMAT, consolidated=True)
+    return Path(path)
+
+
+def open_dataset(path) -> xr.Dataset:
+    """Open a stored Zarr dataset lazily (``xarray.open_zarr``)."""
+    return xr.open_zarr(path, consolidated=True, zarr_format=ZARR_FORMAT)
+
+
+def write_file(path, writer: Callable[[Path], None]) -> Path:
+    """Write a file atomically: ``writer(tmp_path)`` writes, then the file is renamed."""
+    with atomic_path(path) as tmp:
+        writer(tmp)
+    return Path(path)

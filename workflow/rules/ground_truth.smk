@@ -1,0 +1,42 @@
+# Ground truth per scene: one ray per pixel centre of each view (paper Sec. 3.1).
+
+
+rule ground_truth:
+    input:
+        unpack(scene_inputs),
+    output:
+        directory("results/ground_truth/{scene}.zarr"),
+    params:
+        **rig_params(),
+    log:
+        "logs/ground_truth/{scene}.log",
+    benchmark:
+        "benchmarks/ground_truth/{scene}.tsv"
+    threads: 1
+    resources:
+        mem_mb=lambda wc, attempt: 1000 + attempt * 500,
+    conda:
+        ENV
+    script:
+        "../scripts/ground_truth.py"
+
+
+rule scene_summary:
+    input:
+        expand("results/ground_truth/{scene}.zarr", scene=SCENES),
+    output:
+        csv=report(
+            "results/tables/scenes.csv",
+            caption="../report/scenes.rst",
+            category="Scenes",
+            labels={"table": "scene summary", "format": "csv"},
+        ),
+        md="results/tables/scenes.md",
+        tex="results/tables/scenes.tex",
+    log:
+        "logs/tables/scenes.log",
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/scene_summary.py"

@@ -1,0 +1,18 @@
+# Deterministic scene generator: writes scenes/scene_NNN.yaml when a listed spec is missing.
+# The committed specs are its output for generator.seed = 0.
+
+
+rule generate_scene:
+    output:
+        "scenes/{scene}.yaml",
+    wildcard_constraints:
+        scene=GENERATED_SCENE,
+    params:
+        seed=config["generator"]["seed"],
+    log:
+        "logs/scenes/{scene}.log",
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/generate_scene.py"

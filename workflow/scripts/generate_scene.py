@@ -1,0 +1,10 @@
+"""Snakemake adapter: generate one procedural scene spec."""
+
+from stereovar.jobs import generate_scene_job, run_job
+
+run_job(
+    snakemake.log[0],  # noqa: F821
+    generate_scene_job,
+    out=snakemake.output[0],  # noqa: F821
+    seed=snakemake.params.seed,  # noqa: F821
+)

@@ -1,0 +1,10 @@
+"""Snakemake adapter: tabulate glass fraction and disparity range per scene."""
+
+from stereovar.jobs import run_job, scene_summary_job
+
+run_job(
+    snakemake.log[0],  # noqa: F821
+    scene_summary_job,
+    ground_truths=list(snakemake.input),  # noqa: F821
+    outputs=dict(snakemake.output.items()),  # noqa: F821
+)
