@@ -45,7 +45,7 @@ print(path or "")
 EOF
 }
 
-LLVM_FIX="fix: sudo apt-get install libllvm19 (Debian/Ubuntu), or set DRJIT_LIBLLVM_PATH=/path/to/libLLVM-19.so; or set STEREOVAR_ALLOW_SCALAR=1 to continue with the slow scalar Mitsuba backend"
+LLVM_FIX="fix: sudo apt-get install libllvm19 (Debian/Ubuntu; macOS: brew install llvm), or set DRJIT_LIBLLVM_PATH=/path/to/libLLVM-19.so; or set STEREOVAR_ALLOW_SCALAR=1 to continue with the slow scalar Mitsuba backend"
 
 apt_candidate() {  # prints the candidate version of a package, or nothing
     apt-cache policy "$1" 2>/dev/null | awk '/Candidate:/ { if ($2 != "(none)") print $2 }'

@@ -25,31 +25,48 @@ def spheres_spec():
     """Five spheres in a row, one per material, plus a light panel; the rest is empty space."""
     objects = []
     xs = [1.2, 0.6, 0.0, -0.6, -1.2]  # camera +x is image-left: this row runs left to right
-    for x, name in zip(xs, ["matte", "plastic", "chrome", "glass", "rough_glass"]):
-        objects.append({"name": name, "shape": "sphere", "material": name,
-                        "transform": {"translate": [x, 0.0, 4.0], "scale": [0.25, 0.25, 0.25]}})
+    for x, name in zip(xs, ["matte", "plastic", "chrome", "glass", "rough_glass"], strict=True):
+        objects.append(
+            {
+                "name": name,
+                "shape": "sphere",
+                "material": name,
+                "transform": {"translate": [x, 0.0, 4.0], "scale": [0.25, 0.25, 0.25]},
+            }
+        )
     return {
         "name": "spheres",
         "camera": {"origin": [0, 0, 0], "target": [0, 0, 1], "up": [0, 1, 0], "fov_deg": 60},
-        "textures": {}, "materials": MATERIALS, "objects": objects,
-        "lights": [{"name": "panel", "radiance": [5, 5, 5],
-                    "transform": {"translate": [0, 0.8, 4.0], "rotate": [0, 180, 0],
-                                  "scale": [0.3, 0.1, 1]}}],
+        "textures": {},
+        "materials": MATERIALS,
+        "objects": objects,
+        "lights": [
+            {
+                "name": "panel",
+                "radiance": [5, 5, 5],
+                "transform": {
+                    "translate": [0, 0.8, 4.0],
+                    "rotate": [0, 180, 0],
+                    "scale": [0.3, 0.1, 1],
+                },
+            }
+        ],
     }
 
 
 @pytest.fixture(scope="module")
 def spheres_gt(mi):
     scene, cam = load_scene(mi, spheres_spec())
-    rig = make_rig(cam.to_world, cam.fov_deg, width=96, height=54, baseline_m=0.05,
-                   convention="paper")
+    rig = make_rig(
+        cam.to_world, cam.fov_deg, width=96, height=54, baseline_m=0.05, convention="paper"
+    )
     return rig, compute_ground_truth(mi, scene, rig)
 
 
 def test_material_class_of_each_sphere_centre(spheres_gt):
     rig, ds = spheres_gt
     expected = ["diffuse", "glossy", "conductor", "glass", "glass"]
-    for x, cls in zip([1.2, 0.6, 0.0, -0.6, -1.2], expected):
+    for x, cls in zip([1.2, 0.6, 0.0, -0.6, -1.2], expected, strict=True):
         u, v, _ = rig.project(np.array([x, 0.0, 3.75]), "left")
         code = int(ds.material.sel(view="left").values[int(v), int(u)])
         assert MATERIAL_CLASSES[code] == cls
@@ -82,12 +99,21 @@ def test_occlusion_flags_wall_pixels_hidden_by_a_box(mi):
     spec = {
         "name": "occ",
         "camera": {"origin": [0, 0, 0], "target": [0, 0, 1], "up": [0, 1, 0], "fov_deg": 50},
-        "textures": {}, "materials": {"m": MATERIALS["matte"]},
+        "textures": {},
+        "materials": {"m": MATERIALS["matte"]},
         "objects": [
-            {"name": "wall", "shape": "rectangle", "material": "m",
-             "transform": {"translate": [0, 0, 3], "rotate": [0, 180, 0], "scale": [9, 9, 1]}},
-            {"name": "box", "shape": "box", "material": "m",
-             "transform": {"translate": [0.013, 0.021, 1.0], "scale": [0.1, 0.1, 0.1]}},
+            {
+                "name": "wall",
+                "shape": "rectangle",
+                "material": "m",
+                "transform": {"translate": [0, 0, 3], "rotate": [0, 180, 0], "scale": [9, 9, 1]},
+            },
+            {
+                "name": "box",
+                "shape": "box",
+                "material": "m",
+                "transform": {"translate": [0.013, 0.021, 1.0], "scale": [0.1, 0.1, 0.1]},
+            },
         ],
         "lights": [],
     }
@@ -130,11 +156,16 @@ def test_summary_matches_brute_force(spheres_gt):
     _, ds = spheres_gt
     s = summarize_ground_truth(ds)
     g = ds.sel(view="left")
-    n_glass = sum(bool(g.glass.values[j, i]) for j in range(g.sizes["y"])
-                  for i in range(g.sizes["x"]))
+    n_glass = sum(
+        bool(g.glass.values[j, i]) for j in range(g.sizes["y"]) for i in range(g.sizes["x"])
+    )
     assert s["glass_fraction"] == pytest.approx(n_glass / g.glass.size)
-    d = [float(g.disparity.values[j, i]) for j in range(g.sizes["y"]) for i in range(g.sizes["x"])
-         if g.valid.values[j, i]]
+    d = [
+        float(g.disparity.values[j, i])
+        for j in range(g.sizes["y"])
+        for i in range(g.sizes["x"])
+        if g.valid.values[j, i]
+    ]
     assert s["disparity_min_px"] == pytest.approx(min(d))
     assert s["disparity_max_px"] == pytest.approx(max(d))
 
@@ -151,8 +182,9 @@ def test_committed_scene_has_glass_and_full_room(mi, path):
     """At least 3% glass in the left view and no ray leaving the room (paper aspect, 26 mm)."""
     spec = load_scene_spec(path)
     scene, cam = load_scene(mi, spec)
-    rig = make_rig(cam.to_world, cam.fov_deg, width=320, height=180, baseline_m=0.026,
-                   convention="paper")
+    rig = make_rig(
+        cam.to_world, cam.fov_deg, width=320, height=180, baseline_m=0.026, convention="paper"
+    )
     ds = compute_ground_truth(mi, scene, rig)
     s = summarize_ground_truth(ds)
     assert s["glass_fraction"] >= 0.03

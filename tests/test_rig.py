@@ -13,15 +13,26 @@ def plane_spec(depth=3.0, fov=60.0):
     """A diffuse fronto-parallel wall at planar depth ``depth`` in front of the camera."""
     return {
         "name": "plane",
-        "camera": {"origin": [0.2, 1.0, -0.5], "target": [0.2, 1.0, 1.0], "up": [0, 1, 0],
-                   "fov_deg": fov},
+        "camera": {
+            "origin": [0.2, 1.0, -0.5],
+            "target": [0.2, 1.0, 1.0],
+            "up": [0, 1, 0],
+            "fov_deg": fov,
+        },
         "textures": {},
         "materials": {"grey": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
-        "objects": [{
-            "name": "wall", "shape": "rectangle", "material": "grey",
-            "transform": {"translate": [0.2, 1.0, -0.5 + depth], "rotate": [0, 180, 0],
-                          "scale": [20, 20, 1]},
-        }],
+        "objects": [
+            {
+                "name": "wall",
+                "shape": "rectangle",
+                "material": "grey",
+                "transform": {
+                    "translate": [0.2, 1.0, -0.5 + depth],
+                    "rotate": [0, 180, 0],
+                    "scale": [20, 20, 1],
+                },
+            }
+        ],
         "lights": [],
     }
 
@@ -29,11 +40,13 @@ def plane_spec(depth=3.0, fov=60.0):
 def test_right_camera_is_left_translated_along_camera_x():
     cam = camera_from_spec(plane_spec())
     for convention, sign in (("paper", 1), ("conventional", -1)):
-        rig = make_rig(cam.to_world, 60, width=32, height=18, baseline_m=0.026,
-                       convention=convention)
+        rig = make_rig(
+            cam.to_world, 60, width=32, height=18, baseline_m=0.026, convention=convention
+        )
         frame = camera_frame([0.2, 1.0, -0.5], [0.2, 1.0, 1.0], [0, 1, 0])
-        np.testing.assert_allclose(rig.origin("right") - rig.origin("left"),
-                                   sign * 0.026 * frame[0], atol=1e-12)
+        np.testing.assert_allclose(
+            rig.origin("right") - rig.origin("left"), sign * 0.026 * frame[0], atol=1e-12
+        )
         np.testing.assert_allclose(rig.frame("right"), rig.frame("left"))
         assert rig.disparity_sign == sign
 
@@ -59,8 +72,9 @@ def test_projection_inverts_mitsuba_camera_rays(mi):
     sensor = mi.load_dict(sensor_dict(mi, rig, "left"))
     uv = rng.uniform(0.05, 0.95, size=(50, 2))
     for s in uv:
-        ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f(float(s[0]), float(s[1])),
-                                   mi.Point2f(0.5, 0.5), True)
+        ray, _ = sensor.sample_ray(
+            0.0, 0.5, mi.Point2f(float(s[0]), float(s[1])), mi.Point2f(0.5, 0.5), True
+        )
         t = rng.uniform(0.5, 9.0)
         p = np.array([ray.o[i] + t * ray.d[i] for i in range(3)], dtype=np.float64).ravel()
         u, v, _ = rig.project(p, "left")
@@ -72,8 +86,14 @@ def test_disparity_is_f_b_over_z_on_fronto_parallel_plane(mi, convention):
     depth, width, height, baseline = 2.5, 64, 36, 0.026
     spec = plane_spec(depth)
     scene, cam = load_scene(mi, spec)
-    rig = make_rig(cam.to_world, cam.fov_deg, width=width, height=height, baseline_m=baseline,
-                   convention=convention)
+    rig = make_rig(
+        cam.to_world,
+        cam.fov_deg,
+        width=width,
+        height=height,
+        baseline_m=baseline,
+        convention=convention,
+    )
     ds = compute_ground_truth(mi, scene, rig)
     expected = focal_length_px(60.0, width) * baseline / depth
     for view in ("left", "right"):
@@ -87,5 +107,6 @@ def test_disparity_is_f_b_over_z_on_fronto_parallel_plane(mi, convention):
     # The correspondence leaves the other image exactly where x +/- d leaves [0, W - 1].
     cols = np.arange(width) + ds.attrs["disparity_sign"] * expected
     inside = (cols >= 0) & (cols <= width - 1)
-    np.testing.assert_array_equal(ds.valid.sel(view="left").values,
-                                  np.broadcast_to(inside, (height, width)))
+    np.testing.assert_array_equal(
+        ds.valid.sel(view="left").values, np.broadcast_to(inside, (height, width))
+    )

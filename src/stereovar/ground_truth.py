@@ -105,7 +105,10 @@ def trace_pixel_centres(mi, scene, sensor, width: int, height: int):
     normals = np.stack([np.asarray(c, dtype=np.float64) for c in si.n], axis=-1)
     ids = np.asarray(dr.reinterpret_array(mi.UInt32, si.shape), dtype=np.int64)
     registry = np.asarray(
-        [int(np.asarray(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s)))[0]) for s in scene.shapes()],
+        [
+            int(np.asarray(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s)))[0])
+            for s in scene.shapes()
+        ],
         dtype=np.int64,
     )
     order = np.argsort(registry)
@@ -113,8 +116,12 @@ def trace_pixel_centres(mi, scene, sensor, width: int, height: int):
     found = hit & (registry[order][pos] == ids)
     shape_index = np.where(found, order[pos], -1).astype(np.int32)
     shape = (height, width)
-    return (found.reshape(shape), points.reshape(*shape, 3), normals.reshape(*shape, 3),
-            shape_index.reshape(shape))
+    return (
+        found.reshape(shape),
+        points.reshape(*shape, 3),
+        normals.reshape(*shape, 3),
+        shape_index.reshape(shape),
+    )
 
 
 def _trace_scalar(mi, scene, sensor, width, height):
@@ -298,27 +305,52 @@ def compute_ground_truth(mi, scene, rig: StereoRig, *, attrs: dict | None = None
     glass_code = MATERIAL_CLASSES.index("glass")
     ds = xr.Dataset(
         {
-            "disparity": (dims, np.stack(fields["disparity"]), {
-                "units": "px",
-                "long_name": "disparity magnitude; x_R = x_L + disparity_sign * disparity",
-            }),
-            "depth": (dims, np.stack(fields["depth"]), {
-                "units": "m", "long_name": "planar depth along the optical axis",
-            }),
-            "material": (dims, material, {
-                "flag_values": list(range(len(MATERIAL_CLASSES))),
-                "flag_meanings": " ".join(MATERIAL_CLASSES),
-            }),
+            "disparity": (
+                dims,
+                np.stack(fields["disparity"]),
+                {
+                    "units": "px",
+                    "long_name": "disparity magnitude; x_R = x_L + disparity_sign * disparity",
+                },
+            ),
+            "depth": (
+                dims,
+                np.stack(fields["depth"]),
+                {
+                    "units": "m",
+                    "long_name": "planar depth along the optical axis",
+                },
+            ),
+            "material": (
+                dims,
+                material,
+                {
+                    "flag_values": list(range(len(MATERIAL_CLASSES))),
+                    "flag_meanings": " ".join(MATERIAL_CLASSES),
+                },
+            ),
             "glass": (dims, material == glass_code, {"long_name": "glass (dielectric BSDF)"}),
-            "valid": (dims, np.stack(fields["valid"]), {
-                "long_name": "hit, finite, and correspondence inside the other image",
-            }),
-            "occluded": (dims, np.stack(fields["occluded"]), {
-                "long_name": "correspondence hidden in the other view (left-right depth check)",
-            }),
-            "shape_index": (dims, np.stack(fields["shape_index"]), {
-                "long_name": "index of the first-hit shape; see attrs shape_ids; -1 background",
-            }),
+            "valid": (
+                dims,
+                np.stack(fields["valid"]),
+                {
+                    "long_name": "hit, finite, and correspondence inside the other image",
+                },
+            ),
+            "occluded": (
+                dims,
+                np.stack(fields["occluded"]),
+                {
+                    "long_name": "correspondence hidden in the other view (left-right depth check)",
+                },
+            ),
+            "shape_index": (
+                dims,
+                np.stack(fields["shape_index"]),
+                {
+                    "long_name": "index of the first-hit shape; see attrs shape_ids; -1 background",
+                },
+            ),
         },
         coords=coords,
     )

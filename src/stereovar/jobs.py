@@ -29,7 +29,9 @@ def run_job(log_path, job, **kwargs) -> None:
         Path(log_path).parent.mkdir(parents=True, exist_ok=True)
         handlers.append(logging.FileHandler(log_path, mode="w"))
     logging.basicConfig(
-        level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", handlers=handlers,
+        level=logging.INFO,
+        format="%(asctime)s %(levelname)s %(message)s",
+        handlers=handlers,
         force=True,
     )
     start = time.perf_counter()
@@ -51,8 +53,16 @@ def scene_digest(spec: dict) -> str:
     return h.hexdigest()
 
 
-def prepare_scene(spec_path, *, variant: str, width: int, height: int, baseline_m: float,
-                  convention: str, threads: int | None = None):
+def prepare_scene(
+    spec_path,
+    *,
+    variant: str,
+    width: int,
+    height: int,
+    baseline_m: float,
+    convention: str,
+    threads: int | None = None,
+):
     """Load a spec, pick the backend, compile the scene and build the rig.
 
     Returns
@@ -73,8 +83,14 @@ def prepare_scene(spec_path, *, variant: str, width: int, height: int, baseline_
 
         dr.set_thread_count(int(threads))
     scene, camera = load_scene(mi, spec)
-    rig = make_rig(camera.to_world, camera.fov_deg, width=width, height=height,
-                   baseline_m=baseline_m, convention=convention)
+    rig = make_rig(
+        camera.to_world,
+        camera.fov_deg,
+        width=width,
+        height=height,
+        baseline_m=baseline_m,
+        convention=convention,
+    )
     backend = describe_backend()
     provenance = {
         "scene": spec["name"],
@@ -85,20 +101,33 @@ def prepare_scene(spec_path, *, variant: str, width: int, height: int, baseline_
         "variant": backend["variant"],
         "stereovar_version": __version__,
     }
-    log.info("scene %s: variant %s, %dx%d, baseline %.4f m, convention %s",
-             spec["name"], backend["variant"], width, height, baseline_m, convention)
+    log.info(
+        "scene %s: variant %s, %dx%d, baseline %.4f m, convention %s",
+        spec["name"],
+        backend["variant"],
+        width,
+        height,
+        baseline_m,
+        convention,
+    )
     return mi, spec, scene, rig, provenance
 
 
-def ground_truth_job(spec, out, *, variant="auto", width, height, baseline_m, convention,
-                     threads=None) -> None:
+def ground_truth_job(
+    spec, out, *, variant="auto", width, height, baseline_m, convention, threads=None
+) -> None:
     """Trace and store the ground truth of one scene (``results/ground_truth/{scene}.zarr``)."""
     from .ground_truth import compute_ground_truth, summarize_ground_truth
     from .store import write_dataset
 
     mi, _, scene, rig, provenance = prepare_scene(
-        spec, variant=variant, width=width, height=height, baseline_m=baseline_m,
-        convention=convention, threads=threads,
+        spec,
+        variant=variant,
+        width=width,
+        height=height,
+        baseline_m=baseline_m,
+        convention=convention,
+        threads=threads,
     )
     ds = compute_ground_truth(mi, scene, rig, attrs=provenance)
     write_dataset(ds, out)
@@ -106,8 +135,19 @@ def ground_truth_job(spec, out, *, variant="auto", width, height, baseline_m, co
     log.info("ground truth: %s", json.dumps({k: round(v, 4) for k, v in summary.items()}))
 
 
-def preview_job(spec, ground_truth, out, *, variant="auto", spp, integrator="path", max_depth=8,
-                rfilter="box", sampler="independent", threads=None) -> None:
+def preview_job(
+    spec,
+    ground_truth,
+    out,
+    *,
+    variant="auto",
+    spp,
+    integrator="path",
+    max_depth=8,
+    rfilter="box",
+    sampler="independent",
+    threads=None,
+) -> None:
     """Render both views at a modest SPP and save the preview figure as PNG."""
     import matplotlib
 
@@ -120,16 +160,27 @@ def preview_job(spec, ground_truth, out, *, variant="auto", spp, integrator="pat
 
     gt = open_dataset(ground_truth).load()
     mi, spec_d, scene, rig, _ = prepare_scene(
-        spec, variant=variant, width=int(gt.attrs["width"]), height=int(gt.attrs["height"]),
-        baseline_m=float(gt.attrs["baseline_m"]), convention=str(gt.attrs["convention"]),
+        spec,
+        variant=variant,
+        width=int(gt.attrs["width"]),
+        height=int(gt.attrs["height"]),
+        baseline_m=float(gt.attrs["baseline_m"]),
+        convention=str(gt.attrs["convention"]),
         threads=threads,
     )
     images = {}
     for view in ("left", "right"):
         start = time.perf_counter()
         images[view] = render_view(
-            mi, scene, rig, view, spp=spp, seed=derive_seed(spec_d["name"], view, spp, "preview"),
-            integrator=integrator_dict(integrator, max_depth), rfilter=rfilter, sampler=sampler,
+            mi,
+            scene,
+            rig,
+            view,
+            spp=spp,
+            seed=derive_seed(spec_d["name"], view, spp, "preview"),
+            integrator=integrator_dict(integrator, max_depth),
+            rfilter=rfilter,
+            sampler=sampler,
         )
         log.info("rendered %s view at %d spp in %.2f s", view, spp, time.perf_counter() - start)
     fig = preview_figure(images["left"], images["right"], gt, title=spec_d["name"], spp=spp)
@@ -138,9 +189,21 @@ def preview_job(spec, ground_truth, out, *, variant="auto", spp, integrator="pat
 
 
 SUMMARY_COLUMNS = [
-    "scene", "width", "height", "baseline_m", "convention", "glass_fraction", "valid_fraction",
-    "occluded_fraction", "disparity_min_px", "disparity_median_px", "disparity_max_px",
-    "diffuse_fraction", "glossy_fraction", "conductor_fraction", "emitter_fraction",
+    "scene",
+    "width",
+    "height",
+    "baseline_m",
+    "convention",
+    "glass_fraction",
+    "valid_fraction",
+    "occluded_fraction",
+    "disparity_min_px",
+    "disparity_median_px",
+    "disparity_max_px",
+    "diffuse_fraction",
+    "glossy_fraction",
+    "conductor_fraction",
+    "emitter_fraction",
     "background_fraction",
 ]
 
@@ -154,16 +217,22 @@ def scene_summary_job(ground_truths, outputs: dict) -> list[dict]:
     rows = []
     for path in ground_truths:
         ds = open_dataset(path).load()
-        rows.append({
-            "scene": ds.attrs["scene"],
-            "width": int(ds.attrs["width"]),
-            "height": int(ds.attrs["height"]),
-            "baseline_m": float(ds.attrs["baseline_m"]),
-            "convention": ds.attrs["convention"],
-            **summarize_ground_truth(ds),
-        })
-    write_tables(rows, SUMMARY_COLUMNS, outputs,
-                 caption="Scenes: left-view glass fraction and disparity range")
+        rows.append(
+            {
+                "scene": ds.attrs["scene"],
+                "width": int(ds.attrs["width"]),
+                "height": int(ds.attrs["height"]),
+                "baseline_m": float(ds.attrs["baseline_m"]),
+                "convention": ds.attrs["convention"],
+                **summarize_ground_truth(ds),
+            }
+        )
+    write_tables(
+        rows,
+        SUMMARY_COLUMNS,
+        outputs,
+        caption="Scenes: left-view glass fraction and disparity range",
+    )
     return rows
 
 

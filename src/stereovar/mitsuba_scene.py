@@ -86,7 +86,10 @@ def lathe_mesh(profile, segments: int) -> tuple[np.ndarray, np.ndarray]:
     nxt = np.roll(idx, -1, axis=1)
     # Side quads (a, b) on ring i, (c, d) on ring i + 1: (a, c, b) and (b, c, d) face outwards
     # because y increases with i.
-    faces = [np.stack([idx[:-1], idx[1:], nxt[:-1]], -1), np.stack([nxt[:-1], idx[1:], nxt[1:]], -1)]
+    faces = [
+        np.stack([idx[:-1], idx[1:], nxt[:-1]], -1),
+        np.stack([nxt[:-1], idx[1:], nxt[1:]], -1),
+    ]
     vertices = [ring]
     offset = len(ring)
     for end, facing_down in ((0, True), (n - 1, False)):
@@ -144,12 +147,16 @@ def material_dict(mi, spec: dict, name: str) -> dict:
     rough = float(mat.get("roughness", 0.0))
     if kind == "diffuse":
         albedo = (
-            _texture_dict(mi, spec, mat["texture"]) if "texture" in mat else _rgb(mat["reflectance"])
+            _texture_dict(mi, spec, mat["texture"])
+            if "texture" in mat
+            else _rgb(mat["reflectance"])
         )
         return {"type": "diffuse", "reflectance": albedo}
     if kind == "glossy":
         albedo = (
-            _texture_dict(mi, spec, mat["texture"]) if "texture" in mat else _rgb(mat["reflectance"])
+            _texture_dict(mi, spec, mat["texture"])
+            if "texture" in mat
+            else _rgb(mat["reflectance"])
         )
         out = {"diffuse_reflectance": albedo, "int_ior": float(mat.get("ior", 1.49))}
         if rough > 0:

@@ -22,7 +22,10 @@ def to_display(rgb, *, exposure: float | None = None) -> np.ndarray:
 
     The exposure maps the 99th percentile of luminance to 1 unless given.
 
-    .. math:: c_{\\mathrm{sRGB}} = 1.055\\,c^{1/2.4} - 0.055 \\ (c > 0.0031308),\\ 12.92\\,c\\ \\text{else}
+    .. math::
+
+        c_{\\mathrm{sRGB}} = \\begin{cases} 1.055\\,c^{1/2.4} - 0.055 & c > 0.0031308 \\\\
+        12.92\\,c & \\text{otherwise} \\end{cases}
     """
     rgb = np.nan_to_num(np.asarray(rgb, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
     if exposure is None:
@@ -77,14 +80,21 @@ def preview_figure(left, right, gt: xr.Dataset, *, title: str = "", spp: int | N
     fig.colorbar(im, ax=axes[1, 0], shrink=0.8, label="disparity [px]")
     colours = ListedColormap([MATERIAL_COLOURS[m] for m in MATERIAL_CLASSES])
     axes[1, 1].imshow(
-        g["material"].values, cmap=colours, vmin=-0.5, vmax=len(MATERIAL_CLASSES) - 0.5,
+        g["material"].values,
+        cmap=colours,
+        vmin=-0.5,
+        vmax=len(MATERIAL_CLASSES) - 0.5,
         interpolation="nearest",
     )
     glass = float(g["glass"].values.mean())
     axes[1, 1].set_title(f"left material classes (glass {100 * glass:.1f}% of pixels)")
     axes[1, 1].legend(
         handles=[Patch(color=MATERIAL_COLOURS[m], label=m) for m in MATERIAL_CLASSES],
-        loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=3, fontsize="small", frameon=False,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.02),
+        ncol=3,
+        fontsize="small",
+        frameon=False,
     )
     for ax in axes.ravel():
         ax.set_xticks([])

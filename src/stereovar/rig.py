@@ -76,10 +76,12 @@ class StereoRig:
         """
         u = np.arange(self.width) + 0.5
         v = np.arange(self.height) + 0.5
-        xc = np.broadcast_to(-(u[None, :] - 0.5 * self.width) / self.focal_px,
-                             (self.height, self.width))
-        yc = np.broadcast_to(-(v[:, None] - 0.5 * self.height) / self.focal_px,
-                             (self.height, self.width))
+        xc = np.broadcast_to(
+            -(u[None, :] - 0.5 * self.width) / self.focal_px, (self.height, self.width)
+        )
+        yc = np.broadcast_to(
+            -(v[:, None] - 0.5 * self.height) / self.focal_px, (self.height, self.width)
+        )
         cam = np.stack([xc, yc, np.ones_like(xc)], axis=-1)
         return cam @ self.frame(view)
 
@@ -102,7 +104,8 @@ def make_rig(
 
     .. math::
 
-        O_R = O_L + s\\,B\\,\\hat{x}_L, \\qquad s = +1\\ (\\text{paper}),\\ -1\\ (\\text{conventional})
+        O_R = O_L + s\\,B\\,\\hat{x}_L, \\qquad
+        s = +1\\ (\\text{paper}),\\ -1\\ (\\text{conventional})
 
     where :math:`\\hat{x}_L` is the left camera's unit camera-space +x axis in world space
     (the image-left direction) and :math:`B` the baseline; the orientation is shared.
@@ -142,8 +145,15 @@ def make_rig(
     )
 
 
-def sensor_dict(mi, rig: StereoRig, view: str, *, spp: int = 1, rfilter: str = "box",
-                sampler: str = "independent") -> dict:
+def sensor_dict(
+    mi,
+    rig: StereoRig,
+    view: str,
+    *,
+    spp: int = 1,
+    rfilter: str = "box",
+    sampler: str = "independent",
+) -> dict:
     """Mitsuba ``perspective`` sensor dict for one view of the rig.
 
     The film stores linear float32 RGB with the given reconstruction filter (``box`` by

@@ -247,7 +247,7 @@ def _describe_one_of(error, path) -> tuple[str, str]:
             return _describe(best)
     # branches that differ only in which key is required (exactly one of ...)
     reqs = [_resolve(b).get("required") for b in branches]
-    if all(r and len(r) == 1 and len(_resolve(b)) == 1 for r, b in zip(reqs, branches)):
+    if all(r and len(r) == 1 and len(_resolve(b)) == 1 for r, b in zip(reqs, branches, strict=False)):
         names = [r[0] for r in reqs]
         return key, f"give exactly one of {', '.join(names)}"
     if error.context:
@@ -347,7 +347,7 @@ def _check_semantics(spec: dict, source: str, path: Path) -> None:
                     f"points (object {obj['name']!r})"
                 )
             if any(p[0] < 0 for p in profile) or any(
-                b[1] <= a[1] for a, b in zip(profile, profile[1:])
+                b[1] <= a[1] for a, b in zip(profile, profile[1:], strict=False)
             ):
                 raise SceneError(
                     f"{source}: {key}.profile: radii must be >= 0 and heights must increase "

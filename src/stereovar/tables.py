@@ -39,8 +39,13 @@ def to_markdown(rows: list[dict], columns: list[str], *, digits: int = 4) -> str
 
 
 def _tex_escape(text: str) -> str:
-    for a, b in (("\\", r"\textbackslash{}"), ("_", r"\_"), ("%", r"\%"), ("&", r"\&"),
-                 ("#", r"\#")):
+    for a, b in (
+        ("\\", r"\textbackslash{}"),
+        ("_", r"\_"),
+        ("%", r"\%"),
+        ("&", r"\&"),
+        ("#", r"\#"),
+    ):
         text = text.replace(a, b)
     return text
 
@@ -57,13 +62,19 @@ def to_latex(rows: list[dict], columns: list[str], *, digits: int = 4, caption: 
         body.append(" & ".join(_tex_escape(_fmt(row.get(c, ""), digits)) for c in columns) + r" \\")
     body += [r"\bottomrule", r"\end{tabular}"]
     if caption:
-        body = [r"\begin{table}[t]", r"\centering", rf"\caption{{{_tex_escape(caption)}}}",
-                *body, r"\end{table}"]
+        body = [
+            r"\begin{table}[t]",
+            r"\centering",
+            rf"\caption{{{_tex_escape(caption)}}}",
+            *body,
+            r"\end{table}",
+        ]
     return "\n".join(body) + "\n"
 
 
-def write_tables(rows: list[dict], columns: list[str], paths: dict, *, caption: str = "",
-                 digits: int = 4) -> None:
+def write_tables(
+    rows: list[dict], columns: list[str], paths: dict, *, caption: str = "", digits: int = 4
+) -> None:
     """Write ``rows`` to each of ``paths`` (keys among ``csv``, ``md``, ``tex``) atomically."""
     render = {
         "csv": lambda: to_csv(rows, columns),

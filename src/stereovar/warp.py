@@ -48,8 +48,9 @@ def warp_right_to_left(right, disparity, *, sign: int = 1, valid=None):
             r.values, np.asarray(d), sign=sign, valid=None if v is None else np.asarray(v)
         )
         warped = r.copy(data=w)
-        omega = xr.DataArray(om, dims=("y", "x"), coords={k: r.coords[k] for k in ("y", "x")
-                                                          if k in r.coords})
+        omega = xr.DataArray(
+            om, dims=("y", "x"), coords={k: r.coords[k] for k in ("y", "x") if k in r.coords}
+        )
         return warped.transpose(*right.dims), omega
     right = np.asarray(right)
     d = np.asarray(disparity, dtype=np.float64)

@@ -1,0 +1,244 @@
+"""Workflow config: schema defaults, one-line errors, shipped configs and profile."""
+
+from __future__ import annotations
+
+import copy
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from stereovar.config import load_config, merge_configs, validate_config, validate_config_or_exit
+from stereovar.errors import ConfigError
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
+CONFIG = REPO_ROOT / "config.yaml"
+PAPER = REPO_ROOT / "workflow" / "presets" / "paper.yaml"
+
+DEFAULTS = {
+    "scenes": ["scene_000", "scene_001", "scene_002", "scene_003"],
+    "generator": {"count": 20, "seed": 0},
+    "resolution": {"width": 320, "height": 180},
+    "rig": {"baseline_m": 0.026, "convention": "paper"},
+    "render": {
+        "variant": "auto",
+        "integrator": "path",
+        "max_depth": 8,
+        "rfilter": "box",
+        "sampler": "independent",
+        "spp": 64,
+        "n_seeds": 8,
+        "spp_sweep": {"scene": "scene_000", "spp": [16, 32, 64, 128]},
+    },
+    "preview": {"spp": 32},
+}
+
+
+def test_empty_config_gets_every_default():
+    assert validate_config({}, SCHEMA) == DEFAULTS
+    assert validate_config(None, SCHEMA) == DEFAULTS
+
+
+def test_partial_config_keeps_values_and_fills_the_rest():
+    given = {
+        "render": {"spp": 32, "spp_sweep": {"spp": [32]}},
+        "rig": {"convention": "conventional"},
+    }
+    original = copy.deepcopy(given)
+    out = validate_config(given, SCHEMA)
+    assert given == original, "the input must not be modified"
+    assert out["render"]["spp"] == 32 and out["render"]["n_seeds"] == 8
+    assert out["render"]["spp_sweep"] == {"scene": "scene_000", "spp": [32]}
+    assert out["rig"] == {"baseline_m": 0.026, "convention": "conventional"}
+    assert out["preview"] == {"spp": 32}
+
+
+def test_defaults_are_not_shared_between_calls():
+    first = validate_config({}, SCHEMA)
+    first["scenes"].append("scene_999")
+    assert validate_config({}, SCHEMA)["scenes"] == DEFAULTS["scenes"]
+
+
+def test_max_depth_accepts_minus_one():
+    assert validate_config({"render": {"max_depth": -1}}, SCHEMA)["render"]["max_depth"] == -1
+
+
+BAD_CONFIGS = [
+    pytest.param(
+        {"colour": "red"},
+        ["'colour'", "not known", "scenes, generator, resolution, rig, render, preview"],
+        id="unknown-top-level-key",
+    ),
+    pytest.param(
+        {"render": {"sppp": 8}},
+        ["'render.sppp'", "not known", "under 'render'", "spp, n_seeds, spp_sweep"],
+        id="unknown-nested-key",
+    ),
+    pytest.param(
+        {"resolution": {"width": "320"}},
+        ["'resolution.width'", "expected an integer", "'320'", "a string"],
+        id="wrong-type",
+    ),
+    pytest.param(
+        {"render": {"spp": 64.0}},
+        ["'render.spp'", "expected an integer", "64.0"],
+        id="float-for-integer",
+    ),
+    pytest.param(
+        {"rig": {"convention": "left"}},
+        ["config key 'rig.convention': 'left' is not allowed; use one of: paper, conventional"],
+        id="bad-enum",
+    ),
+    pytest.param(
+        {"render": {"variant": "gpu"}},
+        ["'render.variant'", "auto, cuda_ad_rgb, llvm_ad_rgb, scalar_rgb"],
+        id="bad-variant",
+    ),
+    pytest.param(
+        {"render": {"n_seeds": 1}},
+        ["'render.n_seeds'", "1 is too small", ">= 2"],
+        id="one-seed",
+    ),
+    pytest.param(
+        {"render": {"spp": 256}},
+        ["'render.spp_sweep.spp'", "render.spp = 256", "add 256", "16, 32, 64, 128"],
+        id="sweep-without-main-spp",
+    ),
+    pytest.param(
+        {"render": {"spp_sweep": {"scene": "scene_007"}}},
+        ["'render.spp_sweep.scene'", "'scene_007'", "not in scenes", "scene_000, scene_001"],
+        id="sweep-scene-not-in-scenes",
+    ),
+    pytest.param(
+        {"scenes": ["scene_000", "scene_000"]},
+        ["'scenes'", "'scene_000' listed more than once"],
+        id="duplicate-scene",
+    ),
+    pytest.param(
+        {"scenes": ["my scene"]},
+        ["'scenes[0]'", "'my scene'", "letters, digits"],
+        id="bad-scene-name",
+    ),
+    pytest.param({"scenes": []}, ["'scenes'", "at least 1 item"], id="no-scenes"),
+    pytest.param(
+        {"rig": {"baseline_m": 0}}, ["'rig.baseline_m'", "0 is too small", "> 0"], id="baseline"
+    ),
+    pytest.param(
+        {"render": {"max_depth": 0}}, ["'render.max_depth'", "-1 for unbounded"], id="max-depth"
+    ),
+    pytest.param(
+        {"resolution": [320, 180]},
+        ["'resolution'", "expected a mapping", "[320, 180]"],
+        id="list-for-mapping",
+    ),
+]
+
+
+@pytest.mark.parametrize(("config", "expected"), BAD_CONFIGS)
+def test_invalid_config_raises_one_line_error(config, expected):
+    with pytest.raises(ConfigError) as info:
+        validate_config(config, SCHEMA)
+    message = str(info.value)
+    assert "\n" not in message
+    for part in expected:
+        assert part in message, f"{part!r} missing from: {message}"
+
+
+def test_several_problems_are_counted_on_the_same_line():
+    with pytest.raises(ConfigError, match=r"and 1 more problem\)$"):
+        validate_config({"render": {"spp": 0, "n_seeds": 0}}, SCHEMA)
+
+
+def test_validate_config_or_exit_exits_with_the_message():
+    with pytest.raises(SystemExit) as info:
+        validate_config_or_exit({"rig": {"convention": "left"}}, SCHEMA)
+    assert str(info.value.code).startswith("stereovar: config key 'rig.convention'")
+    assert validate_config_or_exit({}, str(SCHEMA)) == DEFAULTS
+
+
+def test_shipped_config_holds_the_schema_defaults():
+    assert load_config(CONFIG, SCHEMA) == DEFAULTS
+
+
+def test_paper_preset_merged_over_config_validates():
+    config = load_config([CONFIG, PAPER], SCHEMA)
+    assert config["scenes"] == [f"scene_{i:03d}" for i in range(20)]
+    assert config["resolution"] == {"width": 1280, "height": 720}
+    assert config["rig"] == {"baseline_m": 0.026, "convention": "paper"}
+    render = config["render"]
+    assert (render["spp"], render["n_seeds"]) == (512, 30)
+    assert render["spp_sweep"] == {"scene": "scene_000", "spp": [128, 256, 512, 1024, 2048]}
+    assert render["rfilter"] == "box" and render["variant"] == "auto"
+    assert config["preview"] == {"spp": 64}
+
+
+def test_merge_configs_merges_mappings_and_replaces_lists():
+    base = {"a": {"b": 1, "c": [1, 2]}, "d": 1}
+    merged = merge_configs(base, {"a": {"c": [3]}, "e": 2})
+    assert merged == {"a": {"b": 1, "c": [3]}, "d": 1, "e": 2}
+    assert base == {"a": {"b": 1, "c": [1, 2]}, "d": 1}
+
+
+def test_load_config_names_a_missing_file(tmp_path):
+    missing = tmp_path / "nope.yaml"
+    with pytest.raises(ConfigError, match=re.escape(str(missing))):
+        load_config(missing, SCHEMA)
+
+
+def test_load_config_names_an_unparsable_file(tmp_path):
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("render: {spp: [1, 2\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(broken, SCHEMA)
+    assert str(broken) in str(info.value) and "not valid YAML" in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_schema_works_with_snakemake_validate():
+    from snakemake.utils import validate
+
+    config: dict = {}
+    validate(config, str(SCHEMA), set_default=True)
+    assert config == DEFAULTS
+    validate(validate_config({}, SCHEMA), str(SCHEMA), set_default=True)
+
+
+def test_schema_forbids_unknown_keys_everywhere():
+    schema = yaml.safe_load(SCHEMA.read_text())
+
+    def objects(node, path="config"):
+        if isinstance(node, dict):
+            if node.get("type") == "object":
+                yield path, node
+            for key, value in node.get("properties", {}).items():
+                yield from objects(value, f"{path}.{key}")
+
+    for path, node in objects(schema):
+        assert node.get("additionalProperties") is False, path
+        assert path == "config" or "default" in node, path
+
+
+def test_default_profile_uses_only_known_snakemake_options():
+    profile = yaml.safe_load((REPO_ROOT / "profiles" / "default" / "config.yaml").read_text())
+    help_text = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    ).stdout
+    unknown = [key for key in profile if f"--{key}" not in help_text]
+    assert not unknown, f"not snakemake options: {unknown}"
+
+
+def test_conda_env_pins_match_pyproject():
+    tomllib = pytest.importorskip("tomllib")
+    project = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"]
+    env = yaml.safe_load((REPO_ROOT / "envs" / "stereovar.yaml").read_text())
+    pip = next(item["pip"] for item in env["dependencies"] if isinstance(item, dict))
+    assert sorted(pip) == sorted(project["dependencies"])
+    assert "python=3.11" in env["dependencies"]

@@ -1,0 +1,143 @@
+"""Tiny end-to-end Snakemake runs: outputs, no-op reruns, partial reruns, config errors."""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from stereovar.store import open_dataset
+
+REPO = Path(__file__).resolve().parents[1]
+SCENES = ["scene_000", "scene_001"]
+TINY = {
+    "scenes": SCENES,
+    "resolution": {"width": 48, "height": 27},
+    "preview": {"spp": 4},
+}
+
+pytestmark = pytest.mark.workflow
+
+
+def snakemake(workdir, *args, check=True):
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--configfile", "tiny.yaml", *args],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+    )
+    if check and proc.returncode != 0:
+        raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+def planned_jobs(workdir, *targets) -> dict:
+    """Job counts per rule of a dry run (empty when nothing is to be done)."""
+    out = snakemake(workdir, "-n", *targets).stdout
+    counts = {}
+    if "Job stats:" not in out:
+        return counts
+    table = out.split("Job stats:", 1)[1]
+    for line in table.splitlines()[3:]:
+        m = re.match(r"^(\w+)\s+(\d+)$", line.strip())
+        if not m:
+            break
+        counts[m.group(1)] = int(m.group(2))
+    counts.pop("total", None)
+    return counts
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A copy of the workflow with two scenes, run once to completion."""
+    root = tmp_path_factory.mktemp("wf")
+    for name in ("Snakefile", "config.yaml"):
+        shutil.copy(REPO / name, root / name)
+    for name in ("workflow", "profiles", "envs"):
+        shutil.copytree(REPO / name, root / name)
+    (root / "scenes").mkdir()
+    for scene in SCENES:
+        shutil.copy(REPO / "scenes" / f"{scene}.yaml", root / "scenes")
+    (root / "tiny.yaml").write_text(yaml.safe_dump(TINY))
+    snakemake(root, "-j2", "all")
+    return root
+
+
+def test_run_produces_ground_truth_previews_and_tables(workdir):
+    for scene in SCENES:
+        ds = open_dataset(workdir / f"results/ground_truth/{scene}.zarr")
+        assert set(ds.data_vars) >= {"disparity", "depth", "material", "glass", "valid"}
+        assert dict(ds.sizes) == {"view": 2, "y": 27, "x": 48}
+        assert ds.attrs["convention"] == "paper" and ds.attrs["disparity_sign"] == 1
+        assert ds.attrs["scene"] == scene and len(ds.attrs["scene_digest"]) == 64
+        assert np.isfinite(ds.disparity.values).all()
+        png = workdir / f"results/figures/previews/{scene}.png"
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (workdir / f"logs/ground_truth/{scene}.log").is_file()
+    csv = (workdir / "results/tables/scenes.csv").read_text().splitlines()
+    assert csv[0].startswith("scene,") and len(csv) == 1 + len(SCENES)
+    assert (workdir / "results/tables/scenes.tex").read_text().count(r"\\") >= 1 + len(SCENES)
+    leftovers = [p for p in (workdir / "results").rglob(".*tmp-*")]
+    assert not leftovers
+
+
+def test_second_run_does_nothing(workdir):
+    assert planned_jobs(workdir, "all") == {}
+
+
+def test_editing_one_scene_reruns_only_that_scene(workdir):
+    spec = workdir / "scenes/scene_001.yaml"
+    future = time.time() + 5
+    os.utime(spec, (future, future))
+    try:
+        jobs = planned_jobs(workdir, "all")
+        assert jobs == {"ground_truth": 1, "preview": 1, "scene_summary": 1, "all": 1}
+        out = snakemake(workdir, "-n", "all").stdout
+        assert "results/ground_truth/scene_000.zarr\n" not in out.split("rule ground_truth")[-1]
+        assert "wildcards: scene=scene_001" in out and "wildcards: scene=scene_000" not in out
+    finally:
+        os.utime(spec, (future - 3600, future - 3600))
+
+
+def test_changing_preview_spp_rerenders_only_previews(workdir):
+    jobs = planned_jobs(workdir, "all", "--config", "preview={'spp': 2}")
+    assert jobs == {"preview": 2, "all": 1}
+
+
+def test_single_target_builds_only_what_it_needs(workdir):
+    jobs = planned_jobs(
+        workdir, "--forcerun", "ground_truth", "results/ground_truth/scene_000.zarr"
+    )
+    assert jobs == {"ground_truth": 1}
+
+
+def test_bad_config_stops_before_any_job_with_one_line(workdir):
+    gt = workdir / "results/ground_truth/scene_000.zarr"
+    before = gt.stat().st_mtime
+    proc = snakemake(workdir, "-j2", "all", "--config", "rig={'convention': 'left'}", check=False)
+    assert proc.returncode != 0
+    text = proc.stdout + proc.stderr
+    assert "Traceback" not in text
+    lines = [ln for ln in text.splitlines() if "rig.convention" in ln]
+    assert lines and "paper" in lines[0] and "conventional" in lines[0]
+    assert gt.stat().st_mtime == before
+    assert not re.search(r"^rule \w+:", proc.stdout, flags=re.M)
+
+
+def test_missing_generated_scene_is_generated_by_its_rule(workdir):
+    jobs = planned_jobs(workdir, "all", "--config", "scenes=['scene_000', 'scene_007']")
+    assert jobs.get("generate_scene") == 1
+    assert jobs.get("ground_truth") == 1
+
+
+def test_unknown_scene_without_spec_is_one_line_error(workdir):
+    proc = snakemake(workdir, "-n", "all", "--config", "scenes=['my_room']", check=False)
+    assert proc.returncode != 0
+    assert "my_room" in proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stdout + proc.stderr
