@@ -6,3 +6,32 @@ dependencies are installed. Import submodules explicitly, e.g. ``stereovar.backe
 """
 
 __version__ = "0.1.0"
+
+# Public API for notebooks, imported on first use so that `import stereovar` stays cheap.
+_API = {
+    "load_mitsuba": "backend",
+    "select_variant": "backend",
+    "load_scene_spec": "scenespec",
+    "generate_scene": "scenegen",
+    "load_scene": "mitsuba_scene",
+    "make_rig": "rig",
+    "StereoRig": "rig",
+    "compute_ground_truth": "ground_truth",
+    "summarize_ground_truth": "ground_truth",
+    "MATERIAL_CLASSES": "ground_truth",
+    "warp_right_to_left": "warp",
+    "render_view": "render",
+    "derive_seed": "render",
+    "open_dataset": "store",
+    "write_dataset": "store",
+}
+
+__all__ = ["__version__", *sorted(_API)]
+
+
+def __getattr__(name):
+    if name in _API:
+        from importlib import import_module
+
+        return getattr(import_module(f"stereovar.{_API[name]}"), name)
+    raise AttributeError(f"module 'stereovar' has no attribute {name!r}")

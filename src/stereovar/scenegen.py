@@ -16,6 +16,7 @@ left camera and re-draws it until
 
 * the visible glass covers at least :data:`GLASS_TARGET` of the left view,
 * every glass object is itself visible,
+* glossy and metallic surfaces are both visible (>= 0.3 % and >= 0.2 % of the view),
 * no light is directly visible and no ray leaves the room.
 
 The renderer-side ground truth (which traces the real geometry) is the final judge of the
@@ -31,7 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .geometry import camera_frame, euler_rotation, focal_length_px, transform_matrix
+from .geometry import (
+    camera_frame,
+    euler_rotation,
+    focal_length_px,
+    project_points,
+    transform_matrix,
+)
 
 GENERATOR_VERSION = 1
 """Bumped whenever the same ``(seed, index)`` would give a different scene."""
@@ -49,7 +56,7 @@ EXPOSURE_TARGET = 0.28
 
 #: Ratio of the mean of a Mitsuba render (path, max_depth 8) to the simple lighting model of
 #: :func:`predicted_mean_radiance`; calibrated on the 20 committed scenes.
-EXPOSURE_CALIBRATION = 1.0
+EXPOSURE_CALIBRATION = 1.05
 
 EXPOSURE_SIZE = (96, 54)
 """Image size of the lighting model's ray cast."""
@@ -98,7 +105,10 @@ def _footprint(center_xz, half_xz, yaw_deg):
 
 def _overlap(a, b, margin: float = 0.0) -> bool:
     return not (
-        a[1] + margin <= b[0] or b[1] + margin <= a[0] or a[3] + margin <= b[2] or b[3] + margin <= a[2]
+        a[1] + margin <= b[0]
+        or b[1] + margin <= a[0]
+        or a[3] + margin <= b[2]
+        or b[3] + margin <= a[2]
     )
 
 
@@ -137,7 +147,9 @@ class _Scene:
         return name
 
     def material(self, name, **kw):
-        self.materials[name] = {k: (_r(v) if k in ("reflectance", "tint") else v) for k, v in kw.items()}
+        self.materials[name] = {
+            k: (_r(v) if k in ("reflectance", "tint") else v) for k, v in kw.items()
+        }
         for key in ("roughness", "ior"):
             if key in self.materials[name]:
                 self.materials[name][key] = _r(self.materials[name][key])
@@ -223,7 +235,7 @@ def _palette(sc: _Scene) -> dict:
     # walls: plaster or wallpaper, an accent back wall half of the time
     wall_h = base_hue + (0.08 if warm else 0.55) + rng.uniform(-0.05, 0.05)
     wall_v = rng.uniform(0.7, 0.92)
-    wall_pattern = rng.choice(["noise", "noise", "stripes", "tiles"])
+    wall_pattern = rng.choice(["noise", "noise", "stripes", "stripes", "tiles"])
     wcols = [_hsv(wall_h, rng.uniform(0.05, 0.3), wall_v),
              _hsv(wall_h + 0.03, rng.uniform(0.1, 0.35), wall_v * rng.uniform(0.7, 0.85))]
     if wall_pattern == "stripes":
@@ -271,11 +283,11 @@ def _palette(sc: _Scene) -> dict:
                                       _hsv(ch, 0.4, 0.8)], resolution=256)
     sc.material("cardboard", type="diffuse", texture="cardboard")
     ph = rng.random()
-    sc.texture("pattern", str(rng.choice(["checker", "stripes", "tiles"])),
+    sc.texture("print", str(rng.choice(["checker", "stripes", "tiles"])),
                [_hsv(ph, rng.uniform(0.3, 0.8), rng.uniform(0.5, 0.9)),
                 _hsv(ph + 0.4, rng.uniform(0.3, 0.8), rng.uniform(0.2, 0.6)),
                 _hsv(ph + 0.7, 0.2, 0.85)], resolution=256)
-    sc.material("patterned", type="diffuse", texture="pattern")
+    sc.material("patterned", type="diffuse", texture="print")
 
     # glossy plastics
     for k in range(3):
@@ -332,7 +344,8 @@ def _support(origin, yaw, y, hx, hz, clearance):
 def _table(sc: _Scene, origin, yaw, length, depth, height, *, wood="wood", metal_legs=False):
     rng = sc.rng
     top = rng.uniform(0.03, 0.06)
-    sc.box("table_top", wood, origin, yaw, (0, height - top / 2, 0), (length / 2, top / 2, depth / 2))
+    sc.box("table_top", wood, origin, yaw, (0, height - top / 2, 0),
+           (length / 2, top / 2, depth / 2))
     inset = rng.uniform(0.04, 0.1)
     leg = rng.uniform(0.035, 0.06)
     leg_h = height - top
@@ -376,7 +389,8 @@ def _shelf(sc: _Scene, origin, yaw, width, depth, height):
 def _cabinet(sc: _Scene, origin, yaw, width, depth, height):
     rng = sc.rng
     body = str(rng.choice(["wood", "wood2", "paint"]))
-    sc.box("cabinet_body", body, origin, yaw, (0, height / 2, 0), (width / 2, height / 2, depth / 2))
+    sc.box("cabinet_body", body, origin, yaw, (0, height / 2, 0),
+           (width / 2, height / 2, depth / 2))
     doors = 1 if width < 0.7 else 2
     dw = (width - 0.04) / doors
     door_mat = str(rng.choice(["paint", "plastic_0", "wood2"]))
@@ -437,13 +451,13 @@ def _small_object(sc: _Scene, support, kind: str) -> bool:
     """Put a small glossy/metal/diffuse prop on a support."""
     rng = sc.rng
     if kind == "metal_sphere":
-        r = rng.uniform(0.04, 0.09)
+        r = rng.uniform(0.05, 0.11)
         p = _place_on(sc, support, r, 2 * r)
         if p is None:
             return False
         sc.sphere("metal_ball", "metal_0", p + [0, r, 0], r)
     elif kind == "metal_can":
-        r, h = rng.uniform(0.03, 0.07), rng.uniform(0.08, 0.25)
+        r, h = rng.uniform(0.035, 0.08), rng.uniform(0.1, 0.28)
         p = _place_on(sc, support, r, h)
         if p is None:
             return False
@@ -476,7 +490,8 @@ def _small_object(sc: _Scene, support, kind: str) -> bool:
         x = -width / 2
         for t, h in zip(thick, heights, strict=False):
             mat = str(rng.choice(["patterned", "plastic_0", "plastic_1", "paint", "cardboard"]))
-            sc.box("book", mat, p, support["yaw"], (x + t / 2, h / 2, 0), (t / 2 - 0.001, h / 2, depth / 2))
+            sc.box("book", mat, p, support["yaw"], (x + t / 2, h / 2, 0),
+                   (t / 2 - 0.001, h / 2, depth / 2))
             x += t
     else:
         raise ValueError(kind)
@@ -533,7 +548,7 @@ def _glass_dims(rng, kind: str, *, floor: bool, factor: float) -> dict:
     if kind == "pane":
         w = (rng.uniform(0.5, 0.9) if floor else rng.uniform(0.3, 0.6)) * f
         h = (rng.uniform(0.6, 1.1) if floor else rng.uniform(0.25, 0.5)) * f
-        return {"kind": kind, "w": w, "h": h, "t": rng.uniform(0.008, 0.02),
+        return {"kind": kind, "w": w, "h": h, "t": rng.uniform(0.012, 0.04),
                 "turn": rng.uniform(-35, 35), "radius": w / 2 + 0.01, "height": h}
     if kind == "vase":
         h = (rng.uniform(0.5, 0.85) if floor else rng.uniform(0.25, 0.45)) * f
@@ -605,13 +620,14 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
 
     supports = [table]
     # furniture against the walls
-    n_wall = int(rng.integers(2, 5))
+    n_wall = int(rng.integers(3, 6))
     kinds = ["shelf", "cabinet", "shelf", "cabinet", "table"]
     for _ in range(n_wall):
         kind = str(rng.choice(kinds))
         for _try in range(25):
             if kind == "shelf":
-                w, d, h = rng.uniform(0.7, 1.6), rng.uniform(0.28, 0.45), rng.uniform(1.2, min(2.2, H - 0.35))
+                w, d = rng.uniform(0.7, 1.6), rng.uniform(0.28, 0.45)
+                h = rng.uniform(1.2, min(2.2, H - 0.35))
             elif kind == "cabinet":
                 w, d, h = rng.uniform(0.5, 1.4), rng.uniform(0.4, 0.6), rng.uniform(0.6, 1.1)
             else:
@@ -649,7 +665,7 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
     facing = math.degrees(heading)
     side_dir = np.array([math.cos(heading), 0.0, -math.sin(heading)])
     for _ in range(n_glass):
-        kind = str(rng.choice(["sphere", "pane", "vase", "cylinder"]))
+        kind = str(rng.choice(["sphere", "pane", "vase", "cylinder"], p=[0.3, 0.2, 0.3, 0.2]))
         if rng.random() < 0.3:
             dims = _glass_dims(rng, kind, floor=True, factor=factor)
             for _try in range(20):
@@ -675,8 +691,11 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
     wanted = [str(rng.choice(["metal_sphere", "metal_can"])),
               str(rng.choice(["plastic_box", "plastic_ball"]))]
     wanted += [str(k) for k in rng.choice(props, size=int(rng.integers(2, 7)))]
-    for kind in wanted:
+    for k, kind in enumerate(wanted):
+        # the first metal and glossy props go on the main table when there is room
         order = rng.permutation(len(supports))
+        if k < 2:
+            order = np.concatenate([[0], order[order != 0]])
         for j in order:
             if _small_object(sc, supports[j], kind):
                 break
@@ -712,8 +731,11 @@ def _light_color(rng, warm: bool):
 
 
 def _clear_above(sc: _Scene, fp, y_low: float) -> bool:
-    """Whether no furniture within floor footprint ``fp`` reaches up to ``y_low``."""
-    return not any(_overlap(fp, b[:4], 0.05) and b[4] > y_low - 0.05 for b in sc.blocked)
+    """Whether nothing within floor footprint ``fp`` reaches up to ``y_low``.
+
+    Furniture heights get 0.65 m added for the props that may stand on top of them.
+    """
+    return not any(_overlap(fp, b[:4], 0.05) and b[4] + 0.65 > y_low for b in sc.blocked)
 
 
 def _lights(sc: _Scene, cam, focus) -> None:
@@ -815,13 +837,17 @@ def _hit_rect(o, d):
     return np.where(ok, t, np.inf)
 
 
-def _hit_box(o, d, lo=(-1, -1, -1), hi=(1, 1, 1)):
+def _hit_box(o, d):
+    """Slab test against the canonical box [-1, 1]^3 (fmin/fmax skip 0 * inf NaNs)."""
+    tn = np.full(d.shape[:-1], -np.inf)
+    tf = np.full(d.shape[:-1], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / d
-        t1 = (np.asarray(lo) - o) * inv
-        t2 = (np.asarray(hi) - o) * inv
-    tn = np.nanmax(np.minimum(t1, t2), axis=-1)
-    tf = np.nanmin(np.maximum(t1, t2), axis=-1)
+        for a in range(3):
+            inv = 1.0 / d[..., a]
+            t1 = (-1.0 - o[a]) * inv
+            t2 = (1.0 - o[a]) * inv
+            tn = np.fmax(tn, np.fmin(t1, t2))
+            tf = np.fmin(tf, np.fmax(t1, t2))
     t = np.where(tn > 1e-6, tn, tf)
     return np.where((tf >= tn) & (t > 1e-6), t, np.inf)
 
@@ -886,16 +912,54 @@ def _object_matrix(obj: dict) -> np.ndarray:
     )
 
 
+def _local_bounds(obj: dict) -> np.ndarray:
+    """Corners (8, 3) of a canonical shape's object-space bounding box."""
+    shape = obj["shape"]
+    if shape == "rectangle":
+        lo, hi = (-1.0, -1.0, 0.0), (1.0, 1.0, 0.0)
+    elif shape in ("box", "sphere"):
+        lo, hi = (-1.0, -1.0, -1.0), (1.0, 1.0, 1.0)
+    elif shape == "cylinder":
+        lo, hi = (-1.0, 0.0, -1.0), (1.0, 1.0, 1.0)
+    else:
+        prof = np.asarray(obj["profile"], dtype=np.float64)
+        r = float(prof[:, 0].max())
+        lo, hi = (-r, float(prof[:, 1].min()), -r), (r, float(prof[:, 1].max()), r)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def _pixel_window(obj, m, origin, frame, f, width, height):
+    """Pixel rows/columns slices that can see ``obj`` (whole image if it straddles the eye)."""
+    corners = _local_bounds(obj) @ m[:3, :3].T + m[:3, 3]
+    u, v, z = project_points(corners, origin=origin, frame=frame, focal_px=f, width=width,
+                             height=height)
+    if np.any(z <= 1e-3):
+        return slice(0, height), slice(0, width)
+    c0 = int(max(0, np.floor(np.min(u)) - 1))
+    c1 = int(min(width, np.ceil(np.max(u)) + 1))
+    r0 = int(max(0, np.floor(np.min(v)) - 1))
+    r1 = int(min(height, np.ceil(np.max(v)) + 1))
+    return slice(r0, max(r0, r1)), slice(c0, max(c0, c1))
+
+
 def _raycast(spec: dict, width: int, height: int):
     """First hits: ``(labels, t, origin, dirs, entries)``; see :func:`raycast_labels`."""
-    origin, dirs = camera_rays(spec["camera"], width, height)
+    cam = spec["camera"]
+    origin, dirs = camera_rays(cam, width, height)
+    frame = camera_frame(origin, cam["target"], cam.get("up", (0.0, 1.0, 0.0)))
+    f = focal_length_px(cam.get("fov_deg", 60.0), width)
     entries = list(spec.get("objects", [])) + [
         {**light, "shape": "rectangle"} for light in spec.get("lights", [])
     ]
     best = np.full((height, width), np.inf)
     labels = np.full((height, width), -1, dtype=np.int64)
     for k, obj in enumerate(entries):
-        o, d = _local(origin, dirs, _object_matrix(obj))
+        m = _object_matrix(obj)
+        rows, cols = _pixel_window(obj, m, origin, frame, f, width, height)
+        if rows.start >= rows.stop or cols.start >= cols.stop:
+            continue
+        o, d = _local(origin, dirs[rows, cols], m)
         shape = obj["shape"]
         if shape == "rectangle":
             t = _hit_rect(o, d)
@@ -909,9 +973,10 @@ def _raycast(spec: dict, width: int, height: int):
             t = _hit_lathe(o, d, obj["profile"])
         else:
             raise ValueError(f"unknown shape {shape!r}")
-        closer = t < best
-        best = np.where(closer, t, best)
-        labels = np.where(closer, k, labels)
+        window = best[rows, cols]
+        closer = t < window
+        best[rows, cols] = np.where(closer, t, window)
+        labels[rows, cols] = np.where(closer, k, labels[rows, cols])
     return labels, best, origin, dirs, entries
 
 
@@ -1070,24 +1135,29 @@ def glass_coverage(spec: dict, *, width: int = ESTIMATE_SIZE[0], height: int = E
     -------
     dict
         ``fraction`` (share of pixels whose first hit is glass), ``per_object`` (share per
-        glass object name), ``light_fraction`` (share of pixels that see a light directly) and
+        glass object name), ``by_type`` (share per material type: diffuse, glossy, conductor,
+        glass), ``light_fraction`` (share of pixels that see a light directly) and
         ``miss_fraction`` (share of rays that hit nothing).
     """
     labels, entries = raycast_labels(spec, width=width, height=height)
     materials = spec.get("materials", {})
     n_obj = len(spec.get("objects", []))
     total = labels.size
+    counts = np.bincount(labels[labels >= 0].ravel(), minlength=len(entries))
     per_object = {}
-    glass = np.zeros(labels.shape, dtype=bool)
+    by_type = dict.fromkeys(("diffuse", "glossy", "conductor", "glass"), 0.0)
     for k, obj in enumerate(entries[:n_obj]):
-        if materials.get(obj["material"], {}).get("type") == "glass":
-            mask = labels == k
-            glass |= mask
-            per_object[obj["name"]] = float(mask.sum()) / total
+        kind = materials.get(obj["material"], {}).get("type")
+        share = float(counts[k]) / total
+        if kind in by_type:
+            by_type[kind] += share
+        if kind == "glass":
+            per_object[obj["name"]] = share
     return {
-        "fraction": float(glass.sum()) / total,
+        "fraction": by_type["glass"],
         "per_object": per_object,
-        "light_fraction": float((labels >= n_obj).sum()) / total,
+        "by_type": by_type,
+        "light_fraction": float(counts[n_obj:].sum()) / total,
         "miss_fraction": float((labels < 0).sum()) / total,
     }
 
@@ -1115,6 +1185,8 @@ def _acceptable(spec: dict, info: dict) -> tuple[bool, dict]:
         and cov["miss_fraction"] == 0.0
         and len(info["glass_names"]) >= 1
         and all(cov["per_object"].get(n, 0.0) >= 0.002 for n in info["glass_names"])
+        and cov["by_type"]["glossy"] >= 0.003
+        and cov["by_type"]["conductor"] >= 0.002
     )
     return ok, cov
 
@@ -1146,19 +1218,22 @@ def generate_scene(index: int, seed: int) -> dict:
     The random stream is ``numpy.random.default_rng([seed, index])``, so the scene does not
     depend on how many others are generated. Layouts are re-drawn from the same stream until
     the ray-cast checks pass (glass >= :data:`GLASS_TARGET` of the left view, every glass
-    object visible, no light seen directly, no ray leaving the room).
+    object visible, glossy and metal surfaces visible, no light seen directly, no ray leaving
+    the room).
     """
     index, seed = int(index), int(seed)
     if index < 0 or seed < 0:
         raise ValueError("index and seed must be >= 0")
     rng = np.random.default_rng([seed, index])
-    for attempt in range(1, MAX_ATTEMPTS + 1):
+    attempt = 0
+    while True:
+        attempt += 1
+        if attempt > MAX_ATTEMPTS:
+            raise RuntimeError(f"no acceptable layout for scene {index} (seed {seed})")
         body, info = _draw(rng)
         ok, cov = _acceptable(body, info)
         if ok:
             break
-    else:
-        raise RuntimeError(f"no acceptable layout for scene {index} (seed {seed})")
     _normalise_exposure(body)
     W, H, D = info["room"]
     spec = {

@@ -55,6 +55,8 @@ _KEY_ORDER = (
     "tint",
     "repeat",
     "seed",
+    "index",
+    "version",
     "resolution",
     "profile",
     "segments",
@@ -247,7 +249,8 @@ def _describe_one_of(error, path) -> tuple[str, str]:
             return _describe(best)
     # branches that differ only in which key is required (exactly one of ...)
     reqs = [_resolve(b).get("required") for b in branches]
-    if all(r and len(r) == 1 and len(_resolve(b)) == 1 for r, b in zip(reqs, branches, strict=False)):
+    pairs = zip(reqs, branches, strict=True)
+    if all(r and len(r) == 1 and len(_resolve(b)) == 1 for r, b in pairs):
         names = [r[0] for r in reqs]
         return key, f"give exactly one of {', '.join(names)}"
     if error.context:
@@ -472,13 +475,22 @@ def scene_spec_digest(spec: dict) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def _ordered(value):
-    """Recursively order dict keys: preferred order first, the rest alphabetically."""
+_NAMED_MAPS = ("textures", "materials")
+
+
+def _ordered(value, *, named: bool = False):
+    """Recursively order dict keys: preferred order first, the rest alphabetically.
+
+    Entries of the named maps (``textures``, ``materials``) are sorted by name.
+    """
     if isinstance(value, dict):
-        keys = sorted(value, key=lambda k: (_KEY_RANK.get(k, len(_KEY_RANK)), k))
-        if all(k not in _KEY_RANK for k in value):  # named maps (textures, materials)
+        if named:
             keys = sorted(value)
-        return {k: _ordered(value[k]) for k in keys}
+        else:
+            keys = sorted(value, key=lambda k: (_KEY_RANK.get(k, len(_KEY_RANK)), k))
+        return {
+            k: _ordered(value[k], named=(not named and k in _NAMED_MAPS)) for k in keys
+        }
     if isinstance(value, list):
         return [_ordered(v) for v in value]
     return value

@@ -246,9 +246,10 @@ def _checker(rng, n, colors):
         mix = _squash(_fbm(rng, n, base=4, gain=0.6))
         pick = extra[rng.integers(0, len(extra))]
         img = img * (1.0 - 0.25 * mix[..., None]) + pick * 0.25 * mix[..., None]
-    fine = _detail(rng, n)
-    cloud = _fbm(rng, n, base=4, gain=0.5)
-    return img * (1.0 + 0.06 * cloud + 0.15 * fine)[..., None]
+    # bounded modulation (at most +-26 %), so every texel stays nearer its own cell colour
+    fine = np.tanh(_detail(rng, n))
+    cloud = np.tanh(_fbm(rng, n, base=4, gain=0.5))
+    return img * (1.0 + 0.06 * cloud + 0.2 * fine)[..., None]
 
 
 def _grain(rng, n, colors):

@@ -1,0 +1,167 @@
+"""Tests of the procedural texture baker (stereovar.textures)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from stereovar.textures import PATTERNS, bake_texture
+
+COLORS = {
+    "planks": [[0.45, 0.28, 0.14], [0.25, 0.13, 0.06], [0.6, 0.4, 0.2]],
+    "tiles": [[0.7, 0.7, 0.68], [0.5, 0.55, 0.6], [0.2, 0.2, 0.2]],
+    "noise": [[0.75, 0.72, 0.65], [0.55, 0.5, 0.45]],
+    "stripes": [[0.6, 0.2, 0.2], [0.8, 0.75, 0.6], [0.2, 0.3, 0.5]],
+    "checker": [[0.8, 0.8, 0.8], [0.1, 0.1, 0.1]],
+    "grain": [[0.55, 0.35, 0.18], [0.3, 0.16, 0.07]],
+}
+
+
+def spec(pattern, *, seed=3, resolution=128, **extra):
+    return {"pattern": pattern, "colors": COLORS[pattern], "seed": seed,
+            "resolution": resolution, **extra}
+
+
+def luminance(img):
+    return img.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def box_blur(a, radius=2):
+    """Periodic box blur (the textures tile, so wrap-around is the right boundary)."""
+    out = np.zeros_like(a)
+    k = 2 * radius + 1
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            out += np.roll(a, (dy, dx), axis=(0, 1))
+    return out / (k * k)
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+def test_deterministic(pattern):
+    a = bake_texture(spec(pattern))
+    b = bake_texture(spec(pattern))
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+@pytest.mark.parametrize("resolution", [16, 100, 256])
+def test_shape_dtype_range(pattern, resolution):
+    img = bake_texture(spec(pattern, resolution=resolution))
+    assert img.shape == (resolution, resolution, 3)
+    assert img.dtype == np.float32
+    assert np.isfinite(img).all()
+    assert img.min() >= 0.0 and img.max() <= 1.0
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+def test_has_fine_texture(pattern):
+    """Stereo needs local detail: high-pass energy and global contrast above thresholds."""
+    lum = luminance(bake_texture(spec(pattern, resolution=256)))
+    high_pass = lum - box_blur(lum, radius=2)
+    assert high_pass.std() > 0.01, high_pass.std()
+    # detail everywhere, not only in a few places: most 16x16 blocks carry texture
+    blocks = high_pass.reshape(16, 16, 16, 16).std(axis=(1, 3))
+    assert np.mean(blocks > 0.005) > 0.95
+    assert lum.std() > 0.03
+    # gradients: mean absolute finite difference well above float noise
+    assert np.abs(np.diff(lum, axis=1)).mean() > 0.005
+    assert np.abs(np.diff(lum, axis=0)).mean() > 0.005
+
+
+def seam_ratio(lum, axis):
+    """Mean jump across the border over the largest mean jump between neighbouring lines.
+
+    A tileable texture continues across its border, so the border is no worse than the
+    sharpest line pair inside it (a cell edge of a checker, a grout line, a board gap).
+    """
+    inner = np.abs(np.diff(lum, axis=axis)).mean(axis=1 - axis)
+    seam = np.abs(np.take(lum, 0, axis=axis) - np.take(lum, -1, axis=axis)).mean()
+    return seam / inner.max()
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+@pytest.mark.parametrize("resolution", [128, 200])
+def test_tileable(pattern, resolution):
+    lum = luminance(bake_texture(spec(pattern, resolution=resolution)))
+    for axis in (0, 1):
+        assert seam_ratio(lum, axis) <= 1.05, (axis, seam_ratio(lum, axis))
+
+
+@pytest.mark.parametrize("pattern", ["noise", "grain", "planks"])
+def test_seam_check_detects_non_tileable(pattern):
+    """Control for test_tileable: an off-grid crop (not periodic) fails the same criterion."""
+    big = luminance(bake_texture(spec(pattern, resolution=256)))
+    crop = big[37:165, 11:139]
+    assert max(seam_ratio(crop, 0), seam_ratio(crop, 1)) > 1.05
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+def test_seeds_differ(pattern):
+    a = bake_texture(spec(pattern, seed=0))
+    b = bake_texture(spec(pattern, seed=1))
+    assert np.abs(a - b).mean() > 0.01
+
+
+def test_repeat_is_not_baked():
+    a = bake_texture(spec("planks"))
+    b = bake_texture(spec("planks", repeat=[4.0, 2.5]))
+    np.testing.assert_array_equal(a, b)
+
+
+def test_colors_change_output():
+    a = bake_texture(spec("noise"))
+    b = bake_texture({**spec("noise"), "colors": [[0.2, 0.3, 0.4], [0.1, 0.1, 0.1]]})
+    assert not np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 7])
+@pytest.mark.parametrize("resolution", [64, 100, 256])
+def test_checker_matches_brute_force(seed, resolution):
+    """Each texel is nearer colors[0] where (i + j) is even and colors[1] where it is odd.
+
+    The number of cells per side is drawn from the seed; it must be even (so the pattern
+    tiles) and one of the counts must reproduce the texture exactly.
+    """
+    c0, c1 = [0.85, 0.85, 0.85], [0.05, 0.05, 0.05]
+    img = bake_texture({"pattern": "checker", "colors": [c0, c1], "seed": seed,
+                        "resolution": resolution})
+    observed = np.linalg.norm(img - np.asarray(c0), axis=-1) > np.linalg.norm(
+        img - np.asarray(c1), axis=-1
+    )  # True where nearer colors[1]
+    best = None
+    for cells in range(2, 33, 2):
+        ref = np.zeros((resolution, resolution), dtype=bool)
+        for row in range(resolution):
+            for col in range(resolution):
+                i = int(np.floor((row + 0.5) / resolution * cells))
+                j = int(np.floor((col + 0.5) / resolution * cells))
+                ref[row, col] = (i + j) % 2 == 1
+        agree = np.mean(ref == observed)
+        if best is None or agree > best[0]:
+            best = (agree, cells)
+    assert best[0] == 1.0, best
+    # the top-left cell is colors[0]
+    assert not observed[0, 0]
+
+
+def test_invalid_specs():
+    with pytest.raises(ValueError, match="pattern"):
+        bake_texture({"pattern": "marble", "colors": [[0, 0, 0], [1, 1, 1]]})
+    with pytest.raises(ValueError, match="colors"):
+        bake_texture({"pattern": "noise", "colors": [[0, 0, 0]]})
+    with pytest.raises(ValueError, match="resolution"):
+        bake_texture({"pattern": "noise", "colors": [[0, 0, 0], [1, 1, 1]], "resolution": 8})
+
+
+def test_fast_enough():
+    """Generous bounds (the targets are < 50 ms at 256^2 and < 1 s at 1024^2)."""
+    for pattern in PATTERNS:
+        bake_texture(spec(pattern, resolution=256))  # warm up
+        t0 = time.perf_counter()
+        bake_texture(spec(pattern, resolution=256))
+        assert time.perf_counter() - t0 < 0.25, pattern
+    t0 = time.perf_counter()
+    bake_texture(spec("grain", resolution=1024))
+    assert time.perf_counter() - t0 < 3.0
