@@ -119,7 +119,9 @@ def test_changing_preview_spp_rerenders_only_previews(workdir):
 
 
 def test_single_target_builds_only_what_it_needs(workdir):
-    jobs = planned_jobs(workdir, "results/ground_truth/scene_000.zarr", "--forcerun", "ground_truth")
+    jobs = planned_jobs(
+        workdir, "results/ground_truth/scene_000.zarr", "--forcerun", "ground_truth"
+    )
     assert jobs == {"ground_truth": 1}
 
 
