@@ -54,6 +54,20 @@ def transform_matrix(*, translate=(0, 0, 0), rotate=(0, 0, 0), scale=(1, 1, 1)) 
     return m
 
 
+def object_matrix(obj: dict) -> np.ndarray:
+    """Object-to-world matrix of a scene-spec entry with an optional ``transform`` block.
+
+    Missing ``translate``, ``rotate`` or ``scale`` keys take their identity values; see
+    :func:`transform_matrix`.
+    """
+    t = obj.get("transform", {})
+    return transform_matrix(
+        translate=t.get("translate", (0, 0, 0)),
+        rotate=t.get("rotate", (0, 0, 0)),
+        scale=t.get("scale", (1, 1, 1)),
+    )
+
+
 def camera_frame(origin, target, up) -> np.ndarray:
     """Orthonormal camera axes as Mitsuba's ``look_at`` builds them.
 

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from .errors import SceneError
-from .geometry import camera_frame, transform_matrix
+from .geometry import camera_frame, object_matrix
 
 
 @dataclass(frozen=True)
@@ -178,15 +178,6 @@ def material_dict(mi, spec: dict, name: str) -> dict:
     raise SceneError(f"scene '{spec['name']}': material '{name}' has unknown type '{kind}'")
 
 
-def _matrix(obj: dict) -> np.ndarray:
-    t = obj.get("transform", {})
-    return transform_matrix(
-        translate=t.get("translate", (0, 0, 0)),
-        rotate=t.get("rotate", (0, 0, 0)),
-        scale=t.get("scale", (1, 1, 1)),
-    )
-
-
 def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, bsdf) -> object:
     import drjit as dr
 
@@ -203,7 +194,7 @@ def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, bsdf) -> objec
 
 def shape_dict(mi, spec: dict, obj: dict):
     """Mitsuba shape (dict or instantiated mesh) of one spec object."""
-    m = _matrix(obj)
+    m = object_matrix(obj)
     bsdf = material_dict(mi, spec, obj["material"])
     shape = obj["shape"]
     if shape in ("rectangle", "box"):
@@ -233,7 +224,7 @@ def light_dict(mi, light: dict) -> dict:
     """One-sided rectangular area light emitting towards its local +z."""
     return {
         "type": "rectangle",
-        "to_world": mi.ScalarTransform4f(_matrix(light).tolist()),
+        "to_world": mi.ScalarTransform4f(object_matrix(light).tolist()),
         "emitter": {"type": "area", "radiance": _rgb(light["radiance"])},
         "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))},
     }

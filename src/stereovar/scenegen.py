@@ -42,8 +42,8 @@ from .geometry import (
     camera_frame,
     euler_rotation,
     focal_length_px,
+    object_matrix,
     project_points,
-    transform_matrix,
 )
 
 GENERATOR_VERSION = 1
@@ -908,15 +908,6 @@ def _hit_lathe(o, d, profile, sub: int = 4):
     return best
 
 
-def _object_matrix(obj: dict) -> np.ndarray:
-    t = obj.get("transform", {})
-    return transform_matrix(
-        translate=t.get("translate", (0, 0, 0)),
-        rotate=t.get("rotate", (0, 0, 0)),
-        scale=t.get("scale", (1, 1, 1)),
-    )
-
-
 def _local_bounds(obj: dict) -> np.ndarray:
     """Corners (8, 3) of a canonical shape's object-space bounding box."""
     shape = obj["shape"]
@@ -960,7 +951,7 @@ def _raycast(spec: dict, width: int, height: int):
     best = np.full((height, width), np.inf)
     labels = np.full((height, width), -1, dtype=np.int64)
     for k, obj in enumerate(entries):
-        m = _object_matrix(obj)
+        m = object_matrix(obj)
         rows, cols = _pixel_window(obj, m, origin, frame, f, width, height)
         if rows.start >= rows.stop or cols.start >= cols.stop:
             continue
@@ -1076,7 +1067,7 @@ def predicted_mean_radiance(spec: dict, *, width: int = EXPOSURE_SIZE[0],
             continue
         obj = entries[k]
         sel = lab == k
-        m = _object_matrix(obj)
+        m = object_matrix(obj)
         inv = np.linalg.inv(m)
         lp = pts[sel] @ inv[:3, :3].T + inv[:3, 3]
         n = _local_normals(obj, lp) @ inv[:3, :3]
@@ -1094,7 +1085,7 @@ def predicted_mean_radiance(spec: dict, *, width: int = EXPOSURE_SIZE[0],
     gx, gy = np.meshgrid(g, g)
     local = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size), np.ones(gx.size)], axis=-1)
     for light in spec["lights"]:
-        m = _object_matrix(light)
+        m = object_matrix(light)
         lpts = (local @ m.T)[:, :3]
         ln = m[:3, :3] @ np.array([0.0, 0.0, 1.0])
         area = float(np.linalg.norm(np.cross(m[:3, 0], m[:3, 1]))) * 4.0
