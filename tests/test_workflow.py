@@ -87,6 +87,11 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
     csv = (workdir / "results/tables/scenes.csv").read_text().splitlines()
     assert csv[0].startswith("scene,") and len(csv) == 1 + len(SCENES)
     assert (workdir / "results/tables/scenes.tex").read_text().count(r"\\") >= 1 + len(SCENES)
+    # Committed specs are inputs, never regenerated (no generate_scene job ran).
+    assert not (workdir / "logs/scenes").exists()
+    for scene in SCENES:
+        spec = f"scenes/{scene}.yaml"
+        assert (workdir / spec).read_bytes() == (REPO / spec).read_bytes()
     leftovers = [p for p in (workdir / "results").rglob(".*tmp-*")]
     assert not leftovers
 

@@ -1,12 +1,13 @@
 # Deterministic scene generator: writes scenes/scene_NNN.yaml when a listed spec is missing.
-# The committed specs are its output for generator.seed = 0.
+# The committed specs are its output for generator.seed = 0; existing specs are left alone
+# (regenerate them all with `stereovar scenes generate --count 20 --seed 0 --out scenes`).
 
 
 rule generate_scene:
     output:
         "scenes/{scene}.yaml",
     wildcard_constraints:
-        scene=GENERATED_SCENE,
+        scene=GENERATE_PATTERN,
     params:
         seed=config["generator"]["seed"],
     log:
