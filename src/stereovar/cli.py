@@ -111,6 +111,9 @@ def main(argv=None) -> int:
         message = " ".join(str(err).split())
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into e.g. `head`, which closed early
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":
