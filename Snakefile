@@ -25,3 +25,4 @@ rule all:
 include: "workflow/rules/scenes.smk"
 include: "workflow/rules/ground_truth.smk"
 include: "workflow/rules/preview.smk"
+include: "workflow/rules/render.smk"

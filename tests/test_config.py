@@ -30,9 +30,10 @@ DEFAULTS = {
         "max_depth": 8,
         "rfilter": "box",
         "sampler": "independent",
-        "spp": 64,
+        "spp": 32,
         "n_seeds": 8,
-        "spp_sweep": {"scene": "scene_000", "spp": [16, 32, 64, 128]},
+        "seeds_per_job": 8,
+        "spp_sweep": {"scene": "scene_000", "spp": [8, 16, 32, 64, 128]},
     },
     "preview": {"spp": 32},
 }
@@ -75,7 +76,7 @@ BAD_CONFIGS = [
     ),
     pytest.param(
         {"render": {"sppp": 8}},
-        ["'render.sppp'", "not known", "under 'render'", "spp, n_seeds, spp_sweep"],
+        ["'render.sppp'", "not known", "under 'render'", "spp, n_seeds, seeds_per_job, spp_sweep"],
         id="unknown-nested-key",
     ),
     pytest.param(

@@ -19,3 +19,7 @@ class SceneError(StereovarError):
 
 class BackendError(StereovarError):
     """No usable Mitsuba variant, or a forced variant is unavailable."""
+
+
+class StoreError(StereovarError):
+    """A stored result (e.g. a render) is missing, damaged or incomplete and must be rerun."""

@@ -188,6 +188,103 @@ def preview_job(
     plt.close(fig)
 
 
+def render_job(
+    spec,
+    outputs,
+    *,
+    seeds,
+    view,
+    spp,
+    variant="auto",
+    width,
+    height,
+    baseline_m,
+    convention,
+    integrator="path",
+    max_depth=8,
+    rfilter="box",
+    sampler="independent",
+    threads=None,
+) -> None:
+    """Render one view of a scene once per seed index; one store per seed.
+
+    Each store is a DataArray ``radiance`` on (y, x, channel) written atomically, with the
+    seed value actually passed to Mitsuba, derived from (scene, view, spp, seed index), in its
+    attrs. The scene is compiled once per job, so the per-seed cost is the render itself.
+    """
+    import numpy as np
+    import xarray as xr
+
+    from .render import derive_seed, integrator_dict, render_view
+    from .store import write_dataset
+
+    if len(outputs) != len(seeds):
+        raise StereovarError(f"render job got {len(outputs)} outputs for {len(seeds)} seeds")
+    mi, spec_d, scene, rig, provenance = prepare_scene(
+        spec,
+        variant=variant,
+        width=width,
+        height=height,
+        baseline_m=baseline_m,
+        convention=convention,
+        threads=threads,
+    )
+    integ = integrator_dict(integrator, max_depth)
+    name = spec_d["name"]
+    for k, (index, out) in enumerate(zip(seeds, outputs, strict=True)):
+        seed = derive_seed(name, view, spp, index)
+        start = time.perf_counter()
+        image = render_view(
+            mi,
+            scene,
+            rig,
+            view,
+            spp=spp,
+            seed=seed,
+            integrator=integ,
+            rfilter=rfilter,
+            sampler=sampler,
+        )
+        elapsed = time.perf_counter() - start
+        n_bad = int((~np.isfinite(image)).any(axis=-1).sum())
+        da = xr.DataArray(
+            image,
+            dims=("y", "x", "channel"),
+            coords={"channel": ["R", "G", "B"]},
+            name="radiance",
+            attrs={
+                **provenance,
+                "view": view,
+                "spp": int(spp),
+                "seed_index": int(index),
+                "seed": int(seed),
+                "integrator": integrator,
+                "max_depth": int(max_depth),
+                "rfilter": rfilter,
+                "sampler": sampler,
+                "width": int(width),
+                "height": int(height),
+                "baseline_m": float(baseline_m),
+                "convention": convention,
+                "n_nonfinite_pixels": n_bad,
+            },
+        )
+        write_dataset(da, out)
+        rate = width * height * spp / max(elapsed, 1e-9) / 1e6
+        log.info(
+            "%s %s spp %d: seed %d (%d/%d) rendered in %.2f s, %.1f Msamples/s%s",
+            name,
+            view,
+            spp,
+            index,
+            k + 1,
+            len(seeds),
+            elapsed,
+            rate,
+            f", {n_bad} non-finite pixels" if n_bad else "",
+        )
+
+
 SUMMARY_COLUMNS = [
     "scene",
     "width",

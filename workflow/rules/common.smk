@@ -6,6 +6,7 @@ import yaml
 from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
+from stereovar.experiment import render_store, render_stores, scene_spp_pairs, seed_batches
 
 CONFIG_SCHEMA = "../schemas/config.schema.yaml"
 
@@ -23,6 +24,21 @@ GENERATED_SCENE = r"scene_\d{3}"
 wildcard_constraints:
     scene=r"[A-Za-z0-9_-]+",
     view="left|right",
+    spp=r"\d+",
+
+
+N_SEEDS = config["render"]["n_seeds"]
+MAIN_SPP = config["render"]["spp"]
+SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
+SWEEP_SPP = sorted(config["render"]["spp_sweep"]["spp"])
+
+
+def scene_renders(wildcards):
+    """All N seeds of both views of one scene at one SPP."""
+    return {
+        view: [render_store(wildcards.scene, view, wildcards.spp, n) for n in range(N_SEEDS)]
+        for view in ("left", "right")
+    }
 
 
 def scene_spec_path(scene):
@@ -90,6 +106,7 @@ def all_targets():
     """Everything `snakemake all` builds."""
     return [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
+        *render_stores(config),
         *expand("results/figures/previews/{scene}.png", scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex"]),
     ]

@@ -1,0 +1,393 @@
+"""Per-pixel Monte Carlo variance over independent seeds (paper Sec. 2.1, Eq. 1).
+
+:func:`variance_field` is the batch estimator on a stack of renders held in memory;
+:class:`StreamingVariance` accumulates the same estimate one render at a time (Welford, float64),
+so peak memory does not grow with the number of seeds; :func:`variance_from_stores` and
+:func:`variance_dataset` stream render stores from disk into it and build the contract of
+``results/variance/{scene}/spp{spp}.zarr``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .errors import StoreError
+from .store import open_dataset
+
+IMAGE_DIMS = ("y", "x", "channel")
+"""Dims of one render (and of the seed mean)."""
+
+VIEWS = ("left", "right")
+
+ESTIMATOR = "population variance (1/N) over seeds, averaged over RGB channels (Eq. 1)"
+
+
+def variance_field(images, *, dim: str = "seed"):
+    """Seed mean and RGB-averaged per-pixel Monte Carlo variance of a stack of renders.
+
+    For view :math:`V` and :math:`N` independent renders :math:`I_V^{(n)}` (paper Sec. 2.1),
+
+    .. math::
+
+        \\bar I_V(x, y) = \\frac1N \\sum_{n=1}^{N} I_V^{(n)}(x, y), \\qquad
+        \\sigma_V^2(x, y) = \\frac13 \\sum_{c \\in \\{R,G,B\\}} \\frac1N \\sum_{n=1}^{N}
+            \\bigl(I_{V,c}^{(n)}(x, y) - \\bar I_{V,c}(x, y)\\bigr)^2
+
+    (Eq. 1, population variance, averaged over the colour channels), accumulated in float64
+    with two passes (mean first, then squared deviations). Non-finite values propagate; use
+    :class:`StreamingVariance` to flag them instead.
+
+    Parameters
+    ----------
+    images : numpy.ndarray, shape (N, H, W, C), or xarray.DataArray
+        Renders stacked over seeds (seeds first for numpy); a DataArray needs the dims
+        ``dim``, ``y``, ``x`` and ``channel`` in any order.
+    dim : str, keyword-only
+        Name of the seed dim of a DataArray.
+
+    Returns
+    -------
+    mean : numpy.ndarray (H, W, C) or xarray.DataArray (y, x, channel), float64
+        Seed mean per channel.
+    variance : numpy.ndarray (H, W) or xarray.DataArray (y, x), float64
+        Eq. 1 averaged over channels.
+    """
+    if isinstance(images, xr.DataArray):
+        missing = [d for d in (dim, *IMAGE_DIMS) if d not in images.dims]
+        if missing or images.ndim != 4:
+            raise ValueError(
+                f"images must have dims ({dim}, y, x, channel), got {images.dims}"
+            )
+        stack = images.transpose(dim, *IMAGE_DIMS)
+        mean, variance = variance_field(stack.values)
+        first = stack.isel({dim: 0}, drop=True)
+        mean_da = xr.DataArray(
+            mean, dims=IMAGE_DIMS, coords=first.coords, name="mean",
+            attrs={"long_name": "seed mean"},
+        )
+        var_da = xr.DataArray(
+            variance, dims=("y", "x"), coords=first.isel(channel=0, drop=True).coords,
+            name="variance", attrs={"long_name": ESTIMATOR},
+        )
+        return mean_da, var_da
+    stack = np.asarray(images, dtype=np.float64)
+    if stack.ndim != 4 or stack.shape[0] == 0:
+        raise ValueError(f"images must have shape (N, H, W, C) with N >= 1, got {stack.shape}")
+    mean = stack.mean(axis=0)
+    variance = ((stack - mean) ** 2).mean(axis=0).mean(axis=-1)
+    return mean, variance
+
+
+def _as_image(image) -> np.ndarray:
+    """One render (or a block of its rows) as float64 (h, W, C)."""
+    if isinstance(image, xr.DataArray):
+        image = image.transpose(*IMAGE_DIMS).values
+    block = np.asarray(image, dtype=np.float64)
+    if block.ndim != 3:
+        raise ValueError(f"an image must have shape (H, W, C), got {block.shape}")
+    return block
+
+
+class StreamingVariance:
+    """Welford accumulator of Eq. 1 fed one render (or one row block of it) at a time.
+
+    With :math:`n` renders added, the running mean and sum of squared deviations of each
+    pixel and channel are updated as (Welford; paper Sec. 2.1, Eq. 1)
+
+    .. math::
+
+        \\delta = I^{(n)} - \\bar I_{n-1}, \\quad
+        \\bar I_n = \\bar I_{n-1} + \\delta / n, \\quad
+        M_n = M_{n-1} + \\delta\\,\\bigl(I^{(n)} - \\bar I_n\\bigr), \\quad
+        \\sigma^2 = \\tfrac13 \\sum_c M_{N,c} / N,
+
+    all in float64, so large offsets (radiance ``1e4`` with small noise) stay accurate and
+    memory is two float64 images whatever :math:`N`.
+
+    A pixel with a NaN or Inf in any channel of a render is counted in :attr:`n_nonfinite`;
+    its value is replaced by the running mean before the update (so the accumulator never holds
+    a non-finite number and no other pixel is affected), and its :attr:`mean` and
+    :attr:`variance` are reported as 0 with :attr:`finite` False.
+
+    Parameters
+    ----------
+    shape : tuple of int (H, W, C), optional
+        Image shape; taken from the first full render when omitted, and required to add row
+        blocks before any full render.
+    """
+
+    def __init__(self, shape: tuple[int, int, int] | None = None):
+        self._mean = self._m2 = self._count = self._n_nonfinite = None
+        if shape is not None:
+            self._allocate(tuple(int(s) for s in shape))
+
+    def _allocate(self, shape) -> None:
+        if len(shape) != 3:
+            raise ValueError(f"shape must be (H, W, C), got {shape}")
+        self._mean = np.zeros(shape, dtype=np.float64)
+        self._m2 = np.zeros(shape, dtype=np.float64)
+        self._count = np.zeros(shape[0], dtype=np.int64)
+        self._n_nonfinite = np.zeros(shape[:2], dtype=np.int32)
+
+    @property
+    def shape(self) -> tuple[int, int, int] | None:
+        """Image shape (H, W, C), or None before the first update."""
+        return None if self._mean is None else self._mean.shape
+
+    def update(self, image, *, rows: slice | None = None) -> StreamingVariance:
+        """Add one render, or the row block ``rows`` of one render.
+
+        Parameters
+        ----------
+        image : numpy.ndarray (H, W, C) or xarray.DataArray (y, x, channel)
+            The render, or its rows ``rows`` only.
+        rows : slice, keyword-only, optional
+            Contiguous rows that ``image`` holds; every row must receive each render once.
+
+        Returns
+        -------
+        StreamingVariance
+            ``self``.
+        """
+        block = _as_image(image)
+        if self._mean is None:
+            if rows is not None:
+                raise ValueError("pass shape= to StreamingVariance before adding row blocks")
+            self._allocate(block.shape)
+        height = self._mean.shape[0]
+        start, stop, step = (rows or slice(None)).indices(height)
+        if step != 1:
+            raise ValueError(f"rows must be a contiguous slice, got {rows}")
+        expected = (max(stop - start, 0), *self._mean.shape[1:])
+        if block.shape != expected:
+            raise ValueError(f"image block has shape {block.shape}, expected {expected}")
+        sl = slice(start, stop)
+        bad = ~np.isfinite(block).all(axis=-1)
+        mean = self._mean[sl]
+        n = (self._count[sl] + 1)[:, None, None]
+        x = np.where(bad[..., None], mean, block)
+        delta = x - mean
+        mean += delta / n
+        self._m2[sl] += delta * (x - mean)
+        self._count[sl] += 1
+        self._n_nonfinite[sl] += bad
+        return self
+
+    @property
+    def n(self) -> int:
+        """Number of renders added (0 before the first)."""
+        if self._count is None:
+            return 0
+        if self._count.min() != self._count.max():
+            raise ValueError(
+                f"rows received between {self._count.min()} and {self._count.max()} renders; "
+                "add every row of each render"
+            )
+        return int(self._count[0]) if self._count.size else 0
+
+    def _require(self) -> int:
+        n = self.n
+        if n == 0:
+            raise ValueError("no render added yet")
+        return n
+
+    @property
+    def finite(self) -> np.ndarray:
+        """bool (H, W): no render had a NaN or Inf at the pixel."""
+        self._require()
+        return self._n_nonfinite == 0
+
+    @property
+    def n_nonfinite(self) -> np.ndarray:
+        """int32 (H, W): number of renders with a NaN or Inf at the pixel."""
+        self._require()
+        return self._n_nonfinite.copy()
+
+    @property
+    def mean(self) -> np.ndarray:
+        """float64 (H, W, C): seed mean per channel; 0 where not :attr:`finite`."""
+        self._require()
+        return np.where(self.finite[..., None], self._mean, 0.0)
+
+    @property
+    def variance(self) -> np.ndarray:
+        """float64 (H, W): Eq. 1 (1/N) averaged over channels; 0 where not :attr:`finite`."""
+        n = self._require()
+        return np.where(self.finite, (self._m2 / n).mean(axis=-1), 0.0)
+
+
+def _one_line(text) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _store_error(path, detail) -> StoreError:
+    return StoreError(
+        f"render store {path} is damaged or incomplete ({_one_line(detail)}); "
+        f"delete it and rerun `snakemake {path}`"
+    )
+
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """Exceptions that mean a store could not be read (zarr's own base class when present)."""
+    import zarr.errors
+
+    base = getattr(zarr.errors, "BaseZarrError", None)
+    return (OSError, KeyError, ValueError, TypeError, RuntimeError, IndexError) + (
+        (base,) if base is not None else ()
+    )
+
+
+def _open_radiance(path) -> xr.DataArray:
+    """The lazily opened ``radiance`` array of one render store, checked for completeness."""
+    import zarr
+
+    if not Path(path).exists():
+        raise StoreError(f"render store {path} does not exist; rerun `snakemake {path}`")
+    try:
+        ds = open_dataset(path)
+        if "radiance" not in ds:
+            raise _store_error(path, "no 'radiance' array")
+        radiance = ds["radiance"]
+        if set(radiance.dims) != set(IMAGE_DIMS):
+            raise _store_error(path, f"dims {radiance.dims} instead of {IMAGE_DIMS}")
+        # a missing chunk file reads back as the fill value, so count the stored chunks
+        array = zarr.open_group(str(path), mode="r")["radiance"]
+        stored, total = array.nchunks_initialized, array.nchunks
+    except StoreError:
+        raise
+    except _read_errors() as exc:
+        raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
+    if stored < total:
+        raise _store_error(path, f"{total - stored} of {total} chunks missing")
+    return radiance.transpose(*IMAGE_DIMS)
+
+
+def _read_rows(radiance: xr.DataArray, path, rows: slice) -> np.ndarray:
+    try:
+        return np.asarray(radiance.isel(y=rows).values, dtype=np.float64)
+    except _read_errors() as exc:
+        raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
+
+
+def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
+    """Stream the render stores of one view into :class:`StreamingVariance` (Eq. 1).
+
+    Stores are opened and read one at a time (``chunk_rows`` rows at a time when given), so
+    peak memory is the float64 accumulator plus one block of one render, whatever the number
+    of seeds.
+
+    .. math::
+
+        \\sigma^2(x, y) = \\frac13 \\sum_{c} \\frac1N \\sum_{n=1}^{N}
+            \\bigl(I_c^{(n)}(x, y) - \\bar I_c(x, y)\\bigr)^2
+
+    (paper Sec. 2.1, Eq. 1).
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        Render stores of one view, one per seed; each holds a DataArray ``radiance`` on
+        ``(y, x, channel)``.
+    chunk_rows : int, keyword-only, optional
+        Rows read per block; whole renders when omitted.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``mean`` (y, x, channel) float32, ``variance`` (y, x) float64, ``finite`` (y, x) bool
+        and ``n_nonfinite`` (y, x) int32 (see :class:`StreamingVariance`); attrs ``n_seeds``
+        and ``estimator``. Coordinates come from the first store.
+
+    Raises
+    ------
+    StoreError
+        A store is missing, unreadable, lacks ``radiance``, misses chunks, or its shape differs
+        from the first store's; the one-line message names the store and the rerun command.
+    """
+    paths = list(paths)
+    if not paths:
+        raise ValueError("no render stores given")
+    if chunk_rows is not None and int(chunk_rows) < 1:
+        raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows}")
+    acc = None
+    coords = {}
+    for path in paths:
+        radiance = _open_radiance(path)
+        shape = tuple(radiance.shape)
+        if acc is None:
+            acc = StreamingVariance(shape=shape)
+            coords = {k: radiance.coords[k].values for k in IMAGE_DIMS if k in radiance.coords}
+        elif shape != acc.shape:
+            raise _store_error(path, f"shape {shape} differs from {acc.shape} of {paths[0]}")
+        step = int(chunk_rows or shape[0]) or 1
+        for start in range(0, shape[0], step):
+            rows = slice(start, min(start + step, shape[0]))
+            acc.update(_read_rows(radiance, path, rows), rows=rows)
+    yx = ("y", "x")
+    return xr.Dataset(
+        {
+            "mean": (IMAGE_DIMS, acc.mean.astype(np.float32), {"long_name": "seed mean"}),
+            "variance": (yx, acc.variance, {"long_name": ESTIMATOR}),
+            "finite": (yx, acc.finite, {"long_name": "no NaN or Inf in any seed"}),
+            "n_nonfinite": (
+                yx,
+                acc.n_nonfinite.astype(np.int32),
+                {"long_name": "number of seeds with a NaN or Inf; mean and variance are 0"},
+            ),
+        },
+        coords=coords,
+        attrs={"n_seeds": acc.n, "estimator": ESTIMATOR},
+    )
+
+
+def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) -> xr.Dataset:
+    """Variance fields of both views: the contract of ``results/variance/{scene}/spp{spp}.zarr``.
+
+    .. math::
+
+        \\sigma_V^2(x, y) = \\frac13 \\sum_{c} \\frac1N \\sum_{n=1}^{N}
+            \\bigl(I_{V,c}^{(n)}(x, y) - \\bar I_{V,c}(x, y)\\bigr)^2, \\quad V \\in \\{L, R\\}
+
+    (paper Sec. 2.1, Eq. 1), each view streamed by :func:`variance_from_stores`.
+
+    Parameters
+    ----------
+    left_paths, right_paths : sequence of path-like
+        Render stores of the left and right view, the same number of seeds each.
+    chunk_rows : int, keyword-only, optional
+        Passed to :func:`variance_from_stores`.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``mean`` (view, y, x, channel) float32, ``variance`` (view, y, x) float64, ``finite``
+        (view, y, x) bool and ``n_nonfinite`` (view, y, x) int32, ``view`` in
+        ``("left", "right")``; attrs ``n_seeds`` and ``estimator``.
+
+    Raises
+    ------
+    ValueError
+        The views have different numbers of stores.
+    StoreError
+        A store is damaged (see :func:`variance_from_stores`) or the views differ in shape.
+    """
+    left_paths, right_paths = list(left_paths), list(right_paths)
+    if len(left_paths) != len(right_paths):
+        raise ValueError(
+            f"left and right need the same number of seeds, got {len(left_paths)} "
+            f"and {len(right_paths)}"
+        )
+    views = [variance_from_stores(p, chunk_rows=chunk_rows) for p in (left_paths, right_paths)]
+    left_shape, right_shape = (tuple(v["mean"].shape) for v in views)
+    if left_shape != right_shape:
+        raise _store_error(
+            right_paths[0], f"shape {right_shape} differs from {left_shape} of {left_paths[0]}"
+        )
+    ds = xr.concat(views, dim="view", join="exact", combine_attrs="override")
+    ds = ds.assign_coords(view=list(VIEWS))
+    ds.attrs = {"n_seeds": views[0].attrs["n_seeds"], "estimator": ESTIMATOR}
+    return ds

@@ -1,0 +1,13 @@
+"""Snakemake adapter: render one batch of seeds of one view."""
+
+from stereovar.jobs import render_job, run_job
+
+run_job(
+    snakemake.log[0],  # noqa: F821
+    render_job,
+    spec=snakemake.input.spec,  # noqa: F821
+    outputs=list(snakemake.output),  # noqa: F821
+    view=snakemake.wildcards.view,  # noqa: F821
+    threads=snakemake.threads,  # noqa: F821
+    **snakemake.params,  # noqa: F821
+)
