@@ -321,7 +321,7 @@ def rho_vs_spp_figure(rows, *, title: str = ""):
         ax.errorbar(
             spp,
             rho,
-            yerr=np.vstack([upper, lower]),
+            yerr=np.vstack([lower, upper]),
             marker="o",
             markersize=4,
             capsize=3,
