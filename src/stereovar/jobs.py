@@ -193,7 +193,6 @@ def render_job(
     outputs,
     *,
     seeds,
-    view,
     spp,
     variant="auto",
     width,
@@ -206,20 +205,25 @@ def render_job(
     sampler="independent",
     threads=None,
 ) -> None:
-    """Render one view of a scene once per seed index; one store per seed.
+    """Render both views of a scene once per seed index; one store per render.
 
-    Each store is a DataArray ``radiance`` on (y, x, channel) written atomically, with the
-    seed value actually passed to Mitsuba, derived from (scene, view, spp, seed index), in its
-    attrs. The scene is compiled once per job, so the per-seed cost is the render itself.
+    ``outputs`` lists the left view's stores for ``seeds`` followed by the right view's. Each
+    store is a DataArray ``radiance`` on (y, x, channel) written atomically, with the seed
+    value actually passed to Mitsuba, derived from (scene, view, spp, seed index), in its
+    attrs. The scene is compiled once per job, so the per-render cost is the render itself.
     """
     import numpy as np
     import xarray as xr
 
+    from .experiment import VIEWS
     from .render import derive_seed, integrator_dict, render_view
     from .store import write_dataset
 
-    if len(outputs) != len(seeds):
-        raise StereovarError(f"render job got {len(outputs)} outputs for {len(seeds)} seeds")
+    jobs = [(view, index) for view in VIEWS for index in seeds]
+    if len(outputs) != len(jobs):
+        raise StereovarError(
+            f"render job got {len(outputs)} outputs for {len(seeds)} seeds of {len(VIEWS)} views"
+        )
     mi, spec_d, scene, rig, provenance = prepare_scene(
         spec,
         variant=variant,
@@ -231,7 +235,7 @@ def render_job(
     )
     integ = integrator_dict(integrator, max_depth)
     name = spec_d["name"]
-    for k, (index, out) in enumerate(zip(seeds, outputs, strict=True)):
+    for k, ((view, index), out) in enumerate(zip(jobs, outputs, strict=True)):
         seed = derive_seed(name, view, spp, index)
         start = time.perf_counter()
         image = render_view(
@@ -272,13 +276,13 @@ def render_job(
         write_dataset(da, out)
         rate = width * height * spp / max(elapsed, 1e-9) / 1e6
         log.info(
-            "%s %s spp %d: seed %d (%d/%d) rendered in %.2f s, %.1f Msamples/s%s",
+            "%s spp %d: %s seed %d (%d/%d) rendered in %.2f s, %.2f Msamples/s%s",
             name,
-            view,
             spp,
+            view,
             index,
             k + 1,
-            len(seeds),
+            len(jobs),
             elapsed,
             rate,
             f", {n_bad} non-finite pixels" if n_bad else "",

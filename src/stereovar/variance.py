@@ -58,19 +58,23 @@ def variance_field(images, *, dim: str = "seed"):
     if isinstance(images, xr.DataArray):
         missing = [d for d in (dim, *IMAGE_DIMS) if d not in images.dims]
         if missing or images.ndim != 4:
-            raise ValueError(
-                f"images must have dims ({dim}, y, x, channel), got {images.dims}"
-            )
+            raise ValueError(f"images must have dims ({dim}, y, x, channel), got {images.dims}")
         stack = images.transpose(dim, *IMAGE_DIMS)
         mean, variance = variance_field(stack.values)
         first = stack.isel({dim: 0}, drop=True)
         mean_da = xr.DataArray(
-            mean, dims=IMAGE_DIMS, coords=first.coords, name="mean",
+            mean,
+            dims=IMAGE_DIMS,
+            coords=first.coords,
+            name="mean",
             attrs={"long_name": "seed mean"},
         )
         var_da = xr.DataArray(
-            variance, dims=("y", "x"), coords=first.isel(channel=0, drop=True).coords,
-            name="variance", attrs={"long_name": ESTIMATOR},
+            variance,
+            dims=("y", "x"),
+            coords=first.isel(channel=0, drop=True).coords,
+            name="variance",
+            attrs={"long_name": ESTIMATOR},
         )
         return mean_da, var_da
     stack = np.asarray(images, dtype=np.float64)
@@ -179,14 +183,14 @@ class StreamingVariance:
     @property
     def n(self) -> int:
         """Number of renders added (0 before the first)."""
-        if self._count is None:
+        if self._count is None or not self._count.size:
             return 0
         if self._count.min() != self._count.max():
             raise ValueError(
                 f"rows received between {self._count.min()} and {self._count.max()} renders; "
                 "add every row of each render"
             )
-        return int(self._count[0]) if self._count.size else 0
+        return int(self._count[0])
 
     def _require(self) -> int:
         n = self.n
@@ -257,8 +261,6 @@ def _open_radiance(path) -> xr.DataArray:
         # a missing chunk file reads back as the fill value, so count the stored chunks
         array = zarr.open_group(str(path), mode="r")["radiance"]
         stored, total = array.nchunks_initialized, array.nchunks
-    except StoreError:
-        raise
     except _read_errors() as exc:
         raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
     if stored < total:

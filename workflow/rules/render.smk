@@ -1,6 +1,6 @@
 # Multi-seed renders (paper Sec. 2.1): one store per scene, view, SPP and seed index. A job
-# renders one aligned batch of `render.seeds_per_job` seeds, so process start-up and scene
-# compilation are paid once per batch; each seed still has its own output.
+# renders both views for one aligned batch of `render.seeds_per_job` seeds, so process
+# start-up and scene compilation are paid once per batch; each render keeps its own store.
 
 
 for _batch in seed_batches(N_SEEDS, config["render"]["seeds_per_job"]):
@@ -12,16 +12,20 @@ for _batch in seed_batches(N_SEEDS, config["render"]["seeds_per_job"]):
         input:
             unpack(scene_inputs),
         output:
-            [directory(render_store("{scene}", "{view}", "{spp}", n)) for n in _batch],
+            [
+                directory(render_store("{scene}", view, "{spp}", n))
+                for view in ("left", "right")
+                for n in _batch
+            ],
         params:
             seeds=_batch,
             spp=lambda wc: int(wc.spp),
             **rig_params(),
             **{k: v for k, v in render_params().items() if k != "variant"},
         log:
-            f"logs/renders/{{scene}}/{{view}}/spp{{spp}}/seeds{_first}-{_last}.log",
+            f"logs/renders/{{scene}}/spp{{spp}}/seeds{_first}-{_last}.log",
         benchmark:
-            f"benchmarks/renders/{{scene}}/{{view}}/spp{{spp}}/seeds{_first}-{_last}.tsv"
+            f"benchmarks/renders/{{scene}}/spp{{spp}}/seeds{_first}-{_last}.tsv"
         threads: 2
         resources:
             mem_mb=lambda wc, attempt: 1500 + attempt * 500,

@@ -1,4 +1,4 @@
-"""Snakemake adapter: render one batch of seeds of one view."""
+"""Snakemake adapter: render one batch of seeds of both views."""
 
 from stereovar.jobs import render_job, run_job
 
@@ -7,7 +7,6 @@ run_job(
     render_job,
     spec=snakemake.input.spec,  # noqa: F821
     outputs=list(snakemake.output),  # noqa: F821
-    view=snakemake.wildcards.view,  # noqa: F821
     threads=snakemake.threads,  # noqa: F821
     **snakemake.params,  # noqa: F821
 )

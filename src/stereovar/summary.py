@@ -1,0 +1,233 @@
+"""Cross-scene and SPP-sweep summaries (paper Sec. 3.2 and 3.3, Tables 1 and 2).
+
+The row lists feed :func:`stereovar.tables.write_tables`. Rows whose ``rho`` is NaN (an
+undefined correlation, see :func:`stereovar.correlation.pearson_over_mask`) are skipped, never
+counted as a scene.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .correlation import REGIONS, _field
+
+CROSS_SCENE_COLUMNS = [
+    "region",
+    "mean_rho",
+    "std_rho",
+    "min_rho",
+    "max_rho",
+    "n_scenes",
+    "mean_rho_no_warp",
+    "reason",
+]
+"""Columns of Table 1 as produced by :func:`cross_scene_table`."""
+
+SPP_SWEEP_COLUMNS = [
+    "spp",
+    "mean_var_left_glass",
+    "mean_var_left_non_glass",
+    "rho_all",
+    "rho_glass",
+    "rho_non_glass",
+]
+"""Columns of Table 2 as produced by :func:`spp_sweep_table`."""
+
+
+def _finite(value) -> bool:
+    return value is not None and math.isfinite(float(value))
+
+
+def cross_scene_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
+    """Table 1: statistics of the warped correlation over scenes, per region (paper Sec. 3.2).
+
+    For the :math:`S` scenes with a finite warped :math:`\\rho_s` in a region,
+
+    .. math::
+
+        \\bar\\rho = \\frac1S \\sum_{s=1}^{S} \\rho_s, \\qquad
+        \\mathrm{std} = \\sqrt{\\frac{1}{S - 1} \\sum_{s=1}^{S} (\\rho_s - \\bar\\rho)^2},
+
+    the sample standard deviation (``ddof=1``; NaN when :math:`S = 1`), with the range
+    :math:`[\\min_s \\rho_s, \\max_s \\rho_s]`. ``mean_rho_no_warp`` averages the no-warp rows
+    (Eq. 3 without Eq. 2) over the scenes where that value is finite.
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`stereovar.correlation.correlation_rows` of every scene, each with ``scene`` and
+        ``spp`` added.
+    spp : int, keyword-only, optional
+        Use only rows of this sample count; required when ``rows`` mix several.
+
+    Returns
+    -------
+    list of dict
+        One row per region (``all``, ``non_glass``, ``glass``) with :data:`CROSS_SCENE_COLUMNS`
+        (and ``spp``); ``reason`` is ``""`` or, when no scene has a finite warped rho, says so
+        with the scenes' own reasons, and the statistics are NaN.
+    """
+    rows = [r for r in rows if spp is None or r.get("spp") == spp]
+    spps = sorted({r.get("spp") for r in rows}, key=str)
+    if len(spps) > 1:
+        raise ValueError(f"rows mix several spp values {spps}; pass spp=")
+    seen = set()
+    for r in rows:
+        key = (r.get("scene"), r["region"], r["method"])
+        if key in seen:
+            raise ValueError(f"duplicate correlation row for scene, region, method {key}")
+        seen.add(key)
+    nan = float("nan")
+    out = []
+    for region in REGIONS:
+        warp = [r for r in rows if r["region"] == region and r["method"] == "warp"]
+        rho = np.array([float(r["rho"]) for r in warp if _finite(r["rho"])], dtype=np.float64)
+        no_warp = [
+            float(r["rho"])
+            for r in rows
+            if r["region"] == region and r["method"] == "no_warp" and _finite(r["rho"])
+        ]
+        row = {
+            "region": region,
+            "mean_rho": float(rho.mean()) if rho.size else nan,
+            "std_rho": float(rho.std(ddof=1)) if rho.size > 1 else nan,
+            "min_rho": float(rho.min()) if rho.size else nan,
+            "max_rho": float(rho.max()) if rho.size else nan,
+            "n_scenes": int(rho.size),
+            "mean_rho_no_warp": float(np.mean(no_warp)) if no_warp else nan,
+            "reason": "",
+        }
+        if spps:
+            row["spp"] = spps[0]
+        if not rho.size:
+            reasons = sorted({r.get("reason", "") for r in warp} - {""})
+            row["reason"] = f"no scene has a finite rho in region {region}" + (
+                f" ({'; '.join(reasons)})" if reasons else ""
+            )
+        out.append(row)
+    return out
+
+
+def mean_variance_by_region(sigma_left, masks: dict) -> dict:
+    """Mean left-view variance within each region (the :math:`\\bar\\sigma_L^2` of Table 2).
+
+    .. math::
+
+        \\bar\\sigma_L^2\\big|_r = \\frac{1}{|\\Omega_r|} \\sum_{(x, y) \\in \\Omega_r}
+            \\sigma_L^2(x, y)
+
+    (paper Sec. 3.3), in float64 over the finite values of each mask; NaN for an empty one.
+
+    Parameters
+    ----------
+    sigma_left : array_like or xarray.DataArray, shape (H, W)
+        :math:`\\sigma_L^2` (Eq. 1).
+    masks : dict
+        Region name to bool mask, e.g. :func:`stereovar.correlation.region_masks` of
+        :math:`\\Omega`.
+
+    Returns
+    -------
+    dict
+        Region name to mean variance.
+    """
+    sigma = _field(sigma_left).astype(np.float64)
+    out = {}
+    for region, mask in masks.items():
+        values = sigma[_field(mask).astype(bool) & np.isfinite(sigma)]
+        out[region] = float(values.mean()) if values.size else float("nan")
+    return out
+
+
+def sweep_entry(spp: int, rows: list[dict], mean_variance: dict) -> dict:
+    """One entry of :func:`spp_sweep_table` from a scene's correlation rows at ``spp``.
+
+    Parameters
+    ----------
+    spp : int
+    rows : list of dict
+        :func:`stereovar.correlation.correlation_rows` at this ``spp``; the warp rows are used.
+    mean_variance : dict
+        :func:`mean_variance_by_region` at this ``spp``.
+
+    Returns
+    -------
+    dict
+        ``spp``, ``mean_var_left_{region}`` and ``rho_{region}`` for each region present.
+    """
+    entry = {"spp": int(spp)}
+    for region, value in mean_variance.items():
+        entry[f"mean_var_left_{region}"] = float(value)
+    for r in rows:
+        if r["method"] == "warp":
+            entry[f"rho_{r['region']}"] = float(r["rho"])
+    return entry
+
+
+def _log_log_fit(spp: np.ndarray, value: np.ndarray) -> dict:
+    x, y = np.log(spp), np.log(value)
+    dx, dy = x - x.mean(), y - y.mean()
+    slope = float(dx @ dy / (dx @ dx))
+    intercept = float(y.mean() - slope * x.mean())
+    ss_res = float(((y - intercept - slope * x) ** 2).sum())
+    ss_tot = float(dy @ dy)
+    r2 = 1.0 if ss_tot == 0 else 1.0 - ss_res / ss_tot
+    return {"slope": slope, "intercept": intercept, "r2": r2, "n_points": int(x.size), "reason": ""}
+
+
+def spp_sweep_table(entries: list[dict]) -> tuple[list[dict], dict]:
+    """Table 2 rows and the log-log fit of mean variance against SPP (paper Sec. 3.3).
+
+    For each region with at least two sample counts where the mean variance is finite and
+    positive, the least-squares line
+
+    .. math::
+
+        \\ln \\bar\\sigma_L^2\\big|_r = a + b \\ln \\mathrm{SPP}
+
+    is fitted (``intercept`` :math:`a` in natural-log units, ``slope`` :math:`b`, expected
+    :math:`\\approx -1` since :math:`\\sigma^2 \\propto 1/\\mathrm{SPP}`), with
+    :math:`r^2 = 1 - \\sum (y - a - bx)^2 / \\sum (y - \\bar y)^2`.
+
+    Parameters
+    ----------
+    entries : list of dict
+        One per sample count (see :func:`sweep_entry`): ``spp``, ``mean_var_left_glass``,
+        ``mean_var_left_non_glass`` (and optionally ``mean_var_left_all``), ``rho_all``,
+        ``rho_glass``, ``rho_non_glass``.
+
+    Returns
+    -------
+    rows : list of dict
+        Copies of ``entries`` sorted by ``spp`` (columns :data:`SPP_SWEEP_COLUMNS`).
+    fit : dict
+        Region (``all``, ``non_glass``, ``glass``) to ``slope``, ``intercept``, ``r2``,
+        ``n_points`` and ``reason`` (``""``, or why the fit is undefined; then NaN).
+    """
+    rows = sorted((dict(e) for e in entries), key=lambda e: e["spp"])
+    spps = [int(r["spp"]) for r in rows]
+    if any(s <= 0 for s in spps) or len(set(spps)) != len(spps):
+        raise ValueError(f"spp values must be positive and distinct, got {spps}")
+    nan = float("nan")
+    fit = {}
+    for region in REGIONS:
+        key = f"mean_var_left_{region}"
+        points = [
+            (r["spp"], float(r[key]))
+            for r in rows
+            if key in r and _finite(r[key]) and float(r[key]) > 0
+        ]
+        if len(points) < 2:
+            fit[region] = {
+                "slope": nan,
+                "intercept": nan,
+                "r2": nan,
+                "n_points": len(points),
+                "reason": f"fewer than 2 SPP values with a positive {key}",
+            }
+            continue
+        spp, value = (np.array(c, dtype=np.float64) for c in zip(*points, strict=True))
+        fit[region] = _log_log_fit(spp, value)
+    return rows, fit
