@@ -35,6 +35,7 @@ DEFAULTS = {
         "seeds_per_job": 8,
         "spp_sweep": {"scene": "scene_000", "spp": [8, 16, 32, 64, 128]},
     },
+    "analysis": {"min_pixels": 30},
     "preview": {"spp": 32},
 }
 

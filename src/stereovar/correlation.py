@@ -214,6 +214,44 @@ def correlation_rows(
         there) and ``reason`` (``""`` or why the row is NaN; a scene without glass pixels
         gives ``"no glass pixels in the scene"`` for both glass rows).
     """
+    aligned = align_variance(
+        sigma_left,
+        sigma_right,
+        ground_truth_left,
+        sign=sign,
+        finite_left=finite_left,
+        finite_right=finite_right,
+    )
+    return rows_from_alignment(
+        sigma_left,
+        sigma_right,
+        aligned,
+        ground_truth_left["glass"],
+        finite_right=finite_right,
+        min_pixels=min_pixels,
+    )
+
+
+def align_variance(
+    sigma_left, sigma_right, ground_truth_left, *, sign: int, finite_left=None, finite_right=None
+) -> dict:
+    """Warp the right variance field into the left view and build the valid set (Eq. 2).
+
+    .. math:: \\hat\\sigma_{R\\to L}^2(x, y) = \\sigma_R^2\\bigl(x + s\\,d(x, y),\\, y\\bigr)
+
+    Parameters
+    ----------
+    sigma_left, sigma_right, ground_truth_left, sign, finite_left, finite_right
+        As in :func:`correlation_rows`.
+
+    Returns
+    -------
+    dict
+        ``warped`` (float64, 0 outside the geometric valid set), ``omega_geometry`` (the warp's
+        valid set from the ground truth alone), ``usable`` (left value finite and warped right
+        value built only from finite right pixels) and ``omega`` (both: the :math:`\\Omega` of
+        Eq. 3).
+    """
     left = _field(sigma_left).astype(np.float64)
     right = _field(sigma_right).astype(np.float64)
     if left.shape != right.shape or left.ndim != 2:
@@ -224,21 +262,43 @@ def correlation_rows(
         fin_left &= _field(finite_left).astype(bool)
     if finite_right is not None:
         fin_right &= _field(finite_right).astype(bool)
+    disparity = _field(ground_truth_left["disparity"])
     warped, omega_gt = warp_right_to_left(
         np.where(fin_right, right, 0.0),
-        _field(ground_truth_left["disparity"]),
+        disparity,
         sign=sign,
         valid=_field(ground_truth_left["valid"]),
     )
     # a warped value is clean when no neighbour with non-zero weight is non-finite
-    spoiled, _ = warp_right_to_left(
-        (~fin_right).astype(np.float64), _field(ground_truth_left["disparity"]), sign=sign
-    )
+    spoiled, _ = warp_right_to_left((~fin_right).astype(np.float64), disparity, sign=sign)
     usable = fin_left & (spoiled == 0)
-    masks = region_masks(ground_truth_left, omega_gt & usable)
-    gt_masks = region_masks(ground_truth_left, omega_gt)
-    has_glass = bool(_field(ground_truth_left["glass"]).any())
+    return {
+        "warped": warped,
+        "omega_geometry": omega_gt,
+        "usable": usable,
+        "omega": omega_gt & usable,
+    }
+
+
+def rows_from_alignment(
+    sigma_left, sigma_right, aligned: dict, glass, *, finite_right=None, min_pixels: int = 30
+) -> list[dict]:
+    """Correlation rows (region x method) from an :func:`align_variance` result (Eq. 3).
+
+    See :func:`correlation_rows` for the rows and the shared :math:`\\Omega_r`.
+    """
+    left = _field(sigma_left).astype(np.float64)
+    right = _field(sigma_right).astype(np.float64)
+    glass = _field(glass).astype(bool)
+    masks = region_masks({"glass": glass}, _field(aligned["omega"]).astype(bool))
+    gt_masks = region_masks({"glass": glass}, _field(aligned["omega_geometry"]).astype(bool))
+    usable = _field(aligned["usable"]).astype(bool)
+    warped = _field(aligned["warped"]).astype(np.float64)
+    fin_right = np.isfinite(right)
+    if finite_right is not None:
+        fin_right &= _field(finite_right).astype(bool)
     unaligned = np.where(fin_right, right, np.nan)
+    has_glass = bool(glass.any())
     rows = []
     for region in REGIONS:
         excluded = int((gt_masks[region] & ~usable).sum())

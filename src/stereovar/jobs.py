@@ -289,6 +289,259 @@ def render_job(
         )
 
 
+CORRELATION_COLUMNS = [
+    "scene",
+    "spp",
+    "n_seeds",
+    "region",
+    "method",
+    "rho",
+    "n_pixels",
+    "ci_low",
+    "ci_high",
+    "p_value",
+    "log10_p_value",
+    "n_nonfinite",
+    "reason",
+]
+
+
+def _left_right(ds, name):
+    return ds[name].sel(view="left"), ds[name].sel(view="right")
+
+
+def variance_job(left, right, out) -> None:
+    """Stream one scene's renders at one SPP into ``results/variance/{scene}/spp{spp}.zarr``."""
+    from .store import open_dataset, write_dataset
+    from .variance import variance_dataset
+
+    ds = variance_dataset(list(left), list(right))
+    first = open_dataset(left[0])["radiance"].attrs
+    keep = (
+        "scene",
+        "scene_digest",
+        "spp",
+        "renderer",
+        "renderer_version",
+        "variant",
+        "width",
+        "height",
+        "integrator",
+        "max_depth",
+        "rfilter",
+        "sampler",
+    )
+    ds.attrs.update({k: first[k] for k in keep if k in first})
+    n_bad = {v: int((~ds["finite"].sel(view=v).values).sum()) for v in ("left", "right")}
+    write_dataset(ds, out)
+    log.info(
+        "variance over %d seeds; pixels with a non-finite render: left %d, right %d",
+        ds.attrs["n_seeds"],
+        n_bad["left"],
+        n_bad["right"],
+    )
+
+
+def warp_job(variance, ground_truth, out) -> None:
+    """Warp the right variance field into the left view (Eq. 2) and store Ω and the regions."""
+    import numpy as np
+    import xarray as xr
+
+    from .correlation import align_variance, region_masks
+    from .store import open_dataset, write_dataset
+
+    v = open_dataset(variance).load()
+    gt = open_dataset(ground_truth).load()
+    gl = gt.sel(view="left")
+    sigma_l, sigma_r = _left_right(v, "variance")
+    fin_l, fin_r = _left_right(v, "finite")
+    aligned = align_variance(
+        sigma_l,
+        sigma_r,
+        gl,
+        sign=int(gt.attrs["disparity_sign"]),
+        finite_left=fin_l,
+        finite_right=fin_r,
+    )
+    masks = region_masks(gl, aligned["omega"])
+    dims = ("y", "x")
+    ds = xr.Dataset(
+        {
+            "warped_variance": (
+                dims,
+                aligned["warped"],
+                {
+                    "long_name": "right variance field in left coordinates (Eq. 2); 0 outside"
+                    " omega_geometry"
+                },
+            ),
+            "omega": (dims, aligned["omega"], {"long_name": "valid set of Eq. 3"}),
+            "omega_geometry": (
+                dims,
+                aligned["omega_geometry"],
+                {"long_name": "valid set of the warp from the ground truth alone"},
+            ),
+            "usable": (
+                dims,
+                aligned["usable"],
+                {"long_name": "left value and warped right value built from finite renders"},
+            ),
+            **{
+                f"region_{k}": (dims, np.asarray(m), {"long_name": f"omega restricted to {k}"})
+                for k, m in masks.items()
+            },
+        },
+        coords={
+            "y": v["y"].values if "y" in v.coords else np.arange(sigma_l.shape[0]),
+            "x": v["x"].values if "x" in v.coords else np.arange(sigma_l.shape[1]),
+        },
+        attrs={
+            **v.attrs,
+            "disparity_sign": int(gt.attrs["disparity_sign"]),
+            "convention": gt.attrs["convention"],
+        },
+    )
+    write_dataset(ds, out)
+    log.info(
+        "omega: %d of %d pixels (%d glass)",
+        int(aligned["omega"].sum()),
+        aligned["omega"].size,
+        int(np.asarray(masks["glass"]).sum()),
+    )
+
+
+def correlation_job(variance, warped, ground_truth, out, *, min_pixels=30) -> list[dict]:
+    """Eq. 3 over the regions, with and without the warp, to one CSV per scene and SPP."""
+    from .correlation import rows_from_alignment
+    from .store import open_dataset
+    from .tables import write_tables
+
+    v = open_dataset(variance).load()
+    w = open_dataset(warped).load()
+    gt = open_dataset(ground_truth)
+    sigma_l, sigma_r = _left_right(v, "variance")
+    aligned = {k: w[k].values for k in ("warped_variance", "omega", "omega_geometry", "usable")}
+    aligned["warped"] = aligned.pop("warped_variance")
+    rows = rows_from_alignment(
+        sigma_l,
+        sigma_r,
+        aligned,
+        gt["glass"].sel(view="left").values,
+        finite_right=v["finite"].sel(view="right"),
+        min_pixels=min_pixels,
+    )
+    for row in rows:
+        row.update(scene=v.attrs["scene"], spp=int(v.attrs["spp"]), n_seeds=int(v.attrs["n_seeds"]))
+        log.info(
+            "%s spp %s %-9s %-7s rho %.4f (n=%d)%s",
+            row["scene"],
+            row["spp"],
+            row["region"],
+            row["method"],
+            row["rho"],
+            row["n_pixels"],
+            f" [{row['reason']}]" if row["reason"] else "",
+        )
+    write_tables(rows, CORRELATION_COLUMNS, {"csv": out})
+    return rows
+
+
+def cross_scene_job(correlations, outputs: dict, *, spp) -> list[dict]:
+    """Table 1: rho across scenes per region at the main SPP, plus the no-warp mean."""
+    from .summary import CROSS_SCENE_COLUMNS, cross_scene_table
+    from .tables import read_rows, write_tables
+
+    rows = [r for path in correlations for r in read_rows(path)]
+    table = cross_scene_table(rows, spp=int(spp))
+    write_tables(
+        table,
+        CROSS_SCENE_COLUMNS,
+        outputs,
+        caption=f"Cross-scene correlation at SPP={spp} (Table 1)",
+    )
+    return table
+
+
+def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: dict) -> dict:
+    """Table 2: mean left variance by region and rho by region at each SPP, plus the
+    log-log slope of mean variance against SPP."""
+    from .store import open_dataset
+    from .summary import SPP_SWEEP_COLUMNS, mean_variance_by_region, spp_sweep_table, sweep_entry
+    from .tables import read_rows, write_tables
+
+    entries = []
+    for csv_path, var_path, warp_path in zip(correlations, variances, warped, strict=True):
+        v = open_dataset(var_path)
+        w = open_dataset(warp_path)
+        masks = {k: w[f"region_{k}"].values for k in ("all", "non_glass", "glass")}
+        means = mean_variance_by_region(v["variance"].sel(view="left").values, masks)
+        entries.append(sweep_entry(int(v.attrs["spp"]), read_rows(csv_path), means))
+    rows, fit = spp_sweep_table(entries)
+    write_tables(rows, SPP_SWEEP_COLUMNS, outputs, caption="SPP sweep (Table 2)")
+    fit_rows = [{"region": k, **f} for k, f in fit.items()]
+    write_tables(
+        fit_rows,
+        ["region", "slope", "intercept", "r2", "n_points", "reason"],
+        fit_outputs,
+        caption="Log-log slope of mean variance against SPP",
+    )
+    for row in fit_rows:
+        log.info("log-log slope of mean variance vs SPP, %s: %.4f", row["region"], row["slope"])
+    return fit
+
+
+def _save_figure(fig, out) -> None:
+    import matplotlib.pyplot as plt
+
+    from .store import write_file
+
+    write_file(out, lambda tmp: fig.savefig(tmp, format="png", dpi=120))
+    plt.close(fig)
+
+
+def teaser_figure_job(variance, warped, out) -> None:
+    """Fig. 1: sigma_L^2, sigma_R^2, the warped field and their joint histogram over Omega."""
+    from .figures import teaser_figure
+    from .store import open_dataset
+
+    v = open_dataset(variance).load()
+    w = open_dataset(warped).load()
+    sigma_l, sigma_r = _left_right(v, "variance")
+    title = f"{v.attrs['scene']}, SPP {v.attrs['spp']}, N = {v.attrs['n_seeds']}"
+    _save_figure(
+        teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out
+    )
+
+
+def rho_vs_spp_figure_job(correlations, out) -> None:
+    """Fig. 2: rho against SPP per region, with Fisher-z intervals (warp rows)."""
+    from .figures import rho_vs_spp_figure
+    from .tables import read_rows
+
+    rows = [r for path in correlations for r in read_rows(path) if r["method"] == "warp"]
+    scene = rows[0]["scene"] if rows else ""
+    _save_figure(rho_vs_spp_figure(rows, title=f"{scene}: rho against SPP"), out)
+
+
+def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
+    """Fig. 3: (sigma_L^2, warped sigma_R^2) over Omega, glass against non-glass."""
+    from .figures import material_scatter_figure
+    from .store import open_dataset
+
+    v = open_dataset(variance).load()
+    w = open_dataset(warped).load()
+    gt = open_dataset(ground_truth)
+    title = f"{v.attrs['scene']}, SPP {v.attrs['spp']}"
+    fig = material_scatter_figure(
+        v["variance"].sel(view="left"),
+        w["warped_variance"],
+        w["omega"],
+        gt["glass"].sel(view="left").values,
+        title=title,
+    )
+    _save_figure(fig, out)
+
+
 SUMMARY_COLUMNS = [
     "scene",
     "width",

@@ -30,6 +30,21 @@ def to_csv(rows: list[dict], columns: list[str]) -> str:
     return buf.getvalue()
 
 
+def read_rows(path) -> list[dict]:
+    """Rows of a CSV written by :func:`write_tables`, with numbers parsed (``NaN`` too)."""
+
+    def parse(value: str):
+        for kind in (int, float):
+            try:
+                return kind(value)
+            except ValueError:
+                continue
+        return value
+
+    with open(path, newline="") as fh:
+        return [{k: parse(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+
+
 def to_markdown(rows: list[dict], columns: list[str], *, digits: int = 4) -> str:
     """GitHub-flavoured Markdown table."""
     lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]

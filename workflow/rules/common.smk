@@ -41,6 +41,11 @@ def scene_renders(wildcards):
     }
 
 
+def sweep_inputs(pattern):
+    """``pattern`` for the sweep scene at each sweep SPP, ascending."""
+    return [pattern.format(scene=SWEEP_SCENE, spp=spp) for spp in SWEEP_SPP]
+
+
 def scene_spec_path(scene):
     """Path of a scene's spec file."""
     return f"scenes/{scene}.yaml"
@@ -106,7 +111,12 @@ def all_targets():
     """Everything `snakemake all` builds."""
     return [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
-        *render_stores(config),
         *expand("results/figures/previews/{scene}.png", scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex"]),
+        *[f"results/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
+        *expand("results/tables/{name}.{ext}", name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
+                ext=["csv", "md", "tex"]),
+        "results/figures/fig1_teaser.png",
+        "results/figures/fig2_rho_vs_spp.png",
+        "results/figures/fig3_material_scatter.png",
     ]

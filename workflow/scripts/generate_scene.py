@@ -3,8 +3,8 @@
 from stereovar.jobs import generate_scene_job, run_job
 
 run_job(
-    snakemake.log[0],  # noqa: F821
+    snakemake.log[0],
     generate_scene_job,
-    out=snakemake.output[0],  # noqa: F821
-    seed=snakemake.params.seed,  # noqa: F821
+    out=snakemake.output[0],
+    seed=snakemake.params.seed,
 )

@@ -3,10 +3,10 @@
 from stereovar.jobs import ground_truth_job, run_job
 
 run_job(
-    snakemake.log[0],  # noqa: F821
+    snakemake.log[0],
     ground_truth_job,
-    spec=snakemake.input.spec,  # noqa: F821
-    out=snakemake.output[0],  # noqa: F821
-    threads=snakemake.threads,  # noqa: F821
-    **snakemake.params,  # noqa: F821
+    spec=snakemake.input.spec,
+    out=snakemake.output[0],
+    threads=snakemake.threads,
+    **snakemake.params,
 )

@@ -3,8 +3,8 @@
 from stereovar.jobs import run_job, scene_summary_job
 
 run_job(
-    snakemake.log[0],  # noqa: F821
+    snakemake.log[0],
     scene_summary_job,
-    ground_truths=list(snakemake.input),  # noqa: F821
-    outputs=dict(snakemake.output.items()),  # noqa: F821
+    ground_truths=list(snakemake.input),
+    outputs=dict(snakemake.output.items()),
 )

@@ -1,0 +1,13 @@
+"""Snakemake adapter: stereovar.jobs.correlation_job."""
+
+from stereovar.jobs import correlation_job, run_job
+
+run_job(
+    snakemake.log[0],
+    correlation_job,
+    variance=snakemake.input.variance,
+    warped=snakemake.input.warped,
+    ground_truth=snakemake.input.ground_truth,
+    out=snakemake.output[0],
+    **snakemake.params,
+)

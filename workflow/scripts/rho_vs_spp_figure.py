@@ -1,0 +1,10 @@
+"""Snakemake adapter: stereovar.jobs.rho_vs_spp_figure_job."""
+
+from stereovar.jobs import rho_vs_spp_figure_job, run_job
+
+run_job(
+    snakemake.log[0],
+    rho_vs_spp_figure_job,
+    correlations=list(snakemake.input),
+    out=snakemake.output[0],
+)
