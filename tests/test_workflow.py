@@ -18,8 +18,16 @@ SCENES = ["scene_000", "scene_001"]
 TINY = {
     "scenes": SCENES,
     "resolution": {"width": 48, "height": 27},
+    "render": {
+        "spp": 2,
+        "n_seeds": 2,
+        "seeds_per_job": 2,
+        "spp_sweep": {"scene": "scene_000", "spp": [1, 2]},
+    },
     "preview": {"spp": 4},
 }
+#: Jobs that depend on one non-sweep scene at the main SPP.
+SCENE_CHAIN = {"render_seeds_0_1": 1, "variance": 1, "warp": 1, "correlation": 1}
 
 pytestmark = pytest.mark.workflow
 
@@ -84,6 +92,24 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         png = workdir / f"results/figures/previews/{scene}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert (workdir / f"logs/ground_truth/{scene}.log").is_file()
+    for scene, spp in (("scene_000", 1), ("scene_000", 2), ("scene_001", 2)):
+        rows = (workdir / f"results/correlation/{scene}/spp{spp}.csv").read_text().splitlines()
+        assert rows[0].startswith("scene,spp,n_seeds,region,method,rho,n_pixels,ci_low")
+        assert len(rows) == 7
+        renders = [
+            open_dataset(workdir / f"results/renders/{scene}/{v}/spp{spp}/seed{n}.zarr")
+            for v in ("left", "right")
+            for n in range(2)
+        ]
+        assert len({r["radiance"].attrs["seed"] for r in renders}) == 4
+        var = open_dataset(workdir / f"results/variance/{scene}/spp{spp}.zarr")
+        assert dict(var["variance"].sizes) == {"view": 2, "y": 27, "x": 48}
+        assert var.attrs["n_seeds"] == 2
+    for name in ("cross_scene", "spp_sweep", "spp_sweep_fit"):
+        for ext in ("csv", "md", "tex"):
+            assert (workdir / f"results/tables/{name}.{ext}").stat().st_size > 0
+    for fig in ("fig1_teaser", "fig2_rho_vs_spp", "fig3_material_scatter"):
+        assert (workdir / f"results/figures/{fig}.png").read_bytes()[:4] == b"\x89PNG"
     csv = (workdir / "results/tables/scenes.csv").read_text().splitlines()
     assert csv[0].startswith("scene,") and len(csv) == 1 + len(SCENES)
     assert (workdir / "results/tables/scenes.tex").read_text().count(r"\\") >= 1 + len(SCENES)
@@ -109,7 +135,14 @@ def test_editing_one_scene_reruns_only_that_scene(workdir):
     spec.write_text(yaml.safe_dump(data, sort_keys=False))
     try:
         jobs = planned_jobs(workdir, "all")
-        assert jobs == {"ground_truth": 1, "preview": 1, "scene_summary": 1, "all": 1}
+        assert jobs == {
+            "ground_truth": 1,
+            "preview": 1,
+            "scene_summary": 1,
+            **SCENE_CHAIN,
+            "cross_scene_table": 1,
+            "all": 1,
+        }
         out = snakemake(workdir, "-n", "all").stdout
         assert "wildcards: scene=scene_001" in out and "wildcards: scene=scene_000" not in out
     finally:
@@ -128,6 +161,27 @@ def test_single_target_builds_only_what_it_needs(workdir):
         workdir, "results/ground_truth/scene_000.zarr", "--forcerun", "ground_truth"
     )
     assert jobs == {"ground_truth": 1}
+    target = "results/correlation/scene_001/spp2.csv"
+    assert planned_jobs(workdir, target, "--forceall") == {"ground_truth": 1, **SCENE_CHAIN}
+    assert "scene_000" not in snakemake(workdir, "-n", target, "--forceall").stdout
+
+
+def test_analysis_parameter_change_renders_nothing(workdir):
+    jobs = planned_jobs(workdir, "all", config={"analysis": {"min_pixels": 40}})
+    assert jobs == {
+        "correlation": 3,
+        "cross_scene_table": 1,
+        "spp_sweep_table": 1,
+        "rho_vs_spp_figure": 1,
+        "all": 1,
+    }
+
+
+def test_adding_seeds_renders_only_the_new_seeds(workdir):
+    jobs = planned_jobs(workdir, "all", config={"render": {"n_seeds": 4}})
+    renders = {k: v for k, v in jobs.items() if k.startswith("render_")}
+    assert renders == {"render_seeds_2_3": 3}
+    assert jobs["variance"] == 3 and "ground_truth" not in jobs
 
 
 def test_bad_config_stops_before_any_job_with_one_line(workdir):
