@@ -81,8 +81,13 @@ def copy_workflow(dest: Path, config: dict) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--configfile", type=Path, action="append", default=[],
-                        help="config files merged over config.yaml (like snakemake's)")
+    parser.add_argument(
+        "--configfile",
+        type=Path,
+        action="append",
+        default=[],
+        help="config files merged over config.yaml (like snakemake's)",
+    )
     parser.add_argument("--scenes", type=int, help="use only the first N scenes")
     parser.add_argument("--no-sweep", action="store_true", help="drop the SPP sweep")
     args = parser.parse_args(argv)
@@ -103,7 +108,9 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         proc = subprocess.run(
             [sys.executable, "-m", "snakemake", "-j2", *targets, "--configfile", "bench.yaml"],
-            cwd=work, capture_output=True, text=True,
+            cwd=work,
+            capture_output=True,
+            text=True,
         )
         pipeline = time.perf_counter() - start
         if proc.returncode != 0:
@@ -112,18 +119,27 @@ def main(argv=None) -> int:
         n_jobs = len(re.findall(r"^rule render_seeds_", proc.stdout + proc.stderr, flags=re.M))
         bare = subprocess.run(
             [sys.executable, "-c", BARE_LOOP, json.dumps(config)],
-            cwd=work, capture_output=True, text=True, check=True,
+            cwd=work,
+            capture_output=True,
+            text=True,
+            check=True,
         )
         baseline = json.loads(bare.stdout.strip().splitlines()[-1])
 
     ratio = pipeline / baseline["seconds"]
-    print(f"renders: {len(targets)} stores in {n_jobs} jobs, "
-          f"{baseline['samples'] / 1e6:.0f} M samples, "
-          f"{config['resolution']['width']}x{config['resolution']['height']}")
-    print(f"baseline (bare mi.render loop, one process): {baseline['seconds']:.1f} s "
-          f"({baseline['samples'] / baseline['seconds'] / 1e6:.2f} M samples/s)")
-    print(f"pipeline (snakemake -j2, seeds_per_job={config['render']['seeds_per_job']}): "
-          f"{pipeline:.1f} s")
+    print(
+        f"renders: {len(targets)} stores in {n_jobs} jobs, "
+        f"{baseline['samples'] / 1e6:.0f} M samples, "
+        f"{config['resolution']['width']}x{config['resolution']['height']}"
+    )
+    print(
+        f"baseline (bare mi.render loop, one process): {baseline['seconds']:.1f} s "
+        f"({baseline['samples'] / baseline['seconds'] / 1e6:.2f} M samples/s)"
+    )
+    print(
+        f"pipeline (snakemake -j2, seeds_per_job={config['render']['seeds_per_job']}): "
+        f"{pipeline:.1f} s"
+    )
     print(f"ratio pipeline / baseline: {ratio:.3f} (goal <= 1.15)")
     return 0
 

@@ -226,3 +226,14 @@ def test_a_neighbour_with_zero_bilinear_weight_does_not_exclude_a_pixel():
     finite_right = np.isfinite(right)
     rows = correlation_rows(left, np.nan_to_num(right), gt, sign=1, finite_right=finite_right)
     assert rows[0]["n_nonfinite"] == 1
+
+
+@pytest.mark.parametrize("stat", [0.0, 0.5, 3.0, 10.0, 27.0, 28.5, 40.0, 200.0])
+def test_log10_p_value_matches_scipy_without_underflow(stat):
+    from scipy.special import log_ndtr
+
+    from stereovar.correlation import log10_two_sided_normal_p
+
+    expected = (log_ndtr(-stat) + np.log(2.0)) / np.log(10.0)
+    assert log10_two_sided_normal_p(stat) == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    assert log10_two_sided_normal_p(-stat) == log10_two_sided_normal_p(stat)

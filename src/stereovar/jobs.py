@@ -350,9 +350,9 @@ def warp_job(variance, ground_truth, out) -> None:
     from .correlation import align_variance, region_masks
     from .store import open_dataset, write_dataset
 
-    v = open_dataset(variance).load()
-    gt = open_dataset(ground_truth).load()
-    gl = gt.sel(view="left")
+    v = open_dataset(variance)[["variance", "finite"]].load()
+    gt = open_dataset(ground_truth)
+    gl = gt[["disparity", "valid", "glass"]].sel(view="left").load()
     sigma_l, sigma_r = _left_right(v, "variance")
     fin_l, fin_r = _left_right(v, "finite")
     aligned = align_variance(
@@ -416,8 +416,8 @@ def correlation_job(variance, warped, ground_truth, out, *, min_pixels=30) -> li
     from .store import open_dataset
     from .tables import write_tables
 
-    v = open_dataset(variance).load()
-    w = open_dataset(warped).load()
+    v = open_dataset(variance)[["variance", "finite"]].load()
+    w = open_dataset(warped)
     gt = open_dataset(ground_truth)
     sigma_l, sigma_r = _left_right(v, "variance")
     aligned = {k: w[k].values for k in ("warped_variance", "omega", "omega_geometry", "usable")}

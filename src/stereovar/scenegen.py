@@ -182,7 +182,11 @@ class _Scene:
 
     def cylinder(self, stem, material, base, radius, height, yaw=0.0):
         return self.add(
-            stem, "cylinder", material, translate=base, rotate=(0, yaw, 0),
+            stem,
+            "cylinder",
+            material,
+            translate=base,
+            rotate=(0, yaw, 0),
             scale=(radius, height, radius),
         )
 
@@ -191,8 +195,13 @@ class _Scene:
 
     def lathe(self, stem, material, base, profile, yaw=0.0):
         return self.add(
-            stem, "lathe", material, translate=base, rotate=(0, yaw, 0),
-            profile=[_r(p) for p in profile], segments=96,
+            stem,
+            "lathe",
+            material,
+            translate=base,
+            rotate=(0, yaw, 0),
+            profile=[_r(p) for p in profile],
+            segments=96,
         )
 
     def free(self, fp, margin=0.05) -> bool:
@@ -221,19 +230,27 @@ def _palette(sc: _Scene) -> None:
     if floor_pattern == "planks":
         h = rng.uniform(0.05, 0.11)
         v = rng.uniform(0.35, 0.75)
-        cols = [_hsv(h, rng.uniform(0.45, 0.75), v), _hsv(h + 0.01, 0.7, v * 0.55),
-                _hsv(h - 0.01, 0.5, min(1.0, v * 1.25))]
+        cols = [
+            _hsv(h, rng.uniform(0.45, 0.75), v),
+            _hsv(h + 0.01, 0.7, v * 0.55),
+            _hsv(h - 0.01, 0.5, min(1.0, v * 1.25)),
+        ]
         tile = rng.uniform(1.2, 2.2)
     elif floor_pattern == "tiles":
         h = base_hue + rng.uniform(-0.1, 0.1)
         v = rng.uniform(0.55, 0.85)
-        cols = [_hsv(h, rng.uniform(0.05, 0.35), v), _hsv(h + 0.05, rng.uniform(0.1, 0.4), v * 0.8),
-                _hsv(h, 0.1, rng.uniform(0.2, 0.4))]
+        cols = [
+            _hsv(h, rng.uniform(0.05, 0.35), v),
+            _hsv(h + 0.05, rng.uniform(0.1, 0.4), v * 0.8),
+            _hsv(h, 0.1, rng.uniform(0.2, 0.4)),
+        ]
         tile = rng.uniform(1.0, 1.8)
     else:
         h = base_hue
-        cols = [_hsv(h, rng.uniform(0.0, 0.2), rng.uniform(0.75, 0.9)),
-                _hsv(h + 0.5, rng.uniform(0.1, 0.5), rng.uniform(0.15, 0.35))]
+        cols = [
+            _hsv(h, rng.uniform(0.0, 0.2), rng.uniform(0.75, 0.9)),
+            _hsv(h + 0.5, rng.uniform(0.1, 0.5), rng.uniform(0.15, 0.35)),
+        ]
         tile = rng.uniform(1.2, 2.4)
     sc.texture("floor", str(floor_pattern), cols, repeat=(W / tile, D / tile), resolution=1024)
     sc.material("floor", type="diffuse", texture="floor")
@@ -242,21 +259,26 @@ def _palette(sc: _Scene) -> None:
     wall_h = base_hue + (0.08 if warm else 0.55) + rng.uniform(-0.05, 0.05)
     wall_v = rng.uniform(0.7, 0.92)
     wall_pattern = rng.choice(["noise", "noise", "stripes", "stripes", "tiles"])
-    wcols = [_hsv(wall_h, rng.uniform(0.05, 0.3), wall_v),
-             _hsv(wall_h + 0.03, rng.uniform(0.1, 0.35), wall_v * rng.uniform(0.7, 0.85))]
+    wcols = [
+        _hsv(wall_h, rng.uniform(0.05, 0.3), wall_v),
+        _hsv(wall_h + 0.03, rng.uniform(0.1, 0.35), wall_v * rng.uniform(0.7, 0.85)),
+    ]
     if wall_pattern == "stripes":
         wcols.append(_hsv(wall_h + rng.uniform(0.3, 0.7), rng.uniform(0.3, 0.6), wall_v * 0.75))
     if wall_pattern == "tiles":
         wcols.append(_hsv(wall_h, 0.05, 0.45))
     wtile = rng.uniform(1.0, 2.0)
-    sc.texture("wall", str(wall_pattern), wcols, repeat=(max(W, D) / wtile, H / wtile),
-               resolution=1024)
+    sc.texture(
+        "wall", str(wall_pattern), wcols, repeat=(max(W, D) / wtile, H / wtile), resolution=1024
+    )
     sc.material("wall", type="diffuse", texture="wall")
     if rng.random() < 0.5:
         ah = rng.random()
-        acols = [_hsv(ah, rng.uniform(0.2, 0.6), rng.uniform(0.5, 0.85)),
-                 _hsv(ah + 0.05, rng.uniform(0.2, 0.6), rng.uniform(0.3, 0.6)),
-                 _hsv(ah + 0.5, rng.uniform(0.0, 0.3), rng.uniform(0.7, 0.9))]
+        acols = [
+            _hsv(ah, rng.uniform(0.2, 0.6), rng.uniform(0.5, 0.85)),
+            _hsv(ah + 0.05, rng.uniform(0.2, 0.6), rng.uniform(0.3, 0.6)),
+            _hsv(ah + 0.5, rng.uniform(0.0, 0.3), rng.uniform(0.7, 0.9)),
+        ]
         apat = str(rng.choice(["stripes", "noise", "checker", "tiles"]))
         atile = rng.uniform(0.8, 1.6)
         sc.texture("accent", apat, acols, repeat=(W / atile, H / atile), resolution=1024)
@@ -264,75 +286,151 @@ def _palette(sc: _Scene) -> None:
     else:
         sc.material("accent", type="diffuse", texture="wall")
 
-    sc.texture("ceiling", "noise", [_hsv(wall_h, 0.04, 0.9), _hsv(wall_h, 0.06, 0.78)],
-               repeat=(W / 1.5, D / 1.5), resolution=512)
+    sc.texture(
+        "ceiling",
+        "noise",
+        [_hsv(wall_h, 0.04, 0.9), _hsv(wall_h, 0.06, 0.78)],
+        repeat=(W / 1.5, D / 1.5),
+        resolution=512,
+    )
     sc.material("ceiling", type="diffuse", texture="ceiling")
 
     # furniture woods
     for name in ("wood", "wood2"):
         h = rng.uniform(0.04, 0.11)
         v = rng.uniform(0.3, 0.8)
-        sc.texture(name, "grain",
-                   [_hsv(h, rng.uniform(0.4, 0.7), v), _hsv(h, 0.75, v * 0.5),
-                    _hsv(h, 0.5, min(1.0, v * 1.2))],
-                   repeat=(1.0, 1.0), resolution=512)
+        sc.texture(
+            name,
+            "grain",
+            [
+                _hsv(h, rng.uniform(0.4, 0.7), v),
+                _hsv(h, 0.75, v * 0.5),
+                _hsv(h, 0.5, min(1.0, v * 1.2)),
+            ],
+            repeat=(1.0, 1.0),
+            resolution=512,
+        )
         if name == "wood2" and rng.random() < 0.5:  # lacquered wood: glossy with grain
-            sc.material(name, type="glossy", texture=name,
-                        reflectance=sc.textures[name]["colors"][0],
-                        roughness=float(rng.uniform(0.05, 0.3)), ior=1.5)
+            sc.material(
+                name,
+                type="glossy",
+                texture=name,
+                reflectance=sc.textures[name]["colors"][0],
+                roughness=float(rng.uniform(0.05, 0.3)),
+                ior=1.5,
+            )
         else:
             sc.material(name, type="diffuse", texture=name)
 
     # cardboard / fabric-like noise for boxes
     ch = rng.uniform(0.06, 0.12)
-    sc.texture("cardboard", "noise", [_hsv(ch, 0.5, 0.7), _hsv(ch, 0.6, 0.5),
-                                      _hsv(ch, 0.4, 0.8)], resolution=256)
+    sc.texture(
+        "cardboard",
+        "noise",
+        [_hsv(ch, 0.5, 0.7), _hsv(ch, 0.6, 0.5), _hsv(ch, 0.4, 0.8)],
+        resolution=256,
+    )
     sc.material("cardboard", type="diffuse", texture="cardboard")
     ph = rng.random()
-    sc.texture("print", str(rng.choice(["checker", "stripes", "tiles"])),
-               [_hsv(ph, rng.uniform(0.3, 0.8), rng.uniform(0.5, 0.9)),
-                _hsv(ph + 0.4, rng.uniform(0.3, 0.8), rng.uniform(0.2, 0.6)),
-                _hsv(ph + 0.7, 0.2, 0.85)], resolution=256)
+    sc.texture(
+        "print",
+        str(rng.choice(["checker", "stripes", "tiles"])),
+        [
+            _hsv(ph, rng.uniform(0.3, 0.8), rng.uniform(0.5, 0.9)),
+            _hsv(ph + 0.4, rng.uniform(0.3, 0.8), rng.uniform(0.2, 0.6)),
+            _hsv(ph + 0.7, 0.2, 0.85),
+        ],
+        resolution=256,
+    )
     sc.material("patterned", type="diffuse", texture="print")
 
     # glossy plastics
     for k in range(3):
-        sc.material(f"plastic_{k}", type="glossy",
-                    reflectance=_hsv(rng.random(), rng.uniform(0.4, 0.9), rng.uniform(0.4, 0.9)),
-                    roughness=float(rng.choice([0.0, rng.uniform(0.05, 0.35)])),
-                    ior=float(rng.uniform(1.45, 1.6)))
-    sc.material("paint", type="glossy",
-                reflectance=_hsv(rng.random(), rng.uniform(0.1, 0.6), rng.uniform(0.5, 0.9)),
-                roughness=float(rng.uniform(0.1, 0.4)), ior=1.5)
+        sc.material(
+            f"plastic_{k}",
+            type="glossy",
+            reflectance=_hsv(rng.random(), rng.uniform(0.4, 0.9), rng.uniform(0.4, 0.9)),
+            roughness=float(rng.choice([0.0, rng.uniform(0.05, 0.35)])),
+            ior=float(rng.uniform(1.45, 1.6)),
+        )
+    sc.material(
+        "paint",
+        type="glossy",
+        reflectance=_hsv(rng.random(), rng.uniform(0.1, 0.6), rng.uniform(0.5, 0.9)),
+        roughness=float(rng.uniform(0.1, 0.4)),
+        ior=1.5,
+    )
     # metals
     metals = rng.choice(_METALS, size=2, replace=False)
-    sc.material("metal_0", type="conductor", metal=str(metals[0]),
-                roughness=float(rng.choice([0.0, rng.uniform(0.05, 0.3)])))
-    sc.material("metal_1", type="conductor", metal=str(metals[1]),
-                roughness=float(rng.uniform(0.1, 0.4)))
+    sc.material(
+        "metal_0",
+        type="conductor",
+        metal=str(metals[0]),
+        roughness=float(rng.choice([0.0, rng.uniform(0.05, 0.3)])),
+    )
+    sc.material(
+        "metal_1", type="conductor", metal=str(metals[1]), roughness=float(rng.uniform(0.1, 0.4))
+    )
     # glass: clear and slightly tinted
     sc.material("glass", type="glass", ior=float(rng.uniform(1.45, 1.55)), roughness=0.0)
     tint = _hsv(rng.random(), rng.uniform(0.05, 0.3), 1.0)
-    sc.material("glass_tinted", type="glass", ior=float(rng.uniform(1.45, 1.6)), roughness=0.0,
-                tint=tint)
+    sc.material(
+        "glass_tinted", type="glass", ior=float(rng.uniform(1.45, 1.6)), roughness=0.0, tint=tint
+    )
 
 
 def _room(sc: _Scene) -> None:
     """Floor, ceiling and four walls as inward-facing rectangles (overlapping by 1 cm)."""
     W, H, D = sc.W, sc.H, sc.D
     e = 0.01
-    sc.add("floor", "rectangle", "floor", translate=(0, 0, D / 2), rotate=(-90, 0, 0),
-           scale=(W / 2 + e, D / 2 + e, 1))
-    sc.add("ceiling", "rectangle", "ceiling", translate=(0, H, D / 2), rotate=(90, 0, 0),
-           scale=(W / 2 + e, D / 2 + e, 1))
-    sc.add("wall_back", "rectangle", "accent", translate=(0, H / 2, D), rotate=(0, 180, 0),
-           scale=(W / 2 + e, H / 2 + e, 1))
-    sc.add("wall_front", "rectangle", "wall", translate=(0, H / 2, 0), rotate=(0, 0, 0),
-           scale=(W / 2 + e, H / 2 + e, 1))
-    sc.add("wall_left", "rectangle", "wall", translate=(-W / 2, H / 2, D / 2), rotate=(0, 90, 0),
-           scale=(D / 2 + e, H / 2 + e, 1))
-    sc.add("wall_right", "rectangle", "wall", translate=(W / 2, H / 2, D / 2),
-           rotate=(0, -90, 0), scale=(D / 2 + e, H / 2 + e, 1))
+    sc.add(
+        "floor",
+        "rectangle",
+        "floor",
+        translate=(0, 0, D / 2),
+        rotate=(-90, 0, 0),
+        scale=(W / 2 + e, D / 2 + e, 1),
+    )
+    sc.add(
+        "ceiling",
+        "rectangle",
+        "ceiling",
+        translate=(0, H, D / 2),
+        rotate=(90, 0, 0),
+        scale=(W / 2 + e, D / 2 + e, 1),
+    )
+    sc.add(
+        "wall_back",
+        "rectangle",
+        "accent",
+        translate=(0, H / 2, D),
+        rotate=(0, 180, 0),
+        scale=(W / 2 + e, H / 2 + e, 1),
+    )
+    sc.add(
+        "wall_front",
+        "rectangle",
+        "wall",
+        translate=(0, H / 2, 0),
+        rotate=(0, 0, 0),
+        scale=(W / 2 + e, H / 2 + e, 1),
+    )
+    sc.add(
+        "wall_left",
+        "rectangle",
+        "wall",
+        translate=(-W / 2, H / 2, D / 2),
+        rotate=(0, 90, 0),
+        scale=(D / 2 + e, H / 2 + e, 1),
+    )
+    sc.add(
+        "wall_right",
+        "rectangle",
+        "wall",
+        translate=(W / 2, H / 2, D / 2),
+        rotate=(0, -90, 0),
+        scale=(D / 2 + e, H / 2 + e, 1),
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -342,15 +440,23 @@ def _room(sc: _Scene) -> None:
 
 def _support(origin, yaw, y, hx, hz, clearance):
     """A horizontal surface on which small objects can stand."""
-    return {"origin": np.asarray(origin, float), "yaw": float(yaw), "y": float(y),
-            "hx": float(hx), "hz": float(hz), "clear": float(clearance), "used": []}
+    return {
+        "origin": np.asarray(origin, float),
+        "yaw": float(yaw),
+        "y": float(y),
+        "hx": float(hx),
+        "hz": float(hz),
+        "clear": float(clearance),
+        "used": [],
+    }
 
 
 def _table(sc: _Scene, origin, yaw, length, depth, height, *, wood="wood", metal_legs=False):
     rng = sc.rng
     top = rng.uniform(0.03, 0.06)
-    sc.box("table_top", wood, origin, yaw, (0, height - top / 2, 0),
-           (length / 2, top / 2, depth / 2))
+    sc.box(
+        "table_top", wood, origin, yaw, (0, height - top / 2, 0), (length / 2, top / 2, depth / 2)
+    )
     inset = rng.uniform(0.04, 0.1)
     leg = rng.uniform(0.035, 0.06)
     leg_h = height - top
@@ -370,23 +476,55 @@ def _shelf(sc: _Scene, origin, yaw, width, depth, height):
     rng = sc.rng
     t = rng.uniform(0.018, 0.03)
     mat = "wood2"
-    sc.box("shelf_side", mat, origin, yaw, (-(width / 2 - t / 2), height / 2, 0),
-           (t / 2, height / 2, depth / 2))
-    sc.box("shelf_side", mat, origin, yaw, ((width / 2 - t / 2), height / 2, 0),
-           (t / 2, height / 2, depth / 2))
-    sc.box("shelf_back", mat, origin, yaw, (0, height / 2, -depth / 2 + 0.006),
-           (width / 2 - t, height / 2, 0.006))
+    sc.box(
+        "shelf_side",
+        mat,
+        origin,
+        yaw,
+        (-(width / 2 - t / 2), height / 2, 0),
+        (t / 2, height / 2, depth / 2),
+    )
+    sc.box(
+        "shelf_side",
+        mat,
+        origin,
+        yaw,
+        ((width / 2 - t / 2), height / 2, 0),
+        (t / 2, height / 2, depth / 2),
+    )
+    sc.box(
+        "shelf_back",
+        mat,
+        origin,
+        yaw,
+        (0, height / 2, -depth / 2 + 0.006),
+        (width / 2 - t, height / 2, 0.006),
+    )
     n = int(rng.integers(3, 6))
     plinth = rng.uniform(0.05, 0.12)
     levels = np.linspace(plinth, height - t, n + 1)
     supports = []
     for k, y in enumerate(levels):
-        sc.box("shelf_board", mat, origin, yaw, (0, y + t / 2, 0.006),
-               (width / 2 - t, t / 2, depth / 2 - 0.006))
+        sc.box(
+            "shelf_board",
+            mat,
+            origin,
+            yaw,
+            (0, y + t / 2, 0.006),
+            (width / 2 - t, t / 2, depth / 2 - 0.006),
+        )
         if k < n:
             clear = levels[k + 1] - y - t - 0.02
-            supports.append(_support(origin + _yaw_matrix(yaw) @ np.array([0, 0, 0.02]), yaw,
-                                     y + t, width / 2 - t - 0.02, depth / 2 - 0.04, clear))
+            supports.append(
+                _support(
+                    origin + _yaw_matrix(yaw) @ np.array([0, 0, 0.02]),
+                    yaw,
+                    y + t,
+                    width / 2 - t - 0.02,
+                    depth / 2 - 0.04,
+                    clear,
+                )
+            )
     supports.append(_support(origin, yaw, height, width / 2 - 0.03, depth / 2 - 0.03, 0.3))
     return supports
 
@@ -394,18 +532,31 @@ def _shelf(sc: _Scene, origin, yaw, width, depth, height):
 def _cabinet(sc: _Scene, origin, yaw, width, depth, height):
     rng = sc.rng
     body = str(rng.choice(["wood", "wood2", "paint"]))
-    sc.box("cabinet_body", body, origin, yaw, (0, height / 2, 0),
-           (width / 2, height / 2, depth / 2))
+    sc.box(
+        "cabinet_body", body, origin, yaw, (0, height / 2, 0), (width / 2, height / 2, depth / 2)
+    )
     doors = 1 if width < 0.7 else 2
     dw = (width - 0.04) / doors
     door_mat = str(rng.choice(["paint", "plastic_0", "wood2"]))
     for k in range(doors):
         cx = -width / 2 + 0.02 + dw * (k + 0.5)
-        sc.box("cabinet_door", door_mat, origin, yaw, (cx, height / 2 + 0.02, depth / 2 + 0.01),
-               (dw / 2 - 0.006, height / 2 - 0.05, 0.01))
+        sc.box(
+            "cabinet_door",
+            door_mat,
+            origin,
+            yaw,
+            (cx, height / 2 + 0.02, depth / 2 + 0.01),
+            (dw / 2 - 0.006, height / 2 - 0.05, 0.01),
+        )
         hx = cx + (dw / 2 - 0.06) * (1 if k == 0 else -1)
-        sc.box("cabinet_handle", "metal_0", origin, yaw, (hx, height * 0.6, depth / 2 + 0.035),
-               (0.01, 0.07, 0.012))
+        sc.box(
+            "cabinet_handle",
+            "metal_0",
+            origin,
+            yaw,
+            (hx, height * 0.6, depth / 2 + 0.035),
+            (0.01, 0.07, 0.012),
+        )
     return [_support(origin, yaw, height, width / 2 - 0.03, depth / 2 - 0.03, 0.6)]
 
 
@@ -443,8 +594,10 @@ def _place_on(sc: _Scene, support, radius, height, *, toward=None, tries=30):
         lz = rng.uniform(-support["hz"] + radius, support["hz"] - radius)
         if facing is not None and lx * facing[0] + lz * facing[2] < 0:
             lx, lz = -lx, -lz
-        if all((lx - ux) ** 2 + (lz - uz) ** 2 >= (radius + ur + 0.02) ** 2
-               for ux, uz, ur in support["used"]):
+        if all(
+            (lx - ux) ** 2 + (lz - uz) ** 2 >= (radius + ur + 0.02) ** 2
+            for ux, uz, ur in support["used"]
+        ):
             support["used"].append((lx, lz, radius))
             p = support["origin"] + rot @ np.array([lx, 0.0, lz])
             p[1] = support["y"]
@@ -472,31 +625,45 @@ def _small_object(sc: _Scene, support, kind: str) -> bool:
         p = _place_on(sc, support, math.hypot(hx, hz), 2 * hy)
         if p is None:
             return False
-        sc.add("plastic_box", "box", str(rng.choice(["plastic_0", "plastic_1", "plastic_2"])),
-               translate=p + [0, hy, 0], rotate=(0, support["yaw"] + rng.uniform(-30, 30), 0),
-               scale=(hx, hy, hz))
+        sc.add(
+            "plastic_box",
+            "box",
+            str(rng.choice(["plastic_0", "plastic_1", "plastic_2"])),
+            translate=p + [0, hy, 0],
+            rotate=(0, support["yaw"] + rng.uniform(-30, 30), 0),
+            scale=(hx, hy, hz),
+        )
     elif kind == "plastic_ball":
         r = rng.uniform(0.04, 0.1)
         p = _place_on(sc, support, r, 2 * r)
         if p is None:
             return False
-        sc.sphere("plastic_ball", str(rng.choice(["plastic_0", "plastic_1", "plastic_2"])),
-                  p + [0, r, 0], r)
+        sc.sphere(
+            "plastic_ball",
+            str(rng.choice(["plastic_0", "plastic_1", "plastic_2"])),
+            p + [0, r, 0],
+            r,
+        )
     elif kind == "books":
         n = int(rng.integers(3, 9))
         thick = rng.uniform(0.02, 0.05, size=n)
         heights = rng.uniform(0.15, 0.28, size=n)
         depth = rng.uniform(0.1, 0.16)
         width = float(thick.sum())
-        p = _place_on(sc, support, math.hypot(width / 2, depth / 2) + 0.01,
-                      float(heights.max()))
+        p = _place_on(sc, support, math.hypot(width / 2, depth / 2) + 0.01, float(heights.max()))
         if p is None:
             return False
         x = -width / 2
         for t, h in zip(thick, heights, strict=False):
             mat = str(rng.choice(["patterned", "plastic_0", "plastic_1", "paint", "cardboard"]))
-            sc.box("book", mat, p, support["yaw"], (x + t / 2, h / 2, 0),
-                   (t / 2 - 0.001, h / 2, depth / 2))
+            sc.box(
+                "book",
+                mat,
+                p,
+                support["yaw"],
+                (x + t / 2, h / 2, 0),
+                (t / 2 - 0.001, h / 2, depth / 2),
+            )
             x += t
     else:
         raise ValueError(kind)
@@ -540,8 +707,14 @@ def _vase_profile(rng, height, radius):
     lip = neck * rng.uniform(1.05, 1.5)
     yb = height * rng.uniform(0.3, 0.5)
     yn = height * rng.uniform(0.7, 0.85)
-    return [[foot, 0.0], [radius * 0.9, yb * 0.6], [radius, yb],
-            [radius * 0.85, (yb + yn) / 2], [neck, yn], [lip, height]]
+    return [
+        [foot, 0.0],
+        [radius * 0.9, yb * 0.6],
+        [radius, yb],
+        [radius * 0.85, (yb + yn) / 2],
+        [neck, yn],
+        [lip, height],
+    ]
 
 
 def _glass_dims(rng, kind: str, *, floor: bool, factor: float) -> dict:
@@ -553,14 +726,26 @@ def _glass_dims(rng, kind: str, *, floor: bool, factor: float) -> dict:
     if kind == "pane":
         w = (rng.uniform(0.5, 0.9) if floor else rng.uniform(0.3, 0.6)) * f
         h = (rng.uniform(0.6, 1.1) if floor else rng.uniform(0.25, 0.5)) * f
-        return {"kind": kind, "w": w, "h": h, "t": rng.uniform(0.012, 0.04),
-                "turn": rng.uniform(-35, 35), "radius": w / 2 + 0.01, "height": h}
+        return {
+            "kind": kind,
+            "w": w,
+            "h": h,
+            "t": rng.uniform(0.012, 0.04),
+            "turn": rng.uniform(-35, 35),
+            "radius": w / 2 + 0.01,
+            "height": h,
+        }
     if kind == "vase":
         h = (rng.uniform(0.5, 0.85) if floor else rng.uniform(0.25, 0.45)) * f
         r = h * rng.uniform(0.22, 0.35)
         prof = _vase_profile(rng, h, r)
-        return {"kind": kind, "profile": prof, "spin": rng.uniform(0, 360),
-                "radius": max(p[0] for p in prof), "height": h}
+        return {
+            "kind": kind,
+            "profile": prof,
+            "spin": rng.uniform(0, 360),
+            "radius": max(p[0] for p in prof),
+            "height": h,
+        }
     if kind == "cylinder":
         r = (rng.uniform(0.12, 0.2) if floor else rng.uniform(0.05, 0.11)) * f
         h = (rng.uniform(0.4, 0.7) if floor else rng.uniform(0.15, 0.35)) * f
@@ -576,9 +761,14 @@ def _glass_object(sc: _Scene, dims: dict, base, facing_deg: float) -> None:
     if kind == "sphere":
         sc.sphere("glass_sphere", mat, base + [0, dims["r"], 0], dims["r"])
     elif kind == "pane":
-        sc.add("glass_pane", "box", mat, translate=base + [0, dims["h"] / 2, 0],
-               rotate=(0, facing_deg + dims["turn"], 0),
-               scale=(dims["w"] / 2, dims["h"] / 2, dims["t"] / 2))
+        sc.add(
+            "glass_pane",
+            "box",
+            mat,
+            translate=base + [0, dims["h"] / 2, 0],
+            rotate=(0, facing_deg + dims["turn"], 0),
+            scale=(dims["w"] / 2, dims["h"] / 2, dims["t"] / 2),
+        )
     elif kind == "vase":
         sc.lathe("glass_vase", mat, base, dims["profile"], yaw=dims["spin"])
     else:
@@ -620,8 +810,9 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
     corridor = (min(cam[0], tx) - 0.5, max(cam[0], tx) + 0.5, cam[2], tz)
 
     # camera target: around the table top
-    target = np.array([tx + rng.uniform(-0.25, 0.25), t_h + rng.uniform(0.0, 0.25),
-                       tz + rng.uniform(-0.2, 0.3)])
+    target = np.array(
+        [tx + rng.uniform(-0.25, 0.25), t_h + rng.uniform(0.0, 0.25), tz + rng.uniform(-0.2, 0.3)]
+    )
 
     supports = [table]
     # furniture against the walls
@@ -637,8 +828,9 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
                 w, d, h = rng.uniform(0.5, 1.4), rng.uniform(0.4, 0.6), rng.uniform(0.6, 1.1)
             else:
                 w, d, h = rng.uniform(0.8, 1.4), rng.uniform(0.45, 0.7), rng.uniform(0.7, 0.8)
-            placed = _place_against_wall(sc, w, d, walls=["back", "back", "left", "right"],
-                                         keep_out=corridor)
+            placed = _place_against_wall(
+                sc, w, d, walls=["back", "back", "left", "right"], keep_out=corridor
+            )
             if placed is None:
                 continue
             origin, yaw, fpw = placed
@@ -693,8 +885,10 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
 
     # glossy and metal props: at least one of each, plus extras
     props = ["metal_sphere", "metal_can", "plastic_box", "plastic_ball", "books"]
-    wanted = [str(rng.choice(["metal_sphere", "metal_can"])),
-              str(rng.choice(["plastic_box", "plastic_ball"]))]
+    wanted = [
+        str(rng.choice(["metal_sphere", "metal_can"])),
+        str(rng.choice(["plastic_box", "plastic_ball"])),
+    ]
     wanted += [str(k) for k in rng.choice(props, size=int(rng.integers(2, 7)))]
     for k, kind in enumerate(wanted):
         # the first metal and glossy props go on the main table when there is room
@@ -718,8 +912,12 @@ def _draw(rng: np.random.Generator) -> tuple[dict, dict]:
 
     _lights(sc, cam, t_origin)
     spec = {
-        "camera": {"origin": _r(cam), "target": _r(target), "up": [0.0, 1.0, 0.0],
-                   "fov_deg": _r(fov, 2)},
+        "camera": {
+            "origin": _r(cam),
+            "target": _r(target),
+            "up": [0.0, 1.0, 0.0],
+            "fov_deg": _r(fov, 2),
+        },
         "textures": sc.textures,
         "materials": sc.materials,
         "objects": sc.objects,
@@ -797,11 +995,13 @@ def _lights(sc: _Scene, cam, focus) -> None:
         area = 4.0 * hx * hy
         col = _light_color(rng, bool(rng.random() < 0.6))
         radiance = budget * share / area * col / col.mean()
-        sc.lights.append({
-            "name": f"light_{len(sc.lights)}_{kind}",
-            "radiance": _r(radiance, 3),
-            "transform": {"translate": _r(pos), "rotate": _r(rot), "scale": _r((hx, hy, 1.0))},
-        })
+        sc.lights.append(
+            {
+                "name": f"light_{len(sc.lights)}_{kind}",
+                "radiance": _r(radiance, 3),
+                "transform": {"translate": _r(pos), "rotate": _r(rot), "scale": _r((hx, hy, 1.0))},
+            }
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -921,15 +1121,17 @@ def _local_bounds(obj: dict) -> np.ndarray:
         prof = np.asarray(obj["profile"], dtype=np.float64)
         r = float(prof[:, 0].max())
         lo, hi = (-r, float(prof[:, 1].min()), -r), (r, float(prof[:, 1].max()), r)
-    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                     for z in (lo[2], hi[2])])
+    return np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
 
 
 def _pixel_window(obj, m, origin, frame, f, width, height):
     """Pixel rows/columns slices that can see ``obj`` (whole image if it straddles the eye)."""
     corners = _local_bounds(obj) @ m[:3, :3].T + m[:3, 3]
-    u, v, z = project_points(corners, origin=origin, frame=frame, focal_px=f, width=width,
-                             height=height)
+    u, v, z = project_points(
+        corners, origin=origin, frame=frame, focal_px=f, width=width, height=height
+    )
     if np.any(z <= 1e-3):
         return slice(0, height), slice(0, width)
     c0 = int(max(0, np.floor(np.min(u)) - 1))
@@ -1037,8 +1239,9 @@ def _albedo(spec: dict, material: str) -> float | None:
     return float(np.mean(rgb)) * 0.85  # patterns darken their base colours (gaps, grout)
 
 
-def predicted_mean_radiance(spec: dict, *, width: int = EXPOSURE_SIZE[0],
-                            height: int = EXPOSURE_SIZE[1]) -> float:
+def predicted_mean_radiance(
+    spec: dict, *, width: int = EXPOSURE_SIZE[0], height: int = EXPOSURE_SIZE[1]
+) -> float:
     """Mean left-view pixel value predicted by a simple one-bounce-plus-ambient model.
 
     .. math::
@@ -1102,8 +1305,9 @@ def predicted_mean_radiance(spec: dict, *, width: int = EXPOSURE_SIZE[0],
             e_direct += radiance * dA * cos_p * cos_l / r2
     # ambient inter-reflection over the room's surfaces
     room = [o for o in spec["objects"] if o["name"].startswith(("floor", "ceiling", "wall_"))]
-    areas = np.array([4 * abs(o["transform"]["scale"][0] * o["transform"]["scale"][1])
-                      for o in room])
+    areas = np.array(
+        [4 * abs(o["transform"]["scale"][0] * o["transform"]["scale"][1]) for o in room]
+    )
     rhos = np.array([_albedo(spec, o["material"]) or 0.5 for o in room])
     rho = float(np.sum(areas * rhos) / np.sum(areas))
     e_ambient = rho / (1.0 - rho) * power / float(np.sum(areas))
@@ -1158,8 +1362,9 @@ def glass_coverage(spec: dict, *, width: int = ESTIMATE_SIZE[0], height: int = E
     }
 
 
-def estimate_glass_fraction(spec: dict, *, width: int = ESTIMATE_SIZE[0],
-                            height: int = ESTIMATE_SIZE[1]) -> float:
+def estimate_glass_fraction(
+    spec: dict, *, width: int = ESTIMATE_SIZE[0], height: int = ESTIMATE_SIZE[1]
+) -> float:
     """Share of the left view's pixels whose first hit is glass (ray-cast estimate).
 
     The default 320x180 grid has the aspect of the paper's 1280x720 views; the fraction is

@@ -488,9 +488,7 @@ def _ordered(value, *, named: bool = False):
             keys = sorted(value)
         else:
             keys = sorted(value, key=lambda k: (_KEY_RANK.get(k, len(_KEY_RANK)), k))
-        return {
-            k: _ordered(value[k], named=(not named and k in _NAMED_MAPS)) for k in keys
-        }
+        return {k: _ordered(value[k], named=(not named and k in _NAMED_MAPS)) for k in keys}
     if isinstance(value, list):
         return [_ordered(v) for v in value]
     return value
@@ -505,8 +503,7 @@ def dump_scene_spec(spec: dict) -> str:
 
     def _list(dumper, data):
         flow = all(not isinstance(x, (dict, list)) for x in data) or all(
-            isinstance(x, list) and all(not isinstance(y, (dict, list)) for y in x)
-            for x in data
+            isinstance(x, list) and all(not isinstance(y, (dict, list)) for y in x) for x in data
         )
         return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
 

@@ -55,10 +55,27 @@ def atomic_path(path):
             tmp.unlink()
 
 
+CHUNK_BYTES = 32 * 2**20
+"""Target chunk size: arrays are chunked along their first dimension only, in blocks of at
+most this many bytes, so a whole image is one or a few chunks (cheap to read and stream)."""
+
+
+def _row_chunks(array) -> tuple[int, ...]:
+    row_bytes = max(1, array.dtype.itemsize * int(array.size // max(array.shape[0], 1)))
+    rows = max(1, min(array.shape[0], CHUNK_BYTES // row_bytes))
+    return (rows, *array.shape[1:])
+
+
 def write_dataset(ds: xr.Dataset | xr.DataArray, path) -> Path:
-    """Write an xarray object to a Zarr store at ``path`` atomically."""
+    """Write an xarray object to a Zarr store at ``path`` atomically.
+
+    Every variable is chunked along its first dimension only (:data:`CHUNK_BYTES`).
+    """
+    if isinstance(ds, xr.DataArray):
+        ds = ds.to_dataset(name=ds.name or "data", promote_attrs=False)
+    encoding = {name: {"chunks": _row_chunks(v)} for name, v in ds.data_vars.items() if v.ndim}
     with atomic_path(path) as tmp:
-        ds.to_zarr(tmp, mode="w", zarr_format=ZARR_FORMAT, consolidated=True)
+        ds.to_zarr(tmp, mode="w", zarr_format=ZARR_FORMAT, consolidated=True, encoding=encoding)
     return Path(path)
 
 

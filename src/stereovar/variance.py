@@ -1,8 +1,8 @@
 """Per-pixel Monte Carlo variance over independent seeds (paper Sec. 2.1, Eq. 1).
 
 :func:`variance_field` is the batch estimator on a stack of renders held in memory;
-:class:`StreamingVariance` accumulates the same estimate one render at a time (Welford, float64),
-so peak memory does not grow with the number of seeds; :func:`variance_from_stores` and
+:class:`StreamingVariance` accumulates the same estimate one render at a time (shifted sums
+in float64), so peak memory does not grow with the number of seeds; :func:`variance_from_stores` and
 :func:`variance_dataset` stream render stores from disk into it and build the contract of
 ``results/variance/{scene}/spp{spp}.zarr``.
 """
@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from .errors import StoreError
-from .store import open_dataset
+from .store import ZARR_FORMAT
 
 IMAGE_DIMS = ("y", "x", "channel")
 """Dims of one render (and of the seed mean)."""
@@ -86,35 +86,39 @@ def variance_field(images, *, dim: str = "seed"):
 
 
 def _as_image(image) -> np.ndarray:
-    """One render (or a block of its rows) as float64 (h, W, C)."""
+    """One render (or a block of its rows) as float32 or float64 (h, W, C), as given."""
     if isinstance(image, xr.DataArray):
         image = image.transpose(*IMAGE_DIMS).values
-    block = np.asarray(image, dtype=np.float64)
+    block = np.asarray(image)
+    if block.dtype not in (np.float32, np.float64):
+        block = block.astype(np.float32 if block.dtype.itemsize <= 2 else np.float64)
     if block.ndim != 3:
         raise ValueError(f"an image must have shape (H, W, C), got {block.shape}")
     return block
 
 
 class StreamingVariance:
-    """Welford accumulator of Eq. 1 fed one render (or one row block of it) at a time.
+    """Streaming accumulator of Eq. 1 fed one render (or one row block of it) at a time.
 
-    With :math:`n` renders added, the running mean and sum of squared deviations of each
-    pixel and channel are updated as (Welford; paper Sec. 2.1, Eq. 1)
+    Each pixel and channel keeps float64 sums of the deviations from a per-pixel shift
+    :math:`K` (the first render's value there; the shifted-data algorithm), so with :math:`N`
+    renders added (paper Sec. 2.1, Eq. 1)
 
     .. math::
 
-        \\delta = I^{(n)} - \\bar I_{n-1}, \\quad
-        \\bar I_n = \\bar I_{n-1} + \\delta / n, \\quad
-        M_n = M_{n-1} + \\delta\\,\\bigl(I^{(n)} - \\bar I_n\\bigr), \\quad
-        \\sigma^2 = \\tfrac13 \\sum_c M_{N,c} / N,
+        S_1 = \\sum_n \\bigl(I^{(n)} - K\\bigr), \\quad
+        S_2 = \\sum_n \\bigl(I^{(n)} - K\\bigr)^2, \\quad
+        \\bar I = K + \\frac{S_1}{N}, \\quad
+        \\sigma^2 = \\frac13 \\sum_c \\frac{S_{2,c} - S_{1,c}^2 / N}{N}.
 
-    all in float64, so large offsets (radiance ``1e4`` with small noise) stay accurate and
-    memory is two float64 images whatever :math:`N`.
+    Shifting by a sample of the same pixel keeps the sums small, so large offsets (radiance
+    ``1e4`` with small noise) stay accurate; deviations and sums are float64. Memory is
+    three float64 images whatever :math:`N`, and an update is four passes over the render.
 
     A pixel with a NaN or Inf in any channel of a render is counted in :attr:`n_nonfinite`;
-    its value is replaced by the running mean before the update (so the accumulator never holds
-    a non-finite number and no other pixel is affected), and its :attr:`mean` and
-    :attr:`variance` are reported as 0 with :attr:`finite` False.
+    that render contributes nothing there (so the accumulator never holds a non-finite
+    number and no other pixel is affected), and its :attr:`mean` and :attr:`variance` are
+    reported as 0 with :attr:`finite` False.
 
     Parameters
     ----------
@@ -124,22 +128,23 @@ class StreamingVariance:
     """
 
     def __init__(self, shape: tuple[int, int, int] | None = None):
-        self._mean = self._m2 = self._count = self._n_nonfinite = None
+        self._shift = self._s1 = self._s2 = self._count = self._n_nonfinite = None
         if shape is not None:
             self._allocate(tuple(int(s) for s in shape))
 
     def _allocate(self, shape) -> None:
         if len(shape) != 3:
             raise ValueError(f"shape must be (H, W, C), got {shape}")
-        self._mean = np.zeros(shape, dtype=np.float64)
-        self._m2 = np.zeros(shape, dtype=np.float64)
+        self._shift = None  # allocated by the first update
+        self._s1 = np.zeros(shape, dtype=np.float64)
+        self._s2 = np.zeros(shape, dtype=np.float64)
         self._count = np.zeros(shape[0], dtype=np.int64)
         self._n_nonfinite = np.zeros(shape[:2], dtype=np.int32)
 
     @property
     def shape(self) -> tuple[int, int, int] | None:
         """Image shape (H, W, C), or None before the first update."""
-        return None if self._mean is None else self._mean.shape
+        return None if self._s1 is None else self._s1.shape
 
     def update(self, image, *, rows: slice | None = None) -> StreamingVariance:
         """Add one render, or the row block ``rows`` of one render.
@@ -147,7 +152,7 @@ class StreamingVariance:
         Parameters
         ----------
         image : numpy.ndarray (H, W, C) or xarray.DataArray (y, x, channel)
-            The render, or its rows ``rows`` only.
+            The render, or its rows ``rows`` only (any float dtype; accumulated in float64).
         rows : slice, keyword-only, optional
             Contiguous rows that ``image`` holds; every row must receive each render once.
 
@@ -157,27 +162,40 @@ class StreamingVariance:
             ``self``.
         """
         block = _as_image(image)
-        if self._mean is None:
+        if self._s1 is None:
             if rows is not None:
                 raise ValueError("pass shape= to StreamingVariance before adding row blocks")
             self._allocate(block.shape)
-        height = self._mean.shape[0]
+        height = self._s1.shape[0]
         start, stop, step = (rows or slice(None)).indices(height)
         if step != 1:
             raise ValueError(f"rows must be a contiguous slice, got {rows}")
-        expected = (max(stop - start, 0), *self._mean.shape[1:])
+        expected = (max(stop - start, 0), *self._s1.shape[1:])
         if block.shape != expected:
             raise ValueError(f"image block has shape {block.shape}, expected {expected}")
         sl = slice(start, stop)
-        bad = ~np.isfinite(block).all(axis=-1)
-        mean = self._mean[sl]
-        n = (self._count[sl] + 1)[:, None, None]
-        x = np.where(bad[..., None], mean, block)
-        delta = x - mean
-        mean += delta / n
-        self._m2[sl] += delta * (x - mean)
+        if self._shift is None:
+            self._shift = np.zeros(self._s1.shape, dtype=np.float64)
+        first = self._count[sl] == 0
+        bad = None
+        if not np.isfinite(block.sum()):  # one cheap pass; any NaN or Inf makes it non-finite
+            bad = ~np.isfinite(block).all(axis=-1)
+            self._n_nonfinite[sl] += bad
+        if first.any():
+            # The first render of these rows is the shift; a non-finite value shifts by 0.
+            init = (
+                np.where(bad[first][..., None], 0.0, block[first])
+                if bad is not None
+                else (block[first])
+            )
+            self._shift[sl][first] = init
+        d = np.subtract(block, self._shift[sl], dtype=np.float64)
+        if bad is not None:
+            d[bad] = 0.0
+        self._s1[sl] += d
+        np.multiply(d, d, out=d)
+        self._s2[sl] += d
         self._count[sl] += 1
-        self._n_nonfinite[sl] += bad
         return self
 
     @property
@@ -213,14 +231,15 @@ class StreamingVariance:
     @property
     def mean(self) -> np.ndarray:
         """float64 (H, W, C): seed mean per channel; 0 where not :attr:`finite`."""
-        self._require()
-        return np.where(self.finite[..., None], self._mean, 0.0)
+        n = self._require()
+        return np.where(self.finite[..., None], self._shift + self._s1 / n, 0.0)
 
     @property
     def variance(self) -> np.ndarray:
         """float64 (H, W): Eq. 1 (1/N) averaged over channels; 0 where not :attr:`finite`."""
         n = self._require()
-        return np.where(self.finite, (self._m2 / n).mean(axis=-1), 0.0)
+        per_channel = np.maximum((self._s2 - self._s1 * self._s1 / n) / n, 0.0)
+        return np.where(self.finite, per_channel.mean(axis=-1), 0.0)
 
 
 def _one_line(text) -> str:
@@ -245,34 +264,74 @@ def _read_errors() -> tuple[type[BaseException], ...]:
     )
 
 
-def _open_radiance(path) -> xr.DataArray:
-    """The lazily opened ``radiance`` array of one render store, checked for completeness."""
-    import zarr
+class _Radiance:
+    """One render store's ``radiance`` array opened with zarr, checked for completeness."""
 
-    if not Path(path).exists():
-        raise StoreError(f"render store {path} does not exist; rerun `snakemake {path}`")
-    try:
-        ds = open_dataset(path)
-        if "radiance" not in ds:
-            raise _store_error(path, "no 'radiance' array")
-        radiance = ds["radiance"]
-        if set(radiance.dims) != set(IMAGE_DIMS):
-            raise _store_error(path, f"dims {radiance.dims} instead of {IMAGE_DIMS}")
-        # a missing chunk file reads back as the fill value, so count the stored chunks
-        array = zarr.open_group(str(path), mode="r")["radiance"]
-        stored, total = array.nchunks_initialized, array.nchunks
-    except _read_errors() as exc:
-        raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
-    if stored < total:
-        raise _store_error(path, f"{total - stored} of {total} chunks missing")
-    return radiance.transpose(*IMAGE_DIMS)
+    def __init__(self, path):
+        import zarr
+
+        self.path = path
+        if not Path(path).exists():
+            raise StoreError(f"render store {path} does not exist; rerun `snakemake {path}`")
+        try:
+            group = zarr.open_consolidated(str(path), mode="r", zarr_format=ZARR_FORMAT)
+            if "radiance" not in group:
+                raise _store_error(path, "no 'radiance' array")
+            array = group["radiance"]
+            dims = tuple(array.attrs.get("_ARRAY_DIMENSIONS", ()))
+            if set(dims) != set(IMAGE_DIMS) or len(dims) != array.ndim:
+                raise _store_error(path, f"dims {dims} instead of {IMAGE_DIMS}")
+            # a missing chunk file reads back as the fill value, so count the stored chunks
+            stored, total = array.nchunks_initialized, array.nchunks
+            self.coords = {k: group[k][:] for k in IMAGE_DIMS if k in group}
+        except _read_errors() as exc:
+            raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
+        if stored < total:
+            raise _store_error(path, f"{total - stored} of {total} chunks missing")
+        self.array = array
+        self.order = tuple(dims.index(k) for k in IMAGE_DIMS)
+        self.shape = tuple(array.shape[i] for i in self.order)
+
+    def rows(self, rows: slice) -> np.ndarray:
+        """Rows ``rows`` as (y, x, channel)."""
+        index = [slice(None)] * 3
+        index[self.order[0]] = rows
+        try:
+            return np.transpose(self.array[tuple(index)], self.order)
+        except _read_errors() as exc:
+            raise _store_error(self.path, f"{type(exc).__name__}: {exc}") from exc
 
 
-def _read_rows(radiance: xr.DataArray, path, rows: slice) -> np.ndarray:
-    try:
-        return np.asarray(radiance.isel(y=rows).values, dtype=np.float64)
-    except _read_errors() as exc:
-        raise _store_error(path, f"{type(exc).__name__}: {exc}") from exc
+def _blocks(paths, chunk_rows):
+    """Yield ``(radiance, rows, block)`` for each row block of each store in turn.
+
+    The next block is read in a background thread while the caller processes the current one
+    (zarr decompression and numpy both release the GIL), so reading and accumulating overlap;
+    at most two blocks are in memory.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    def tasks():
+        for path in paths:
+            radiance = _Radiance(path)
+            height = radiance.shape[0]
+            step = int(chunk_rows or height) or 1
+            for start in range(0, height, step):
+                yield radiance, slice(start, min(start + step, height))
+
+    def read(task):
+        radiance, rows = task
+        return radiance, rows, radiance.rows(rows)
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = None
+        for task in tasks():
+            future = pool.submit(read, task)
+            if pending is not None:
+                yield pending.result()
+            pending = future
+        if pending is not None:
+            yield pending.result()
 
 
 def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
@@ -317,18 +376,15 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows}")
     acc = None
     coords = {}
-    for path in paths:
-        radiance = _open_radiance(path)
-        shape = tuple(radiance.shape)
+    for radiance, rows, block in _blocks(paths, chunk_rows):
         if acc is None:
-            acc = StreamingVariance(shape=shape)
-            coords = {k: radiance.coords[k].values for k in IMAGE_DIMS if k in radiance.coords}
-        elif shape != acc.shape:
-            raise _store_error(path, f"shape {shape} differs from {acc.shape} of {paths[0]}")
-        step = int(chunk_rows or shape[0]) or 1
-        for start in range(0, shape[0], step):
-            rows = slice(start, min(start + step, shape[0]))
-            acc.update(_read_rows(radiance, path, rows), rows=rows)
+            acc = StreamingVariance(shape=radiance.shape)
+            coords = radiance.coords
+        elif radiance.shape != acc.shape:
+            raise _store_error(
+                radiance.path, f"shape {radiance.shape} differs from {acc.shape} of {paths[0]}"
+            )
+        acc.update(block, rows=rows)
     yx = ("y", "x")
     return xr.Dataset(
         {
@@ -383,7 +439,15 @@ def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) 
             f"left and right need the same number of seeds, got {len(left_paths)} "
             f"and {len(right_paths)}"
         )
-    views = [variance_from_stores(p, chunk_rows=chunk_rows) for p in (left_paths, right_paths)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    # The two views are independent streams: accumulate them side by side.
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        views = list(
+            pool.map(
+                lambda p: variance_from_stores(p, chunk_rows=chunk_rows), (left_paths, right_paths)
+            )
+        )
     left_shape, right_shape = (tuple(v["mean"].shape) for v in views)
     if left_shape != right_shape:
         raise _store_error(

@@ -1,0 +1,141 @@
+"""Analysis cost at paper scale: variance + warp + correlation against reading the renders.
+
+Writes N left and N right synthetic render stores at 1280x720 (float32 radiance, the same
+store layout and compression as the workflow's) and a ground truth, then, each in a fresh
+process so peak RSS is its own:
+
+* baseline: read every render store once (``open_dataset(...)["radiance"].values``);
+* analysis: the workflow's variance, warp and correlation jobs for that scene.
+
+It prints the ratio analysis / baseline (goal <= 2) and the analysis peak RSS for N and N/3
+seeds (goal < 1.5 GB and not growing with N).
+
+Usage::
+
+    .venv/bin/python bench/analysis.py            # N = 30, 1280x720
+    .venv/bin/python bench/analysis.py --seeds 10 --width 640 --height 360
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+READ = r"""
+import json, resource, sys, time
+from stereovar.store import open_dataset
+paths = json.loads(sys.argv[1])
+start = time.perf_counter()
+total = 0.0
+for p in paths:
+    total += float(open_dataset(p)["radiance"].values[0, 0, 0])
+seconds = time.perf_counter() - start
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "rss_mb": rss}))
+"""
+
+ANALYSE = r"""
+import json, resource, sys, time
+import stereovar.store  # xarray and zarr, imported before the clock as in the baseline
+from stereovar.jobs import correlation_job, variance_job, warp_job
+args = json.loads(sys.argv[1])
+start = time.perf_counter()
+variance_job(args["left"], args["right"], args["work"] + "/var.zarr")
+warp_job(args["work"] + "/var.zarr", args["gt"], args["work"] + "/warp.zarr")
+correlation_job(args["work"] + "/var.zarr", args["work"] + "/warp.zarr", args["gt"],
+                args["work"] + "/corr.csv")
+seconds = time.perf_counter() - start
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "rss_mb": rss}))
+"""
+
+
+def write_inputs(root: Path, n: int, width: int, height: int) -> dict:
+    from stereovar.store import write_dataset
+
+    rng = np.random.default_rng(0)
+    yy, xx = np.mgrid[0:height, 0:width]
+    amp = (0.05 + 0.05 * np.sin(xx / 17.0) ** 2 + 0.05 * yy / height).astype(np.float32)
+    paths = {"left": [], "right": []}
+    for view in ("left", "right"):
+        for k in range(n):
+            img = 0.3 + amp[..., None] * rng.standard_normal((height, width, 3), np.float32)
+            da = xr.DataArray(
+                img,
+                dims=("y", "x", "channel"),
+                coords={"channel": ["R", "G", "B"]},
+                name="radiance",
+                attrs={"scene": "bench", "spp": 512, "view": view, "seed_index": k},
+            )
+            path = root / f"{view}_seed{k}.zarr"
+            write_dataset(da, path)
+            paths[view].append(str(path))
+    glass = np.zeros((2, height, width), bool)
+    glass[:, height // 4 : height // 2, width // 4 : width // 2] = True
+    gt = xr.Dataset(
+        {
+            "disparity": (
+                ("view", "y", "x"),
+                np.broadcast_to(4.0 + 8.0 * yy / height, (2, height, width)).astype(np.float32),
+            ),
+            "valid": (("view", "y", "x"), np.ones((2, height, width), bool)),
+            "glass": (("view", "y", "x"), glass),
+        },
+        coords={"view": ["left", "right"]},
+        attrs={"disparity_sign": 1, "convention": "paper"},
+    )
+    write_dataset(gt, root / "gt.zarr")
+    return {"left": paths["left"], "right": paths["right"], "gt": str(root / "gt.zarr")}
+
+
+def run(code: str, arg) -> dict:
+    out = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(arg)], capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=30)
+    parser.add_argument("--width", type=int, default=1280)
+    parser.add_argument("--height", type=int, default=720)
+    args = parser.parse_args(argv)
+
+    with tempfile.TemporaryDirectory(prefix="stereovar-bench-") as tmp:
+        root = Path(tmp)
+        inputs = write_inputs(root, args.seeds, args.width, args.height)
+        results = {}
+        for n in sorted({max(2, args.seeds // 3), args.seeds}):
+            work = root / f"n{n}"
+            work.mkdir()
+            subset = {
+                **inputs,
+                "left": inputs["left"][:n],
+                "right": inputs["right"][:n],
+                "work": str(work),
+            }
+            read = run(READ, subset["left"] + subset["right"])
+            analysis = run(ANALYSE, subset)
+            results[n] = (read, analysis)
+            print(
+                f"N={n}, {args.width}x{args.height}: read {read['seconds']:.2f} s; "
+                f"variance+warp+correlation {analysis['seconds']:.2f} s; "
+                f"ratio {analysis['seconds'] / read['seconds']:.2f} (goal <= 2); "
+                f"peak RSS {analysis['rss_mb']:.0f} MB (read alone {read['rss_mb']:.0f} MB)"
+            )
+    small, large = min(results), max(results)
+    growth = results[large][1]["rss_mb"] / results[small][1]["rss_mb"]
+    print(f"peak RSS N={large} / N={small}: {growth:.2f} (goal: flat, < 1.5 GB)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
