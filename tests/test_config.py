@@ -72,7 +72,7 @@ def test_max_depth_accepts_minus_one():
 BAD_CONFIGS = [
     pytest.param(
         {"colour": "red"},
-        ["'colour'", "not known", "scenes, generator, resolution, rig, render, preview"],
+        ["'colour'", "not known", "scenes, generator, resolution, rig, render, analysis, preview"],
         id="unknown-top-level-key",
     ),
     pytest.param(
