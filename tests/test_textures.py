@@ -20,8 +20,13 @@ COLORS = {
 
 
 def spec(pattern, *, seed=3, resolution=128, **extra):
-    return {"pattern": pattern, "colors": COLORS[pattern], "seed": seed,
-            "resolution": resolution, **extra}
+    return {
+        "pattern": pattern,
+        "colors": COLORS[pattern],
+        "seed": seed,
+        "resolution": resolution,
+        **extra,
+    }
 
 
 def luminance(img):
@@ -125,8 +130,9 @@ def test_checker_matches_brute_force(seed, resolution):
     tiles) and one of the counts must reproduce the texture exactly.
     """
     c0, c1 = [0.85, 0.85, 0.85], [0.05, 0.05, 0.05]
-    img = bake_texture({"pattern": "checker", "colors": [c0, c1], "seed": seed,
-                        "resolution": resolution})
+    img = bake_texture(
+        {"pattern": "checker", "colors": [c0, c1], "seed": seed, "resolution": resolution}
+    )
     observed = np.linalg.norm(img - np.asarray(c0), axis=-1) > np.linalg.norm(
         img - np.asarray(c1), axis=-1
     )  # True where nearer colors[1]
@@ -165,3 +171,25 @@ def test_fast_enough():
     t0 = time.perf_counter()
     bake_texture(spec("grain", resolution=1024))
     assert time.perf_counter() - t0 < 3.0
+
+
+def test_cached_bake_equals_bake_and_survives_a_corrupt_cache(tmp_path):
+    from stereovar.textures import bake_texture, bake_texture_cached
+
+    spec = {
+        "pattern": "planks",
+        "colors": [[0.2, 0.1, 0.05], [0.7, 0.5, 0.3]],
+        "seed": 3,
+        "resolution": 64,
+    }
+    expected = bake_texture(spec)
+    first = bake_texture_cached(spec, cache_dir=tmp_path)
+    files = list(tmp_path.glob("*.npy"))
+    assert len(files) == 1
+    np.testing.assert_array_equal(first, expected)
+    np.testing.assert_array_equal(bake_texture_cached(spec, cache_dir=tmp_path), expected)
+    files[0].write_bytes(b"not an array")
+    np.testing.assert_array_equal(bake_texture_cached(spec, cache_dir=tmp_path), expected)
+    other = bake_texture_cached({**spec, "seed": 4}, cache_dir=tmp_path)
+    assert not np.array_equal(other, expected)
+    assert len(list(tmp_path.glob("*.npy"))) == 2

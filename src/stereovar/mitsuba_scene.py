@@ -112,9 +112,9 @@ def lathe_mesh(profile, segments: int) -> tuple[np.ndarray, np.ndarray]:
 
 @lru_cache(maxsize=64)
 def _baked_texture(texture_json: str) -> np.ndarray:
-    from .textures import bake_texture
+    from .textures import bake_texture_cached
 
-    return bake_texture(json.loads(texture_json))
+    return bake_texture_cached(json.loads(texture_json))
 
 
 def _rgb(value):

@@ -23,6 +23,11 @@ at ``((j + 0.5) / n, (i + 0.5) / n)``.
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+from pathlib import Path
+
 import numpy as np
 
 PATTERNS = ("planks", "tiles", "noise", "stripes", "checker", "grain")
@@ -342,3 +347,47 @@ def bake_texture(spec: dict) -> np.ndarray:
     rng = np.random.default_rng([seed, _SALT[pattern]])
     img = _PATTERN_FUNCS[pattern](rng, n, colors)
     return np.clip(img, 0.0, 1.0).astype(np.float32)
+
+
+TEXTURE_VERSION = 1
+"""Bumped whenever :func:`bake_texture` would give a different image for the same spec, so
+cached bakes of the old version are never reused."""
+
+
+def texture_cache_dir() -> Path:
+    """Directory of baked textures: ``$STEREOVAR_CACHE_DIR/textures`` or
+    ``~/.cache/stereovar/textures``."""
+    root = os.environ.get("STEREOVAR_CACHE_DIR") or Path.home() / ".cache" / "stereovar"
+    return Path(root) / "textures"
+
+
+def bake_texture_cached(spec: dict, cache_dir=None) -> np.ndarray:
+    """:func:`bake_texture` with a content-addressed on-disk cache.
+
+    The key is the SHA-256 of the canonical JSON of ``spec`` and :data:`TEXTURE_VERSION`, so a
+    cached image is only reused for the identical recipe. Every render job compiles its scene
+    afresh; the cache spares each one the baking (about a second for a scene with several
+    1024² textures). An unreadable or unwritable cache falls back to baking.
+    """
+    key = json.dumps({"spec": spec, "version": TEXTURE_VERSION}, sort_keys=True)
+    digest = hashlib.sha256(key.encode()).hexdigest()
+    path = Path(cache_dir or texture_cache_dir()) / f"{digest}.npy"
+    try:
+        image = np.load(path, allow_pickle=False)
+        if image.dtype == np.float32 and image.ndim == 3:
+            return image
+    except (OSError, ValueError):
+        pass
+    image = bake_texture(spec)
+
+    def save(tmp):
+        with open(tmp, "wb") as fh:
+            np.save(fh, image, allow_pickle=False)
+
+    try:
+        from .store import write_file
+
+        write_file(path, save)
+    except OSError:
+        pass
+    return image
