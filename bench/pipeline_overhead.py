@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
 import shutil
 import subprocess
 import sys
@@ -98,9 +97,13 @@ def main(argv=None) -> int:
         config["render"]["spp_sweep"]["scene"] = config["scenes"][0]
     if args.no_sweep:
         config["render"]["spp_sweep"]["spp"] = [config["render"]["spp"]]
-    from stereovar.experiment import render_stores
+    from stereovar.experiment import render_stores, scene_spp_pairs, seed_batches
 
     targets = render_stores(config)
+    render = config["render"]
+    n_jobs = len(scene_spp_pairs(config)) * len(
+        seed_batches(render["n_seeds"], render["seeds_per_job"])
+    )
 
     with tempfile.TemporaryDirectory(prefix="stereovar-bench-") as tmp:
         work = Path(tmp)
@@ -116,7 +119,6 @@ def main(argv=None) -> int:
         if proc.returncode != 0:
             print(proc.stdout[-3000:], proc.stderr[-3000:], file=sys.stderr)
             return 1
-        n_jobs = len(re.findall(r"^rule render_seeds_", proc.stdout + proc.stderr, flags=re.M))
         bare = subprocess.run(
             [sys.executable, "-c", BARE_LOOP, json.dumps(config)],
             cwd=work,
