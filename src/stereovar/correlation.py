@@ -292,8 +292,11 @@ def align_variance(
         valid=_field(ground_truth_left["valid"]),
     )
     # a warped value is clean when no neighbour with non-zero weight is non-finite
-    spoiled, _ = warp_right_to_left((~fin_right).astype(np.float64), disparity, sign=sign)
-    usable = fin_left & (spoiled == 0)
+    if fin_right.all():
+        usable = fin_left
+    else:
+        spoiled, _ = warp_right_to_left((~fin_right).astype(np.float64), disparity, sign=sign)
+        usable = fin_left & (spoiled == 0)
     return {
         "warped": warped,
         "omega_geometry": omega_gt,
