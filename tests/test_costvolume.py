@@ -280,3 +280,29 @@ def test_chance_is_one_over_scored_count_for_integer_gt(pair):
     res_in = wta_accuracy(cost, scored, d_gt, scored[2])
     assert res_in["chance"] == pytest.approx(expected)
     assert res["n_pixels"] == int(scored.any(axis=0).sum())
+
+
+@pytest.mark.parametrize("workers", [1, 2, 3])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_streamed_wta_equals_argmin_of_the_full_volume(workers, dtype, sign):
+    from stereovar.costvolume import sad_cost_volume, wta_disparity
+
+    rng = np.random.default_rng(7)
+    # Small integers make many exact ties, which must go to the smallest d as in argmin.
+    left = rng.integers(0, 4, size=(11, 17)).astype(np.float64)
+    right = rng.integers(0, 4, size=(11, 17)).astype(np.float64)
+    cost, scored = sad_cost_volume(left, right, max_disparity=6, window=3, sign=sign)
+    expected = np.full(left.shape, -1)
+    best = np.full(left.shape, np.inf)
+    for d in range(cost.shape[0]):  # brute-force running argmin, first minimum wins
+        for y in range(left.shape[0]):
+            for x in range(left.shape[1]):
+                if scored[d, y, x] and cost[d, y, x] < best[y, x]:
+                    best[y, x] = cost[d, y, x]
+                    expected[y, x] = d
+    disparity, winning = wta_disparity(
+        left, right, max_disparity=6, window=3, sign=sign, dtype=dtype, workers=workers
+    )
+    np.testing.assert_array_equal(disparity, expected)
+    np.testing.assert_allclose(winning, best, rtol=1e-6)
