@@ -478,11 +478,18 @@ def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
     v = values[:, eligible].astype(np.float64)
     s = scored[:, eligible]
     g = d_gt[eligible]
+    d = np.arange(n_disp, dtype=np.float64)[:, None]
+    near = (np.abs(d - g[None]) < 1.0) & s
+    # A pixel is scoreable only if some disparity within 1 px of its ground truth is scored.
+    keep = near.any(axis=0)
+    n = int(keep.sum())
+    if n == 0:
+        nan = float("nan")
+        return {"accuracy": nan, "n_pixels": 0, "n_hits": 0, "chance": nan, "reason": NO_PIXELS}
+    v, s, g, near = v[:, keep], s[:, keep], g[keep], near[:, keep]
     v = np.where(s, -v if maximise else v, np.inf)
     best = np.argmin(v, axis=0)
     hits = np.abs(best - g) < 1.0
-    d = np.arange(n_disp, dtype=np.float64)[:, None]
-    near = (np.abs(d - g[None]) < 1.0) & s
     chance = near.sum(axis=0) / s.sum(axis=0)
     return {
         "accuracy": float(hits.mean()),
@@ -501,8 +508,8 @@ def wta_accuracy(cost, scored, d_gt, mask=None) -> dict:
         \\Pr_x\\bigl[\\,|\\hat d(x) - d_{\\mathrm{GT}}(x)| < 1\\,\\bigr], \\qquad
         \\hat d(x) = \\arg\\min_{d \\text{ scored}} C(x, d)
 
-    over the region pixels with a finite ``d_gt`` and at least one scored disparity, against
-    the *subpixel* ground truth (so up to two integer disparities count as a hit). Ties go
+    over the region's *scoreable* pixels (a finite ``d_gt`` and at least one scored
+    disparity within 1 px of it, so a hit is possible), against the *subpixel* ground truth (so up to two integer disparities count as a hit). Ties go
     to the smallest :math:`d` (``numpy.argmin``).
 
     Parameters
