@@ -509,8 +509,9 @@ def wta_accuracy(cost, scored, d_gt, mask=None) -> dict:
         \\hat d(x) = \\arg\\min_{d \\text{ scored}} C(x, d)
 
     over the region's *scoreable* pixels (a finite ``d_gt`` and at least one scored
-    disparity within 1 px of it, so a hit is possible), against the *subpixel* ground truth (so up to two integer disparities count as a hit). Ties go
-    to the smallest :math:`d` (``numpy.argmin``).
+    disparity within 1 px of it, so a hit is possible), against the *subpixel* ground
+    truth (so up to two integer disparities count as a hit). Ties go to the smallest
+    :math:`d` (``numpy.argmin``).
 
     Parameters
     ----------
