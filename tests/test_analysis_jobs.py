@@ -17,7 +17,7 @@ from stereovar.jobs import (
     warp_job,
 )
 from stereovar.store import open_dataset, write_dataset
-from stereovar.tables import read_rows
+from stereovar.tables import read_rows, write_tables
 
 H, W, D, N = 24, 48, 3, 6
 
@@ -189,3 +189,61 @@ def test_tables_from_several_scenes_and_spps(tmp_path):
     assert all_row["mean_rho"] == pytest.approx(np.mean(rhos))
     assert all_row["std_rho"] == pytest.approx(np.std(rhos, ddof=1))
     assert all_row["n_scenes"] == 3
+
+
+def test_intervention_job_and_table(tmp_path, caplog):
+    from stereovar.jobs import intervention_job, intervention_table_job
+
+    ground_truth(tmp_path / "gt.zarr")
+    paths = renders(tmp_path, 16)
+    rows = intervention_job(
+        paths["left"], paths["right"], tmp_path / "gt.zarr", tmp_path / "iv.csv", window=3, block=8
+    )
+    # D defaults to the largest ground-truth disparity plus the margin.
+    assert {r["max_disparity"] for r in rows} == {D + 4}
+    stored = read_rows(tmp_path / "iv.csv")
+    assert len(stored) == 20 and stored[0]["scene"] == "synth"
+    with caplog.at_level("WARNING", logger="stereovar"):
+        intervention_job(
+            paths["left"],
+            paths["right"],
+            tmp_path / "gt.zarr",
+            tmp_path / "iv2.csv",
+            window=3,
+            block=8,
+            max_disparity=2,
+        )
+    warning = " ".join(r.getMessage() for r in caplog.records if r.levelname == "WARNING")
+    assert "unscoreable" in warning and str(H * W) in warning
+    second = [
+        dict(r, scene="other", value=r["value"] * 2 if np.isfinite(r["value"]) else r["value"])
+        for r in stored
+    ]
+    write_tables(stored + second, list(stored[0]), {"csv": tmp_path / "both.csv"})
+    table = intervention_table_job([tmp_path / "both.csv"], {"csv": tmp_path / "t3.csv"})
+    row = next(
+        r
+        for r in table
+        if (r["cost"], r["metric"], r["region"]) == ("residual_sad", "wta_accuracy", "non_glass")
+    )
+    v_n = [
+        r["value"]
+        for r in stored + second
+        if r["cost"] == "residual_sad"
+        and r["metric"] == "wta_accuracy"
+        and r["region"] == "non_glass"
+        and r["condition"] == "normal"
+    ]
+    v_d = [
+        r["value"]
+        for r in stored + second
+        if r["cost"] == "residual_sad"
+        and r["metric"] == "wta_accuracy"
+        and r["region"] == "non_glass"
+        and r["condition"] == "decorrelated"
+    ]
+    assert row["normal_mean"] == pytest.approx(np.mean(v_n))
+    assert row["normal_std"] == pytest.approx(np.std(v_n, ddof=1))
+    assert row["relative_change"] == pytest.approx(
+        (np.mean(v_n) - np.mean(v_d)) / abs(np.mean(v_d))
+    )

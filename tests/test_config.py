@@ -36,6 +36,13 @@ DEFAULTS = {
         "spp_sweep": {"scene": "scene_000", "spp": [8, 16, 32, 64, 128]},
     },
     "analysis": {"min_pixels": 30},
+    "intervention": {
+        "window": 5,
+        "block": 16,
+        "seed": 0,
+        "max_disparity": None,
+        "disparity_margin": 4,
+    },
     "preview": {"spp": 32},
 }
 
@@ -72,7 +79,11 @@ def test_max_depth_accepts_minus_one():
 BAD_CONFIGS = [
     pytest.param(
         {"colour": "red"},
-        ["'colour'", "not known", "scenes, generator, resolution, rig, render, analysis, preview"],
+        [
+            "'colour'",
+            "not known",
+            "scenes, generator, resolution, rig, render, analysis, intervention, preview",
+        ],
         id="unknown-top-level-key",
     ),
     pytest.param(
@@ -244,3 +255,20 @@ def test_conda_env_pins_match_pyproject():
     pip = next(item["pip"] for item in env["dependencies"] if isinstance(item, dict))
     assert sorted(pip) == sorted(project["dependencies"])
     assert "python=3.11" in env["dependencies"]
+
+
+@pytest.mark.parametrize(
+    ("override", "needles"),
+    [
+        ({"intervention": {"window": 4}}, ["'intervention.window'", "even", "5"]),
+        ({"intervention": {"window": 0}}, ["'intervention.window'"]),
+        ({"intervention": {"block": 200}}, ["'intervention.block'", "320x180", "180"]),
+    ],
+)
+def test_intervention_settings_are_checked(override, needles):
+    with pytest.raises(ConfigError) as err:
+        validate_config(override, SCHEMA)
+    message = str(err.value)
+    assert "\n" not in message
+    for needle in needles:
+        assert needle in message

@@ -105,7 +105,11 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         var = open_dataset(workdir / f"results/variance/{scene}/spp{spp}.zarr")
         assert dict(var["variance"].sizes) == {"view": 2, "y": 27, "x": 48}
         assert var.attrs["n_seeds"] == 2
-    for name in ("cross_scene", "spp_sweep", "spp_sweep_fit"):
+    for scene in SCENES:
+        rows = (workdir / f"results/intervention/{scene}.csv").read_text().splitlines()
+        assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,cost,metric")
+        assert len(rows) == 1 + 5 * 2 * 2
+    for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention"):
         for ext in ("csv", "md", "tex"):
             assert (workdir / f"results/tables/{name}.{ext}").stat().st_size > 0
     for fig in ("fig1_teaser", "fig2_rho_vs_spp", "fig3_material_scatter"):
@@ -141,6 +145,8 @@ def test_editing_one_scene_reruns_only_that_scene(workdir):
             "scene_summary": 1,
             **SCENE_CHAIN,
             "cross_scene_table": 1,
+            "intervention": 1,
+            "intervention_table": 1,
             "all": 1,
         }
         out = snakemake(workdir, "-n", "all").stdout

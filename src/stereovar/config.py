@@ -193,6 +193,25 @@ def _check_cross_fields(config: dict) -> None:
             f"config key 'render.spp_sweep.scene': {scene!r} is not in scenes; use one of: "
             f"{', '.join(scenes)} (or add it to scenes)"
         )
+    _check_intervention(config)
+
+
+def _check_intervention(config: dict) -> None:
+    intervention = config.get("intervention", {})
+    window = intervention.get("window")
+    if window is not None and window % 2 == 0:
+        raise ConfigError(
+            f"config key 'intervention.window': {window} is even; use an odd window "
+            f"(e.g. {window + 1}) so it is centred on the pixel"
+        )
+    block = intervention.get("block")
+    size = config.get("resolution", {})
+    smallest = min(size.get("width", block or 1), size.get("height", block or 1))
+    if block is not None and block > smallest:
+        raise ConfigError(
+            f"config key 'intervention.block': {block} is larger than the image "
+            f"({size.get('width')}x{size.get('height')}); use at most {smallest}"
+        )
 
 
 def validate_config(config: Mapping, schema_path) -> dict:

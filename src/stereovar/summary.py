@@ -231,3 +231,46 @@ def spp_sweep_table(entries: list[dict]) -> tuple[list[dict], dict]:
         spp, value = (np.array(c, dtype=np.float64) for c in zip(*points, strict=True))
         fit[region] = _log_log_fit(spp, value)
     return rows, fit
+
+
+def intervention_table(rows: list[dict]) -> list[dict]:
+    """Table 3 from per-scene intervention rows (paper Sec. 3.4).
+
+    For each (cost, metric, region): the mean and sample standard deviation (ddof 1) across
+    scenes of the normal and the decorrelated values, their mean chance levels, the number
+    of scenes with a finite value, and the relative change
+
+    .. math:: \\Delta = \\frac{\\bar v_{\\text{normal}} - \\bar v_{\\text{decorr}}}
+        {|\\bar v_{\\text{decorr}}|}.
+
+    NaN values (with a reason) are left out; a row without any finite value is NaN.
+    """
+    keys = []
+    groups: dict = {}
+    for r in rows:
+        key = (r["cost"], r["metric"], r["region"])
+        if key not in groups:
+            keys.append(key)
+            groups[key] = {"normal": [], "decorrelated": []}
+        groups[key][r["condition"]].append(r)
+    out = []
+    for cost, metric, region in keys:
+        row = {"cost": cost, "metric": metric, "region": region}
+        means = {}
+        for condition in ("normal", "decorrelated"):
+            items = [g for g in groups[(cost, metric, region)][condition] if _finite(g["value"])]
+            values = np.array([float(g["value"]) for g in items])
+            chances = [float(g["chance"]) for g in items if _finite(g.get("chance"))]
+            means[condition] = float(values.mean()) if values.size else math.nan
+            row[f"{condition}_mean"] = means[condition]
+            row[f"{condition}_std"] = float(values.std(ddof=1)) if values.size > 1 else math.nan
+            row[f"{condition}_chance"] = float(np.mean(chances)) if chances else math.nan
+            row[f"{condition}_n_scenes"] = int(values.size)
+        denominator = abs(means["decorrelated"])
+        row["relative_change"] = (
+            (means["normal"] - means["decorrelated"]) / denominator
+            if denominator > 0 and _finite(means["normal"])
+            else math.nan
+        )
+        out.append(row)
+    return out

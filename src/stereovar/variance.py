@@ -264,7 +264,7 @@ def _read_errors() -> tuple[type[BaseException], ...]:
     )
 
 
-class _Radiance:
+class RenderStore:
     """One render store's ``radiance`` array opened with zarr, checked for completeness."""
 
     def __init__(self, path):
@@ -313,7 +313,7 @@ def _blocks(paths, chunk_rows):
 
     def tasks():
         for path in paths:
-            radiance = _Radiance(path)
+            radiance = RenderStore(path)
             height = radiance.shape[0]
             step = int(chunk_rows or height) or 1
             for start in range(0, height, step):

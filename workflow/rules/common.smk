@@ -33,10 +33,11 @@ SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
 SWEEP_SPP = sorted(config["render"]["spp_sweep"]["spp"])
 
 
-def scene_renders(wildcards):
-    """All N seeds of both views of one scene at one SPP."""
+def scene_renders(wildcards, spp=None):
+    """All N seeds of both views of one scene at one SPP (the wildcard's by default)."""
+    spp = wildcards.spp if spp is None else spp
     return {
-        view: [render_store(wildcards.scene, view, wildcards.spp, n) for n in range(N_SEEDS)]
+        view: [render_store(wildcards.scene, view, spp, n) for n in range(N_SEEDS)]
         for view in ("left", "right")
     }
 
@@ -116,6 +117,8 @@ def all_targets():
         *[f"results/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
         *expand("results/tables/{name}.{ext}", name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
                 ext=["csv", "md", "tex"]),
+        *expand("results/intervention/{scene}.csv", scene=SCENES),
+        *expand("results/tables/intervention.{ext}", ext=["csv", "md", "tex"]),
         "results/figures/fig1_teaser.png",
         "results/figures/fig2_rho_vs_spp.png",
         "results/figures/fig3_material_scatter.png",

@@ -1,0 +1,43 @@
+# The residual-shuffle intervention of paper Sec. 3.4: per-scene metrics and Table 3.
+
+
+rule intervention:
+    input:
+        unpack(lambda wc: scene_renders(wc, spp=MAIN_SPP)),
+        ground_truth="results/ground_truth/{scene}.zarr",
+    output:
+        "results/intervention/{scene}.csv",
+    params:
+        **config["intervention"],
+    log:
+        "logs/intervention/{scene}.log",
+    benchmark:
+        "benchmarks/intervention/{scene}.tsv"
+    threads: 1
+    resources:
+        mem_mb=lambda wc, attempt: 3000 * attempt,
+    conda:
+        ENV
+    script:
+        "../scripts/intervention.py"
+
+
+rule intervention_table:
+    input:
+        expand("results/intervention/{scene}.csv", scene=SCENES),
+    output:
+        csv=report(
+            "results/tables/intervention.csv",
+            caption="../report/intervention.rst",
+            category="Tables",
+            labels={"table": "Table 3: intervention"},
+        ),
+        md="results/tables/intervention.md",
+        tex="results/tables/intervention.tex",
+    log:
+        "logs/tables/intervention.log",
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/intervention_table.py"

@@ -1,0 +1,13 @@
+"""Snakemake adapter: stereovar.jobs.intervention_job."""
+
+from stereovar.jobs import intervention_job, run_job
+
+run_job(
+    snakemake.log[0],
+    intervention_job,
+    left=snakemake.input.left,
+    right=snakemake.input.right,
+    ground_truth=snakemake.input.ground_truth,
+    out=snakemake.output[0],
+    **snakemake.params,
+)

@@ -1,0 +1,10 @@
+"""Snakemake adapter: stereovar.jobs.intervention_table_job."""
+
+from stereovar.jobs import intervention_table_job, run_job
+
+run_job(
+    snakemake.log[0],
+    intervention_table_job,
+    inputs=list(snakemake.input),
+    outputs=dict(snakemake.output.items()),
+)
