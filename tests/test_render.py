@@ -109,3 +109,14 @@ def test_left_right_residuals_are_uncorrelated_at_zero_disparity(mi):
     # Residuals sum to zero over seeds, so n (n_seeds - 1) / n_seeds are free; 5 sigma.
     assert abs(rho) < 5 / np.sqrt(n * (n_seeds - 1) / n_seeds)
     assert rho_shared > 0.3
+
+
+def test_scene_loads_are_deterministic(mi):
+    """Shapes and emitters keep one order across loads, so a seed always draws the same
+    light choices (parallel loading or shape merging would shuffle them)."""
+    spec = load_scene_spec(REPO / "scenes/scene_001.yaml")
+    orders = {tuple(s.id() for s in load_scene(mi, spec)[0].shapes()) for _ in range(4)}
+    assert len(orders) == 1
+    order = next(iter(orders))
+    assert "" not in order  # no merged, anonymous shapes
+    assert {f"obj_{o['name']}" for o in spec["objects"]} <= set(order)

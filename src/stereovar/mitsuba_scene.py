@@ -127,7 +127,8 @@ def _texture_dict(mi, spec: dict, name: str) -> dict:
     su, sv = tex.get("repeat", (1.0, 1.0))
     return {
         "type": "bitmap",
-        "bitmap": mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32)),
+        # A private copy: the bitmap must not share memory with the cached bake.
+        "bitmap": mi.Bitmap(np.array(image, dtype=np.float32, order="C", copy=True)),
         "raw": True,
         "filter_type": "bilinear",
         "wrap_mode": "repeat",
@@ -267,7 +268,11 @@ def load_scene(mi, spec: dict):
     """
     if "mitsuba_xml" in spec:
         return _load_xml(mi, spec["mitsuba_xml"])
-    return mi.load_dict(scene_dict(mi, spec)), camera_from_spec(spec)
+    # Serial loading without shape merging: both parallel loading and the merging of shapes
+    # that share a BSDF register shapes and emitters in a nondeterministic order, which
+    # changes light selection, and so the render of a fixed seed, from one load to the next.
+    scene = mi.load_dict(scene_dict(mi, spec), parallel=False, optimize=False)
+    return scene, camera_from_spec(spec)
 
 
 def _load_xml(mi, path: str):
@@ -276,7 +281,7 @@ def _load_xml(mi, path: str):
     if not os.path.isfile(path):
         raise SceneError(f"Mitsuba scene file not found: {path}; fix 'mitsuba_xml' in the spec")
     try:
-        scene = mi.load_file(path)
+        scene = mi.load_file(path, parallel=False, optimize=False)  # see load_scene
     except Exception as err:  # mitsuba raises RuntimeError with a multi-line parser message
         first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         raise SceneError(f"cannot parse Mitsuba scene file {path}: {first}") from None
