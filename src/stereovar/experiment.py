@@ -6,7 +6,9 @@ both enumerate exactly the same renders.
 
 from __future__ import annotations
 
-VIEWS = ("left", "right")
+from .rig import VIEWS
+
+__all__ = ["VIEWS", "render_store", "render_stores", "scene_spp_pairs", "seed_batches"]
 
 
 def scene_spp_pairs(config: dict) -> list[tuple[str, int]]:

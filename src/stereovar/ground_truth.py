@@ -189,7 +189,8 @@ def correspondence(points, hit, rig: StereoRig, view: str) -> dict:
     Returns
     -------
     dict
-        ``disparity`` (px, float64), ``depth`` (m, float64), ``valid`` (bool),
+        ``disparity`` (px, float64), ``depth`` (m, float64), ``hit_depth`` (the depth at
+        every hit pixel, valid or not), ``valid`` (bool),
         ``other_u``/``other_v``/``other_z`` (the projection into the other camera) and
         ``vertical_error`` (px, :math:`|v' - v|`, zero for a rectified rig). Float fields are 0
         where not ``valid``.
@@ -198,7 +199,7 @@ def correspondence(points, hit, rig: StereoRig, view: str) -> dict:
     height, width = hit.shape
     u_self = np.arange(width)[None, :] + 0.5
     v_self = np.arange(height)[:, None] + 0.5
-    _, _, depth = rig.project(points, view)
+    depth = (np.asarray(points, dtype=np.float64) - rig.origin(view)) @ rig.frame(view)[2]
     u_o, v_o, z_o = rig.project(points, other)
     u_left, u_right = (u_self, u_o) if view == "left" else (u_o, u_self)
     disparity = rig.disparity_sign * (u_right - u_left)
@@ -219,9 +220,12 @@ def correspondence(points, hit, rig: StereoRig, view: str) -> dict:
     def clean(a):
         return np.where(valid, a, 0.0)
 
+    with np.errstate(invalid="ignore"):
+        seen = hit & np.isfinite(depth) & (depth > 0)
     return {
         "disparity": clean(disparity),
         "depth": clean(depth),
+        "hit_depth": np.where(seen, depth, 0.0),
         "valid": valid,
         "other_u": clean(u_o),
         "other_v": clean(v_o),
@@ -277,12 +281,8 @@ def compute_ground_truth(mi, scene, rig: StereoRig, *, attrs: dict | None = None
         )
         points = refine_hits(rig.origin(view), rig.pixel_rays(view), points, normals)
         traced[view] = (hit, points, shape_index)
-    depth = {}
-    for view in VIEWS:
-        hit, points, _ = traced[view]
-        _, _, z = rig.project(points, view)
-        depth[view] = np.where(hit & np.isfinite(z) & (z > 0), z, 0.0)
     corr = {view: correspondence(traced[view][1], traced[view][0], rig, view) for view in VIEWS}
+    depth = {view: corr[view]["hit_depth"] for view in VIEWS}
     fields = {k: [] for k in ("disparity", "depth", "material", "valid", "occluded", "shape_index")}
     vertical = 0.0
     for view in VIEWS:

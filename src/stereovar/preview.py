@@ -17,6 +17,13 @@ MATERIAL_COLOURS = {
 }
 
 
+def auto_exposure(rgb) -> float:
+    """Scale that maps the 99th percentile of luminance (RGB mean) to 1 (1 for a black image)."""
+    lum = np.nan_to_num(np.asarray(rgb, dtype=np.float64)).mean(axis=-1)
+    p99 = float(np.percentile(lum, 99)) if lum.size else 0.0
+    return 1.0 / p99 if p99 > 0 else 1.0
+
+
 def to_display(rgb, *, exposure: float | None = None) -> np.ndarray:
     """Linear radiance to 8-bit-ready sRGB in [0, 1].
 
@@ -29,9 +36,7 @@ def to_display(rgb, *, exposure: float | None = None) -> np.ndarray:
     """
     rgb = np.nan_to_num(np.asarray(rgb, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
     if exposure is None:
-        lum = rgb.mean(axis=-1)
-        p99 = float(np.percentile(lum, 99)) if lum.size else 1.0
-        exposure = 1.0 / p99 if p99 > 0 else 1.0
+        exposure = auto_exposure(rgb)
     c = np.clip(rgb * exposure, 0.0, 1.0)
     return np.where(c > 0.0031308, 1.055 * np.power(c, 1 / 2.4) - 0.055, 12.92 * c)
 
@@ -65,9 +70,7 @@ def preview_figure(left, right, gt: xr.Dataset, *, title: str = "", spp: int | N
     height, width = g.sizes["y"], g.sizes["x"]
     aspect = height / width
     fig, axes = plt.subplots(2, 2, figsize=(11, 11 * aspect + 1.6), constrained_layout=True)
-    lum = np.asarray(left).mean(axis=-1)
-    p99 = float(np.percentile(lum, 99))
-    exposure = 1.0 / p99 if p99 > 0 else 1.0
+    exposure = auto_exposure(left)  # shared by both views
     suffix = f" ({spp} spp)" if spp else ""
     for ax, img, name in ((axes[0, 0], left, "left"), (axes[0, 1], right, "right")):
         ax.imshow(to_display(img, exposure=exposure), interpolation="nearest")

@@ -15,12 +15,12 @@ import numpy as np
 import xarray as xr
 
 from .errors import StoreError
+from .rig import VIEWS
 from .store import ZARR_FORMAT
 
 IMAGE_DIMS = ("y", "x", "channel")
 """Dims of one render (and of the seed mean)."""
 
-VIEWS = ("left", "right")
 
 ESTIMATOR = "population variance (1/N) over seeds, averaged over RGB channels (Eq. 1)"
 
