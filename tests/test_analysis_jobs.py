@@ -192,23 +192,39 @@ def test_tables_from_several_scenes_and_spps(tmp_path):
 
 
 def test_intervention_job_and_table(tmp_path, caplog):
-    from stereovar.jobs import intervention_job, intervention_table_job
+    from stereovar.jobs import intervention_job, intervention_table_job, margin_figure_job
 
     ground_truth(tmp_path / "gt.zarr")
     paths = renders(tmp_path, 16)
     rows = intervention_job(
-        paths["left"], paths["right"], tmp_path / "gt.zarr", tmp_path / "iv.csv", window=3, block=8
+        paths["left"],
+        paths["right"],
+        tmp_path / "gt.zarr",
+        tmp_path / "iv.csv",
+        tmp_path / "margins.csv",
+        window=3,
+        block=8,
+        margin_samples=40,
     )
     # D defaults to the largest ground-truth disparity plus the margin.
     assert {r["max_disparity"] for r in rows} == {D + 4}
     stored = read_rows(tmp_path / "iv.csv")
     assert len(stored) == 20 and stored[0]["scene"] == "synth"
+    samples = read_rows(tmp_path / "margins.csv")
+    groups = {(s["cost"], s["region"], s["condition"]) for s in samples}
+    assert {s["scene"] for s in samples} == {"synth"} and len(groups) >= 4
+    for key in groups:  # at most margin_samples each, every one finite
+        picked = [s for s in samples if (s["cost"], s["region"], s["condition"]) == key]
+        assert 0 < len(picked) <= 40 and all(np.isfinite(s["margin"]) for s in picked)
+    margin_figure_job([tmp_path / "margins.csv"], tmp_path / "fig4.png")
+    assert (tmp_path / "fig4.png").read_bytes()[:4] == b"\x89PNG"
     with caplog.at_level("WARNING", logger="stereovar"):
         intervention_job(
             paths["left"],
             paths["right"],
             tmp_path / "gt.zarr",
             tmp_path / "iv2.csv",
+            tmp_path / "margins2.csv",
             window=3,
             block=8,
             max_disparity=2,

@@ -42,6 +42,7 @@ DEFAULTS = {
         "seed": 0,
         "max_disparity": None,
         "disparity_margin": 4,
+        "margin_samples": 2000,
     },
     "preview": {"spp": 32},
 }

@@ -310,3 +310,98 @@ def test_streamed_wta_equals_argmin_of_the_full_volume(workers, dtype, sign):
     )
     np.testing.assert_array_equal(disparity, expected)
     np.testing.assert_allclose(winning, best, rtol=1e-6)
+
+
+def _scan_case(rng, shape, max_disparity, *, with_nan):
+    left = rng.normal(size=shape)
+    right = rng.normal(size=shape)
+    left[::3] = np.round(left[::3])  # exact ties on some rows
+    right[::3] = np.round(right[::3])
+    if with_nan:
+        left[2, 4] = np.nan
+        right[5, 1] = np.inf
+    d_gt = _gt(rng, shape, max_disparity)
+    d_gt[0, 0], d_gt[1, 1], d_gt[1, 2] = np.nan, 2.5, max_disparity + 3.0
+    return left, right, d_gt
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+@pytest.mark.parametrize("window", [1, 3, 5])
+@pytest.mark.parametrize("sign", [1, -1])
+@pytest.mark.parametrize("with_nan", [False, True])
+def test_scan_equals_brute_force_margins_and_wta(monkeypatch, workers, window, sign, with_nan):
+    import stereovar.costvolume as cv
+
+    monkeypatch.setattr(cv, "_STRIP_BYTES", 1)  # 8-row strips: several strips per image
+    rng = np.random.default_rng(window + 10 * workers)
+    left, right, d_gt = _scan_case(rng, (21, 15), 5, with_nan=with_nan)
+    mask = rng.random(left.shape) < 0.8
+    ref_cost, ref_scored = brute_sad(left, right, 5, window, sign)
+    ref_scored &= np.isfinite(ref_cost)
+    scan = cv.scan_cost_volume(
+        left, right, max_disparity=5, window=window, sign=sign, d_gt=d_gt, workers=workers
+    )
+    np.testing.assert_allclose(
+        scan.margin, brute_margin(ref_cost, ref_scored, d_gt), rtol=1e-12, atol=1e-12,
+        equal_nan=True,
+    )  # fmt: skip
+    np.testing.assert_array_equal(scan.n_scored, ref_scored.sum(axis=0))
+    got = cv.scan_hit_rate(scan, d_gt, mask)
+    ref = brute_rate(ref_cost, ref_scored, d_gt, mask, maximise=False)
+    assert (got["accuracy"], got["n_pixels"]) == (pytest.approx(ref[0]), ref[1])
+    assert got["chance"] == pytest.approx(ref[2])
+    # The winning disparity is the first minimum of the brute-force volume.
+    masked = np.where(ref_scored, ref_cost, np.inf)
+    expected = np.where(ref_scored.any(axis=0), masked.argmin(axis=0), -1)
+    np.testing.assert_array_equal(scan.disparity, expected)
+    np.testing.assert_allclose(scan.cost, masked.min(axis=0), rtol=1e-12)
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_window_one_scan_is_the_variance_peak_hit_rate(sign):
+    from stereovar.costvolume import scan_cost_volume, scan_hit_rate
+
+    rng = np.random.default_rng(3)
+    left, right, d_gt = _scan_case(rng, (12, 16), 4, with_nan=False)
+    sim, s_scored = brute_similarity(left, right, 4, sign)
+    scan = scan_cost_volume(left, right, max_disparity=4, window=1, sign=sign, d_gt=d_gt)
+    got = scan_hit_rate(scan, d_gt)
+    ref = brute_rate(sim, s_scored, d_gt, np.ones(left.shape, bool), maximise=True)
+    assert (got["accuracy"], got["n_pixels"]) == (pytest.approx(ref[0]), ref[1])
+    assert got["chance"] == pytest.approx(ref[2])
+
+
+@pytest.mark.parametrize(
+    ("high", "window", "expected"), [(255, 5, np.int16), (255, 13, np.int32), (60000, 3, np.int32)]
+)
+def test_integer_images_are_summed_exactly_in_integers(monkeypatch, high, window, expected):
+    import stereovar.costvolume as cv
+
+    rng = np.random.default_rng(high + window)
+    dtype = np.uint8 if high < 256 else np.uint16
+    left = rng.integers(0, high + 1, size=(18, 24)).astype(dtype)
+    right = rng.integers(0, high + 1, size=(18, 24)).astype(dtype)
+    left[:, :4] = right[:, :4] = high  # extreme differences are reachable
+    left[:, 4:8], right[:, 4:8] = 0, high
+    assert cv._compute_dtype(left, right, window, None) == expected
+    monkeypatch.setattr(cv, "_STRIP_BYTES", 1)
+    ref_cost, ref_scored = brute_sad(left, right, 3, window, 1)
+    disparity, cost = cv.wta_disparity(
+        left, right, max_disparity=3, window=window, sign=1, dtype=None
+    )
+    masked = np.where(ref_scored, ref_cost, np.inf)
+    np.testing.assert_array_equal(cost, masked.min(axis=0))  # exact, not approximately
+    np.testing.assert_array_equal(
+        disparity, np.where(ref_scored.any(axis=0), masked.argmin(axis=0), -1)
+    )
+
+
+def test_scan_hit_rate_needs_the_ground_truth_counts(pair):
+    from stereovar.costvolume import scan_cost_volume, scan_hit_rate
+
+    scan = scan_cost_volume(*pair, max_disparity=2, window=3)
+    assert scan.margin is None
+    with pytest.raises(ValueError, match="pass d_gt"):
+        scan_hit_rate(scan, np.zeros(pair[0].shape))
+    with pytest.raises(ValueError, match="dtype"):
+        scan_cost_volume(*pair, max_disparity=2, dtype=np.int8)

@@ -377,3 +377,72 @@ def test_material_scatter_rejects_bad_options():
         material_scatter_figure(left, warped, omega, glass, max_points=0)
     with pytest.raises(ValueError, match="shape"):
         material_scatter_figure(left, warped, omega, glass[:-1])
+
+
+def _margin_rows(rng):
+    rows = []
+    for cost in ("residual_sad", "variance_cost"):
+        for condition, shift in (("normal", 1.0), ("decorrelated", -1.0)):
+            for value in rng.normal(shift, 1.0, size=300):
+                rows.append(
+                    {"cost": cost, "region": "non_glass", "condition": condition, "margin": value}
+                )
+    rows.append({"cost": "residual_sad", "region": "glass", "condition": "normal", "margin": "nan"})
+    return rows
+
+
+def test_margin_figure_legends_give_median_and_share_won_by_the_ground_truth():
+    from stereovar.figures import margin_distribution_figure
+
+    rows = _margin_rows(np.random.default_rng(0))
+    fig = margin_distribution_figure(rows, title="t")
+    axes = fig.axes
+    assert len(axes) == 4
+    non_glass = axes[0]  # (residual SAD, non-glass)
+    labels = [t.get_text() for t in non_glass.get_legend().get_texts()]
+    for condition, label in zip(("normal", "decorrelated"), labels, strict=True):
+        values = np.array(
+            [
+                r["margin"]
+                for r in rows
+                if (r["cost"], r["region"], r["condition"])
+                == ("residual_sad", "non_glass", condition)
+            ]
+        )
+        assert label.startswith(condition)
+        assert f"median {np.median(values):.3g}" in label
+        assert f"P(m>0) {np.mean(values > 0):.1%}" in label
+        assert f"n={values.size}" in label
+    # Each histogram gives the share of its margins per bin, over bins spanning all of them.
+    pooled = np.array(
+        [r["margin"] for r in rows if (r["cost"], r["region"]) == ("residual_sad", "non_glass")]
+    )
+    for patch in non_glass.patches:
+        xy = patch.get_xy()
+        edges = np.unique(xy[:, 0])  # a step outline: (e0, 0), (e0, h0), (e1, h0), (e1, h1)...
+        heights = xy[1 : 2 * edges.size - 2 : 2, 1]
+        assert heights.sum() == pytest.approx(1.0, rel=1e-9)
+        assert (edges[0], edges[-1]) == pytest.approx((pooled.min(), pooled.max()), rel=1e-9)
+    assert non_glass.get_xscale() == "symlog"
+    # The glass column has no finite margin (the one NaN row is dropped).
+    assert any("no scored pixels" in t.get_text() for t in axes[1].texts)
+
+
+def test_margin_figure_rejects_bad_bins():
+    from stereovar.figures import margin_distribution_figure
+
+    with pytest.raises(ValueError, match="bins"):
+        margin_distribution_figure([], bins=0)
+
+
+def test_margin_figure_draws_a_single_repeated_value():
+    from stereovar.figures import margin_distribution_figure
+
+    rows = [
+        {"cost": "variance_cost", "region": "glass", "condition": c, "margin": 2.0}
+        for c in ("normal", "decorrelated")
+    ]
+    ax = margin_distribution_figure(rows).axes[3]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert all("median 2," in label and "P(m>0) 100.0%" in label for label in labels)
+    assert all(patch.get_xy()[:, 1].max() == pytest.approx(1.0) for patch in ax.patches)

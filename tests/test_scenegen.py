@@ -123,8 +123,9 @@ def test_room_is_closed_and_surfaces_face_inwards(loaded):
         objs = {o["name"]: o for o in spec["objects"]}
         floor = objs[next(n for n in objs if n.startswith("floor"))]
         ceiling = objs[next(n for n in objs if n.startswith("ceiling"))]
-        centre = np.array([0.0, ceiling["transform"]["translate"][1] / 2,
-                           floor["transform"]["translate"][2]])
+        centre = np.array(
+            [0.0, ceiling["transform"]["translate"][1] / 2, floor["transform"]["translate"][2]]
+        )
         for name, obj in objs.items():
             if obj["shape"] != "rectangle":
                 continue
@@ -154,11 +155,17 @@ def test_room_sizes_and_camera(loaded):
 
 
 def test_scenes_differ(loaded):
-    sizes = {tuple(o["transform"]["scale"]) for s in loaded for o in s["objects"]
-             if o["name"].startswith("floor")}
+    sizes = {
+        tuple(o["transform"]["scale"])
+        for s in loaded
+        for o in s["objects"]
+        if o["name"].startswith("floor")
+    }
     assert len(sizes) == COUNT
-    floors = {tuple(map(tuple, s["textures"][s["materials"]["floor"]["texture"]]["colors"]))
-              for s in loaded}
+    floors = {
+        tuple(map(tuple, s["textures"][s["materials"]["floor"]["texture"]]["colors"]))
+        for s in loaded
+    }
     assert len(floors) == COUNT
     patterns = {t["pattern"] for s in loaded for t in s["textures"].values()}
     assert len(patterns) >= 5
@@ -183,12 +190,19 @@ def test_furniture_on_the_floor_inside_the_room(loaded):
             if o["shape"] == "lathe":
                 prof = np.asarray(o["profile"])
                 r = prof[:, 0].max()
-                local = np.array([[sx * r, y, sz * r] for sx in (-1, 1) for sz in (-1, 1)
-                                  for y in (prof[0, 1], prof[-1, 1])])
+                local = np.array(
+                    [
+                        [sx * r, y, sz * r]
+                        for sx in (-1, 1)
+                        for sz in (-1, 1)
+                        for y in (prof[0, 1], prof[-1, 1])
+                    ]
+                )
             else:
                 y0 = 0.0 if o["shape"] == "cylinder" else -1.0
-                local = np.array([[sx, y, sz] for sx in (-1, 1) for sz in (-1, 1)
-                                  for y in (y0, 1.0)])
+                local = np.array(
+                    [[sx, y, sz] for sx in (-1, 1) for sz in (-1, 1) for y in (y0, 1.0)]
+                )
             world = local @ m[:3, :3].T + m[:3, 3]
             tol = 2e-3
             assert world[:, 1].min() >= -tol, (spec["name"], o["name"])
@@ -208,8 +222,9 @@ def test_lights_emit_into_the_room(loaded):
             assert normal @ (centre - m[:3, 3]) > 0, (spec["name"], light["name"])
             assert normal[1] < -0.3, "lights point downwards into the room"
         # at least one small panel (the shadow caster)
-        areas = [4 * li["transform"]["scale"][0] * li["transform"]["scale"][1]
-                 for li in spec["lights"]]
+        areas = [
+            4 * li["transform"]["scale"][0] * li["transform"]["scale"][1] for li in spec["lights"]
+        ]
         assert min(areas) <= 0.4, spec["name"]
 
 
@@ -233,8 +248,14 @@ def test_glass_estimate_against_analytic_sphere():
     spec = {
         "camera": {"origin": [0.0, 0.0, 0.0], "target": [0.0, 0.0, 1.0], "fov_deg": 60.0},
         "materials": {"g": {"type": "glass"}},
-        "objects": [{"name": "s", "shape": "sphere", "material": "g",
-                     "transform": {"translate": [0.0, 0.0, 3.0], "scale": [0.5, 0.5, 0.5]}}],
+        "objects": [
+            {
+                "name": "s",
+                "shape": "sphere",
+                "material": "g",
+                "transform": {"translate": [0.0, 0.0, 3.0], "scale": [0.5, 0.5, 0.5]},
+            }
+        ],
         "lights": [],
     }
     width, height = 320, 180
@@ -250,9 +271,18 @@ def test_glass_estimate_box_pane():
     spec = {
         "camera": {"origin": [0.0, 0.0, 0.0], "target": [0.0, 0.0, 1.0], "fov_deg": 60.0},
         "materials": {"g": {"type": "glass"}},
-        "objects": [{"name": "p", "shape": "box", "material": "g",
-                     "transform": {"translate": [0.0, 0.0, 2.0], "rotate": [0, 0, 0],
-                                   "scale": [0.4, 0.3, 0.01]}}],
+        "objects": [
+            {
+                "name": "p",
+                "shape": "box",
+                "material": "g",
+                "transform": {
+                    "translate": [0.0, 0.0, 2.0],
+                    "rotate": [0, 0, 0],
+                    "scale": [0.4, 0.3, 0.01],
+                },
+            }
+        ],
         "lights": [],
     }
     width, height = 320, 180

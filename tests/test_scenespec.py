@@ -29,16 +29,31 @@ BASE = {
         "clear": {"type": "glass"},
     },
     "objects": [
-        {"name": "floor", "shape": "rectangle", "material": "oak",
-         "transform": {"rotate": [-90, 0, 0], "scale": [3, 3, 1]}},
-        {"name": "ball", "shape": "sphere", "material": "clear",
-         "transform": {"translate": [0, 0.3, 3], "scale": [0.3, 0.3, 0.3]}},
-        {"name": "vase", "shape": "lathe", "material": "clear",
-         "profile": [[0.1, 0.0], [0.15, 0.2], [0.05, 0.4]]},
+        {
+            "name": "floor",
+            "shape": "rectangle",
+            "material": "oak",
+            "transform": {"rotate": [-90, 0, 0], "scale": [3, 3, 1]},
+        },
+        {
+            "name": "ball",
+            "shape": "sphere",
+            "material": "clear",
+            "transform": {"translate": [0, 0.3, 3], "scale": [0.3, 0.3, 0.3]},
+        },
+        {
+            "name": "vase",
+            "shape": "lathe",
+            "material": "clear",
+            "profile": [[0.1, 0.0], [0.15, 0.2], [0.05, 0.4]],
+        },
     ],
     "lights": [
-        {"name": "panel", "radiance": [10, 10, 10],
-         "transform": {"translate": [0, 2.9, 3], "rotate": [90, 0, 0]}},
+        {
+            "name": "panel",
+            "radiance": [10, 10, 10],
+            "transform": {"translate": [0, 2.9, 3], "rotate": [90, 0, 0]},
+        },
     ],
 }
 
@@ -84,8 +99,12 @@ def test_valid_spec_fills_defaults(tmp_path):
     assert spec["materials"]["red"]["roughness"] == 0.1
     assert spec["materials"]["red"]["ior"] == 1.49
     assert spec["materials"]["steel"]["roughness"] == 0.0
-    assert spec["materials"]["clear"] == {"type": "glass", "ior": 1.5, "roughness": 0.0,
-                                          "tint": [1.0, 1.0, 1.0]}
+    assert spec["materials"]["clear"] == {
+        "type": "glass",
+        "ior": 1.5,
+        "roughness": 0.0,
+        "tint": [1.0, 1.0, 1.0],
+    }
     assert spec["materials"]["oak"] == {"type": "diffuse", "texture": "wood"}
     floor = spec["objects"][0]
     assert floor["transform"]["translate"] == [0.0, 0.0, 0.0]
@@ -175,53 +194,109 @@ def test_top_level_not_a_mapping(tmp_path):
 @pytest.mark.parametrize(
     ("name", "mutate", "fragments"),
     [
-        ("enum_shape", lambda d: d["objects"][0].update(shape="cube"),
-         ["objects.0.shape", "'cube'", "rectangle, box, sphere, cylinder, lathe"]),
-        ("enum_pattern", lambda d: d["textures"]["wood"].update(pattern="marble"),
-         ["textures.wood.pattern", "planks", "grain"]),
-        ("enum_metal", lambda d: d["materials"]["steel"].update(metal="Fe"),
-         ["materials.steel.metal", "'Fe'", "Al"]),
-        ("material_type", lambda d: d["materials"].update(bad={"type": "plastic"}),
-         ["materials.bad.type", "diffuse, glossy, conductor, glass"]),
-        ("unknown_key", lambda d: d["objects"][1].update(colour=[1, 0, 0]),
-         ["objects.1.colour", "unknown key", "allowed keys", "material", "transform"]),
-        ("unknown_top_key", lambda d: d.update(sky="blue"),
-         ["sky", "unknown key", "camera", "lights"]),
-        ("unknown_material_key", lambda d: d["materials"]["red"].update(shine=2),
-         ["materials.red.shine", "unknown key", "roughness"]),
-        ("both_albedos", lambda d: d["materials"]["oak"].update(reflectance=[1, 1, 1]),
-         ["materials.oak", "exactly one of reflectance, texture"]),
-        ("range", lambda d: d["materials"]["red"].update(roughness=2),
-         ["materials.red.roughness", "<= 1"]),
-        ("vec3", lambda d: d["camera"].update(origin=[0, 1]),
-         ["camera.origin", "at least 3"]),
-        ("fov", lambda d: d["camera"].update(fov_deg=190),
-         ["camera.fov_deg", "< 180"]),
-        ("type", lambda d: d["lights"][0].update(radiance="bright"),
-         ["lights.0.radiance", "expected array"]),
-        ("missing_required", lambda d: d["objects"][0].pop("material"),
-         ["objects.0.material", "missing required key"]),
-        ("no_camera", lambda d: d.pop("camera"),
-         ["camera", "missing required key"]),
-        ("xml_and_objects", lambda d: d.update(mitsuba_xml="room.xml"),
-         ["mitsuba_xml", "camera", "objects"]),
-        ("unknown_material", lambda d: d["objects"][1].update(material="gold"),
-         ["objects.1.material", "'gold'", "unknown material", "clear, oak, red, steel"]),
-        ("unknown_texture", lambda d: d["materials"]["oak"].update(texture="pine"),
-         ["materials.oak.texture", "'pine'", "unknown texture", "wood"]),
-        ("glossy_unknown_texture",
-         lambda d: d["materials"]["red"].update(texture="pine"),
-         ["materials.red.texture", "'pine'"]),
-        ("sphere_scale", lambda d: d["objects"][1]["transform"].update(scale=[0.3, 0.6, 0.3]),
-         ["objects.1.transform.scale", "uniform"]),
-        ("lathe_no_profile", lambda d: d["objects"][2].pop("profile"),
-         ["objects.2.profile", "at least 2"]),
-        ("lathe_short_profile", lambda d: d["objects"][2].update(profile=[[0.1, 0.0]]),
-         ["objects.2.profile", "at least 2"]),
-        ("lathe_bad_profile", lambda d: d["objects"][2].update(profile=[[0.1, 0.2], [0.1, 0.1]]),
-         ["objects.2.profile", "increase"]),
-        ("duplicate_name", lambda d: d["objects"][1].update(name="floor"),
-         ["objects.1.name", "duplicate"]),
+        (
+            "enum_shape",
+            lambda d: d["objects"][0].update(shape="cube"),
+            ["objects.0.shape", "'cube'", "rectangle, box, sphere, cylinder, lathe"],
+        ),
+        (
+            "enum_pattern",
+            lambda d: d["textures"]["wood"].update(pattern="marble"),
+            ["textures.wood.pattern", "planks", "grain"],
+        ),
+        (
+            "enum_metal",
+            lambda d: d["materials"]["steel"].update(metal="Fe"),
+            ["materials.steel.metal", "'Fe'", "Al"],
+        ),
+        (
+            "material_type",
+            lambda d: d["materials"].update(bad={"type": "plastic"}),
+            ["materials.bad.type", "diffuse, glossy, conductor, glass"],
+        ),
+        (
+            "unknown_key",
+            lambda d: d["objects"][1].update(colour=[1, 0, 0]),
+            ["objects.1.colour", "unknown key", "allowed keys", "material", "transform"],
+        ),
+        (
+            "unknown_top_key",
+            lambda d: d.update(sky="blue"),
+            ["sky", "unknown key", "camera", "lights"],
+        ),
+        (
+            "unknown_material_key",
+            lambda d: d["materials"]["red"].update(shine=2),
+            ["materials.red.shine", "unknown key", "roughness"],
+        ),
+        (
+            "both_albedos",
+            lambda d: d["materials"]["oak"].update(reflectance=[1, 1, 1]),
+            ["materials.oak", "exactly one of reflectance, texture"],
+        ),
+        (
+            "range",
+            lambda d: d["materials"]["red"].update(roughness=2),
+            ["materials.red.roughness", "<= 1"],
+        ),
+        ("vec3", lambda d: d["camera"].update(origin=[0, 1]), ["camera.origin", "at least 3"]),
+        ("fov", lambda d: d["camera"].update(fov_deg=190), ["camera.fov_deg", "< 180"]),
+        (
+            "type",
+            lambda d: d["lights"][0].update(radiance="bright"),
+            ["lights.0.radiance", "expected array"],
+        ),
+        (
+            "missing_required",
+            lambda d: d["objects"][0].pop("material"),
+            ["objects.0.material", "missing required key"],
+        ),
+        ("no_camera", lambda d: d.pop("camera"), ["camera", "missing required key"]),
+        (
+            "xml_and_objects",
+            lambda d: d.update(mitsuba_xml="room.xml"),
+            ["mitsuba_xml", "camera", "objects"],
+        ),
+        (
+            "unknown_material",
+            lambda d: d["objects"][1].update(material="gold"),
+            ["objects.1.material", "'gold'", "unknown material", "clear, oak, red, steel"],
+        ),
+        (
+            "unknown_texture",
+            lambda d: d["materials"]["oak"].update(texture="pine"),
+            ["materials.oak.texture", "'pine'", "unknown texture", "wood"],
+        ),
+        (
+            "glossy_unknown_texture",
+            lambda d: d["materials"]["red"].update(texture="pine"),
+            ["materials.red.texture", "'pine'"],
+        ),
+        (
+            "sphere_scale",
+            lambda d: d["objects"][1]["transform"].update(scale=[0.3, 0.6, 0.3]),
+            ["objects.1.transform.scale", "uniform"],
+        ),
+        (
+            "lathe_no_profile",
+            lambda d: d["objects"][2].pop("profile"),
+            ["objects.2.profile", "at least 2"],
+        ),
+        (
+            "lathe_short_profile",
+            lambda d: d["objects"][2].update(profile=[[0.1, 0.0]]),
+            ["objects.2.profile", "at least 2"],
+        ),
+        (
+            "lathe_bad_profile",
+            lambda d: d["objects"][2].update(profile=[[0.1, 0.2], [0.1, 0.1]]),
+            ["objects.2.profile", "increase"],
+        ),
+        (
+            "duplicate_name",
+            lambda d: d["objects"][1].update(name="floor"),
+            ["objects.1.name", "duplicate"],
+        ),
     ],
 )
 def test_invalid_spec(tmp_path, name, mutate, fragments):
@@ -244,10 +319,17 @@ def test_missing_mitsuba_xml(tmp_path):
 
 
 def run_cli(*args):
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(SRC), *filter(None, [os.environ.get("PYTHONPATH")])])}
-    return subprocess.run([sys.executable, "-m", "stereovar.cli", *args], capture_output=True,
-                          text=True, env=env, timeout=120)
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(SRC), *filter(None, [os.environ.get("PYTHONPATH")])]),
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "stereovar.cli", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
 
 
 def test_cli_validate_bad_file_exits_2_with_one_line(tmp_path):

@@ -109,10 +109,17 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         rows = (workdir / f"results/intervention/{scene}.csv").read_text().splitlines()
         assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,cost,metric")
         assert len(rows) == 1 + 5 * 2 * 2
+        margins = (workdir / f"results/intervention/margins/{scene}.csv").read_text()
+        assert margins.startswith("scene,cost,region,condition,seed,y,x,margin")
     for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention"):
         for ext in ("csv", "md", "tex"):
             assert (workdir / f"results/tables/{name}.{ext}").stat().st_size > 0
-    for fig in ("fig1_teaser", "fig2_rho_vs_spp", "fig3_material_scatter"):
+    for fig in (
+        "fig1_teaser",
+        "fig2_rho_vs_spp",
+        "fig3_material_scatter",
+        "fig4_intervention_margins",
+    ):
         assert (workdir / f"results/figures/{fig}.png").read_bytes()[:4] == b"\x89PNG"
     csv = (workdir / "results/tables/scenes.csv").read_text().splitlines()
     assert csv[0].startswith("scene,") and len(csv) == 1 + len(SCENES)
@@ -147,6 +154,7 @@ def test_editing_one_scene_reruns_only_that_scene(workdir):
             "cross_scene_table": 1,
             "intervention": 1,
             "intervention_table": 1,
+            "margin_figure": 1,
             "all": 1,
         }
         out = snakemake(workdir, "-n", "all").stdout

@@ -1,56 +1,137 @@
 """The residual-shuffle intervention of paper Sec. 3.4 (Table 3) for one scene.
 
 For the normal pair and for the decorrelated pair (right residuals block-shuffled by one fixed
-permutation :math:`\\Pi`), three costs are scored against the ground-truth disparity on the
-grey (RGB-mean) fields: the per-seed residual SAD :math:`C_\\epsilon`, the variance cost
-:math:`C_\\sigma` and the pixel-level variance similarity.
+permutation :math:`\\Pi`), three costs are scored against the ground-truth disparity: the
+per-seed residual SAD :math:`C_\\epsilon` on the grey (RGB-mean) residuals, the variance cost
+:math:`C_\\sigma` on the Eq. 1 variance fields and the pixel-level variance similarity. The
+seeds are streamed twice (mean, then residuals) and every cost volume is scanned disparity by
+disparity (:func:`stereovar.costvolume.scan_cost_volume`), so memory is a few images whatever
+:math:`N` and :math:`D`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from .costvolume import (
-    gt_margin,
-    peak_hit_rate,
-    pixel_similarity_volume,
-    residual_cost_volume,
-    variance_cost_volume,
-    wta_accuracy,
-)
+from .costvolume import scan_cost_volume, scan_hit_rate
 from .shuffle import apply_block_permutation, block_permutation
 
 CONDITIONS = ("normal", "decorrelated")
 REGIONS = ("non_glass", "glass")
+COSTS = {
+    "residual_sad": ("gt_margin", "wta_accuracy"),
+    "variance_cost": ("gt_margin", "wta_accuracy"),
+    "variance_peak": ("peak_hit_rate",),
+}
+"""Table 3's rows: each cost and the metrics reported for it."""
 
 
-def _grey(stack) -> np.ndarray:
-    """(N, H, W[, C]) renders to float64 grey (N, H, W)."""
-    a = np.asarray(stack, dtype=np.float64)
-    return a.mean(axis=-1) if a.ndim == 4 else a
+class InterventionResult(NamedTuple):
+    """Output of :func:`intervention_metrics`.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per (cost, metric, region, condition): ``value``, ``chance``, ``n_pixels``,
+        ``reason``.
+    margins : list of dict
+        A uniform random sample of the per-pixel GT margins behind the ``gt_margin`` rows:
+        ``cost``, ``region``, ``condition``, ``seed`` (-1 for :math:`C_\\sigma`, which has
+        no seed), ``y``, ``x`` and ``margin``, for the margin-distribution figure.
+    """
+
+    rows: list
+    margins: list
 
 
-def _margin_entry(margins: list[np.ndarray], n_seeds: int) -> tuple[float, float, int]:
-    """Mean GT margin pooled over seeds; pixel count per seed."""
-    values = np.concatenate(margins) if margins else np.empty(0)
-    return (float(values.mean()) if values.size else math.nan), math.nan, values.size // n_seeds
+def _as_float(render) -> np.ndarray:
+    """One render, (H, W) or (H, W, C), as float64 (H, W, C)."""
+    a = np.asarray(render, dtype=np.float64)
+    return a[..., None] if a.ndim == 2 else a
 
 
-def _accuracy_entry(results: list[dict]) -> tuple[float, float, int]:
-    """Accuracy pooled over seeds (weighted by scoreable pixels), mean chance, pixels/seed."""
-    n = sum(r["n_pixels"] for r in results)
-    if not n:
-        return math.nan, math.nan, 0
-    accuracy = sum(r["accuracy"] * r["n_pixels"] for r in results if r["n_pixels"]) / n
-    chance = float(np.mean([r["chance"] for r in results if r["n_pixels"]]))
-    return accuracy, chance, n // len(results)
+def _seed_mean(renders: Sequence) -> np.ndarray:
+    total = None
+    for render in renders:
+        a = _as_float(render)
+        total = a.copy() if total is None else total.__iadd__(a)
+    return total / len(renders)
+
+
+class _RegionAccumulator:
+    """Per-region sums of margins, WTA counts and chance levels, pooled over seeds."""
+
+    def __init__(self, masks):
+        self.masks = masks
+        self.margin_sum = dict.fromkeys(masks, 0.0)
+        self.margin_n = dict.fromkeys(masks, 0)
+        self.rates = {region: [] for region in masks}
+
+    def add(self, scan, d_gt, *, margin=True):
+        for region, mask in self.masks.items():
+            if margin:
+                values = scan.margin[mask]
+                values = values[np.isfinite(values)]
+                self.margin_sum[region] += float(values.sum())
+                self.margin_n[region] += values.size
+            self.rates[region].append(scan_hit_rate(scan, d_gt, mask))
+
+    def margin_entry(self, region, n_runs):
+        n = self.margin_n[region]
+        return (self.margin_sum[region] / n if n else math.nan), math.nan, n // n_runs
+
+    def rate_entry(self, region):
+        results = self.rates[region]
+        n = sum(r["n_pixels"] for r in results)
+        if not n:
+            return math.nan, math.nan, 0
+        hits = sum(r["n_hits"] for r in results)
+        chance = float(np.mean([r["chance"] for r in results if r["n_pixels"]]))
+        return hits / n, chance, n // len(results)
+
+
+def _sample_plan(masks, n_runs, size, rng):
+    """For each region: {run: (ys, xs)} of ``size`` pairs drawn uniformly without replacement
+    from (run, region pixel)."""
+    plan = {}
+    for region, mask in masks.items():
+        ys, xs = np.nonzero(mask)
+        total = n_runs * ys.size
+        picks = np.sort(rng.choice(total, size=min(size, total), replace=False)) if total else []
+        runs = {}
+        for k in np.asarray(picks, dtype=np.int64):
+            runs.setdefault(int(k // ys.size), []).append(int(k % ys.size))
+        plan[region] = {run: (ys[idx], xs[idx]) for run, idx in runs.items()}
+    return plan
+
+
+def _take_samples(out, plan, run, margin, *, cost, condition, seed):
+    for region, runs in plan.items():
+        if run not in runs:
+            continue
+        ys, xs = runs[run]
+        for y, x, m in zip(ys, xs, margin[ys, xs], strict=True):
+            if math.isfinite(m):
+                out.append(
+                    {
+                        "cost": cost,
+                        "region": region,
+                        "condition": condition,
+                        "seed": seed,
+                        "y": int(y),
+                        "x": int(x),
+                        "margin": float(m),
+                    }
+                )
 
 
 def intervention_metrics(
-    left,
-    right,
+    left: Sequence,
+    right: Sequence,
     ground_truth_left,
     *,
     sign: int,
@@ -58,10 +139,12 @@ def intervention_metrics(
     window: int = 5,
     block: int = 16,
     seed: int = 0,
-) -> list[dict]:
+    margin_samples: int = 2000,
+    workers: int = 1,
+) -> InterventionResult:
     """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4).
 
-    With :math:`I_V^{(n)} = \\bar I_V + \\epsilon_V^{(n)}` on grey fields and
+    With :math:`I_V^{(n)} = \\bar I_V + \\epsilon_V^{(n)}` and
     :math:`\\tilde I_R^{(n)} = \\bar I_R + \\Pi(\\epsilon_R^{(n)})`,
 
     .. math::
@@ -70,16 +153,20 @@ def intervention_metrics(
             \\bigl|\\epsilon_L^{(n)}(x+u) - \\epsilon_R^{(n)}(x+s d+u)\\bigr|, \\qquad
         C_\\sigma(x, d) = \\sum_{u \\in W} \\bigl|\\sigma_L^2(x+u) - \\sigma_R^2(x+s d+u)\\bigr|,
 
-    scored by the GT margin :math:`m(x) = \\min_{d \\ne d_{GT}} C(x, d) - C(x, d_{GT})`
-    (:math:`d_{GT}` the integer nearest the subpixel ground truth), the winner-take-all
-    accuracy :math:`\\Pr[|\\arg\\min_d C - d_{GT}| < 1]` and, for the variance, the peak hit
-    rate of :math:`\\arg\\max_d -|\\sigma_L^2(x) - \\sigma_R^2(x + s d)|`. Decorrelation only
-    permutes residual blocks, so :math:`\\sigma_R^2` becomes :math:`\\Pi(\\sigma_R^2)`.
+    with :math:`\\epsilon` the grey (RGB-mean) residual and :math:`\\sigma_V^2` the Eq. 1
+    variance (:math:`1/N`, averaged over RGB). They are scored by the GT margin
+    :math:`m(x) = \\min_{d \\ne d_{GT}} C(x, d) - C(x, d_{GT})` (:math:`d_{GT}` the integer
+    nearest the subpixel ground truth, halves to even), the winner-take-all accuracy
+    :math:`\\Pr[|\\arg\\min_d C - d_{GT}| < 1]` against the subpixel ground truth and, for the
+    variance, the peak hit rate of :math:`\\arg\\max_d -|\\sigma_L^2(x) - \\sigma_R^2(x + s d)|`
+    (the 1x1-window :math:`C_\\sigma`). Decorrelation permutes every channel's residual
+    blocks with the same :math:`\\Pi`, so :math:`\\sigma_R^2` becomes :math:`\\Pi(\\sigma_R^2)`.
 
     Parameters
     ----------
-    left, right : array_like, shape (N, H, W, C) or (N, H, W)
-        The N seeds' renders of each view.
+    left, right : sequence of array_like, each (H, W, C) or (H, W)
+        The N seeds' renders of each view (an array (N, H, W[, C]) or any sequence that can
+        be iterated twice, e.g. one that reads stores lazily).
     ground_truth_left : mapping
         Left view of the ground truth: ``disparity`` (subpixel), ``valid``, ``glass``.
     sign : {1, -1}, keyword-only
@@ -87,93 +174,101 @@ def intervention_metrics(
     max_disparity : int, keyword-only
         :math:`D`; disparities :math:`0..D` are scored.
     window, block, seed : int, keyword-only
-        Patch side, residual block side and the seed of :math:`\\Pi`.
+        Patch side, residual block side and the seed of :math:`\\Pi` (also of the margin
+        sample).
+    margin_samples : int, keyword-only
+        Size of the margin sample per (cost, region, condition).
+    workers : int, keyword-only
+        Threads for the cost-volume scans.
 
     Returns
     -------
-    list of dict
-        One row per (cost, metric, region, condition): ``value`` (mean margin over the
-        region's scored pixels and seeds, or the accuracy pooled over seeds), ``chance`` (for
-        accuracies, the mean chance level), ``n_pixels`` and ``reason`` (why ``value`` is NaN).
+    InterventionResult
+        ``rows``: ``value`` is the mean margin over the region's scored pixels pooled over
+        seeds, or the accuracy pooled over seeds (hits / scoreable pixels); ``chance`` the
+        mean chance level of an accuracy; ``n_pixels`` the scoreable pixels per seed;
+        ``reason`` why ``value`` is NaN. ``margins``: the margin sample.
     """
-    grey_l, grey_r = _grey(left), _grey(right)
-    if grey_l.shape != grey_r.shape or grey_l.ndim != 3:
-        raise ValueError(f"left and right stacks differ: {grey_l.shape} vs {grey_r.shape}")
-    n, height, width = grey_l.shape
+    n = len(left)
+    if n != len(right) or n < 2:
+        raise ValueError(
+            f"need the same number (>= 2) of left and right seeds, got {n} and {len(right)}"
+        )
+    mean_l, mean_r = _seed_mean(left), _seed_mean(right)
+    if mean_l.shape != mean_r.shape:
+        raise ValueError(f"left and right renders differ: {mean_l.shape} vs {mean_r.shape}")
+    height, width = mean_l.shape[:2]
     perm = block_permutation(height, width, block=block, seed=seed)
-    eps_l = grey_l - grey_l.mean(axis=0)
-    eps_r = grey_r - grey_r.mean(axis=0)
-    sigma_l = (eps_l**2).mean(axis=0)
     d_gt = np.asarray(ground_truth_left["disparity"], dtype=np.float64)
     valid = np.asarray(ground_truth_left["valid"], dtype=bool)
     glass = np.asarray(ground_truth_left["glass"], dtype=bool)
     masks = {"non_glass": valid & ~glass, "glass": valid & glass}
-    kw = {"max_disparity": max_disparity, "sign": sign}
-    rows = []
-
-    def add(cost, metric, condition, per_region):
-        for region in REGIONS:
-            value, chance, n_pix = per_region[region]
-            rows.append(
-                {
-                    "cost": cost,
-                    "metric": metric,
-                    "region": region,
-                    "condition": condition,
-                    "value": value if n_pix else math.nan,
-                    "chance": chance,
-                    "n_pixels": n_pix,
-                    "reason": "" if n_pix else f"no scoreable {region} pixels",
-                }
-            )
-
+    scan = {
+        "max_disparity": max_disparity,
+        "sign": sign,
+        "d_gt": d_gt,
+        "workers": workers,
+        "dtype": np.float64,
+    }
+    rng = np.random.default_rng([seed, 2])
+    residual_plan = _sample_plan(masks, n, margin_samples, rng)
+    variance_plan = _sample_plan(masks, 1, margin_samples, rng)
+    acc = {
+        (cost, condition): _RegionAccumulator(masks) for cost in COSTS for condition in CONDITIONS
+    }
+    samples: list[dict] = []
+    square_l = np.zeros_like(mean_l)
+    square_r = np.zeros_like(mean_r)
+    for k, (render_l, render_r) in enumerate(zip(left, right, strict=True)):
+        res_l = _as_float(render_l) - mean_l
+        res_r = _as_float(render_r) - mean_r
+        square_l += res_l**2
+        square_r += res_r**2
+        eps_l, eps_r = res_l.mean(axis=-1), res_r.mean(axis=-1)
+        for condition in CONDITIONS:
+            if condition == "decorrelated":
+                eps_r = apply_block_permutation(eps_r, perm, block=block)
+            result = scan_cost_volume(eps_l, eps_r, window=window, **scan)
+            acc[("residual_sad", condition)].add(result, d_gt)
+            _take_samples(
+                samples, residual_plan, k, result.margin, cost="residual_sad",
+                condition=condition, seed=k,
+            )  # fmt: skip
+    sigma_l = (square_l / n).mean(axis=-1)
+    sigma_r = (square_r / n).mean(axis=-1)
     for condition in CONDITIONS:
-        right_eps = eps_r
         if condition == "decorrelated":
-            right_eps = np.stack([apply_block_permutation(e, perm, block=block) for e in eps_r])
-        sigma_r = (right_eps**2).mean(axis=0)
-        margins = {r: [] for r in REGIONS}
-        accuracies = {r: [] for r in REGIONS}
-        for k in range(n):
-            cost, scored = residual_cost_volume(eps_l[k], right_eps[k], window=window, **kw)
-            margin = gt_margin(cost, scored, d_gt)
-            for region, mask in masks.items():
-                margins[region].append(margin[mask & np.isfinite(margin)])
-                accuracies[region].append(wta_accuracy(cost, scored, d_gt, mask))
-        add(
-            "residual_sad",
-            "gt_margin",
-            condition,
-            {r: _margin_entry(margins[r], n) for r in REGIONS},
-        )
-        add(
-            "residual_sad",
-            "wta_accuracy",
-            condition,
-            {r: _accuracy_entry(accuracies[r]) for r in REGIONS},
-        )
-        cost, scored = variance_cost_volume(sigma_l, sigma_r, window=window, **kw)
-        margin = gt_margin(cost, scored, d_gt)
-        add(
-            "variance_cost",
-            "gt_margin",
-            condition,
-            {r: _margin_entry([margin[m & np.isfinite(margin)]], 1) for r, m in masks.items()},
-        )
-        add(
-            "variance_cost",
-            "wta_accuracy",
-            condition,
-            {r: _accuracy_entry([wta_accuracy(cost, scored, d_gt, m)]) for r, m in masks.items()},
-        )
-        similarity, scored = pixel_similarity_volume(sigma_l, sigma_r, **kw)
-        add(
-            "variance_peak",
-            "peak_hit_rate",
-            condition,
-            {
-                r: _accuracy_entry([peak_hit_rate(similarity, scored, d_gt, m)])
-                for r, m in masks.items()
-            },
-        )
-    return rows
+            sigma_r = apply_block_permutation(sigma_r, perm, block=block)
+        result = scan_cost_volume(sigma_l, sigma_r, window=window, **scan)
+        acc[("variance_cost", condition)].add(result, d_gt)
+        _take_samples(
+            samples, variance_plan, 0, result.margin, cost="variance_cost",
+            condition=condition, seed=-1,
+        )  # fmt: skip
+        peak = scan_cost_volume(sigma_l, sigma_r, window=1, **scan)
+        acc[("variance_peak", condition)].add(peak, d_gt, margin=False)
+
+    rows = []
+    for cost, metrics in COSTS.items():
+        for metric in metrics:
+            for condition in CONDITIONS:
+                a = acc[(cost, condition)]
+                for region in REGIONS:
+                    if metric == "gt_margin":
+                        runs = n if cost == "residual_sad" else 1
+                        value, chance, n_pix = a.margin_entry(region, runs)
+                    else:
+                        value, chance, n_pix = a.rate_entry(region)
+                    rows.append(
+                        {
+                            "cost": cost,
+                            "metric": metric,
+                            "region": region,
+                            "condition": condition,
+                            "value": value if n_pix else math.nan,
+                            "chance": chance,
+                            "n_pixels": n_pix,
+                            "reason": "" if n_pix else f"no scoreable {region} pixels",
+                        }
+                    )
+    return InterventionResult(rows, samples)

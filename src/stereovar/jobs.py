@@ -542,6 +542,17 @@ def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
     _save_figure(fig, out)
 
 
+def margin_figure_job(margins, out) -> None:
+    """The intervention's GT-margin distributions per region, normal against decorrelated."""
+    from .figures import margin_distribution_figure
+    from .tables import read_rows
+
+    rows = [r for path in margins for r in read_rows(path)]
+    n_scenes = len({r["scene"] for r in rows})
+    title = f"GT margins, normal vs decorrelated ({n_scenes} scenes, sampled pixels)"
+    _save_figure(margin_distribution_figure(rows, title=title), out)
+
+
 INTERVENTION_COLUMNS = [
     "scene",
     "spp",
@@ -560,17 +571,22 @@ INTERVENTION_COLUMNS = [
 ]
 
 
-def _grey_stack(paths):
-    """Renders of one view as a float64 grey (RGB-mean) stack (N, H, W)."""
-    import numpy as np
+MARGIN_COLUMNS = ["scene", "cost", "region", "condition", "seed", "y", "x", "margin"]
 
-    from .variance import RenderStore
 
-    stack = []
-    for path in paths:
-        radiance = RenderStore(path)
-        stack.append(radiance.rows(slice(None)).mean(axis=-1, dtype=np.float64))
-    return np.stack(stack)
+class _LazyRenders:
+    """The renders of one view as a sequence that reads one store per item (never all)."""
+
+    def __init__(self, paths):
+        self.paths = list(paths)
+
+    def __len__(self):
+        return len(self.paths)
+
+    def __getitem__(self, k):
+        from .variance import RenderStore
+
+        return RenderStore(self.paths[k]).rows(slice(None))
 
 
 def intervention_job(
@@ -578,14 +594,18 @@ def intervention_job(
     right,
     ground_truth,
     out,
+    margins,
     *,
     window=5,
     block=16,
     seed=0,
     max_disparity=None,
     disparity_margin=4,
+    margin_samples=2000,
+    workers=1,
 ) -> list[dict]:
-    """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4)."""
+    """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4), and a
+    sample of the per-pixel GT margins for the distribution figure."""
     import math
 
     from .intervention import intervention_metrics
@@ -606,21 +626,23 @@ def intervention_job(
             largest,
             n_lost,
         )
-    left_stack, right_stack = _grey_stack(left), _grey_stack(right)
-    rows = intervention_metrics(
-        left_stack,
-        right_stack,
+    result = intervention_metrics(
+        _LazyRenders(left),
+        _LazyRenders(right),
         gl,
         sign=int(gt.attrs["disparity_sign"]),
         max_disparity=int(max_disparity),
         window=window,
         block=block,
         seed=seed,
+        margin_samples=margin_samples,
+        workers=workers,
     )
     attrs = open_dataset(left[0])["radiance"].attrs
-    for row in rows:
+    scene = attrs.get("scene", gt.attrs.get("scene"))
+    for row in result.rows:
         row.update(
-            scene=attrs.get("scene", gt.attrs.get("scene")),
+            scene=scene,
             spp=attrs.get("spp"),
             n_seeds=len(left),
             max_disparity=int(max_disparity),
@@ -638,8 +660,11 @@ def intervention_job(
             row["n_pixels"],
             f" [{row['reason']}]" if row["reason"] else "",
         )
-    write_tables(rows, INTERVENTION_COLUMNS, {"csv": out})
-    return rows
+    for sample in result.margins:
+        sample["scene"] = scene
+    write_tables(result.margins, MARGIN_COLUMNS, {"csv": margins})
+    write_tables(result.rows, INTERVENTION_COLUMNS, {"csv": out})
+    return result.rows
 
 
 def intervention_table_job(inputs, outputs: dict) -> list[dict]:

@@ -122,4 +122,5 @@ def all_targets():
         "results/figures/fig1_teaser.png",
         "results/figures/fig2_rho_vs_spp.png",
         "results/figures/fig3_material_scatter.png",
+        "results/figures/fig4_intervention_margins.png",
     ]

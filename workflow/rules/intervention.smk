@@ -6,14 +6,15 @@ rule intervention:
         unpack(lambda wc: scene_renders(wc, spp=MAIN_SPP)),
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        "results/intervention/{scene}.csv",
+        metrics="results/intervention/{scene}.csv",
+        margins="results/intervention/margins/{scene}.csv",
     params:
         **config["intervention"],
     log:
         "logs/intervention/{scene}.log",
     benchmark:
         "benchmarks/intervention/{scene}.tsv"
-    threads: 1
+    threads: 2
     resources:
         mem_mb=lambda wc, attempt: 3000 * attempt,
     conda:
@@ -41,3 +42,21 @@ rule intervention_table:
         ENV
     script:
         "../scripts/intervention_table.py"
+
+
+rule margin_figure:
+    input:
+        expand("results/intervention/margins/{scene}.csv", scene=SCENES),
+    output:
+        report(
+            "results/figures/fig4_intervention_margins.png",
+            caption="../report/fig4_intervention_margins.rst",
+            category="Figures",
+            labels={"figure": "Table 3: GT-margin distributions"},
+        ),
+    log:
+        "logs/figures/fig4_intervention_margins.log",
+    conda:
+        ENV
+    script:
+        "../scripts/margin_figure.py"

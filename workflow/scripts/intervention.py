@@ -8,6 +8,8 @@ run_job(
     left=snakemake.input.left,
     right=snakemake.input.right,
     ground_truth=snakemake.input.ground_truth,
-    out=snakemake.output[0],
+    out=snakemake.output.metrics,
+    margins=snakemake.output.margins,
+    workers=snakemake.threads,
     **snakemake.params,
 )
