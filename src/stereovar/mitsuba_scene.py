@@ -180,14 +180,15 @@ def material_dict(mi, spec: dict, name: str) -> dict:
 
 
 def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, bsdf) -> object:
-    import drjit as dr
 
     props = mi.Properties()
     props["bsdf"] = bsdf
     mesh = mi.Mesh(name, len(vertices), len(faces), props=props, has_vertex_normals=True)
     params = mi.traverse(mesh)
-    params["vertex_positions"] = dr.ravel(mi.Point3f(*vertices.T.astype(np.float32)))
-    params["faces"] = dr.ravel(mi.Vector3u(*faces.T))
+    # Flat buffers of the variant's own array types (scalar variants have no Point3f arrays).
+    positions, indices = params["vertex_positions"], params["faces"]
+    params["vertex_positions"] = type(positions)(np.ascontiguousarray(vertices, np.float32).ravel())
+    params["faces"] = type(indices)(np.ascontiguousarray(faces, np.uint32).ravel())
     params.update()
     mesh.recompute_vertex_normals()
     return mesh

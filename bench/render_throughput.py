@@ -1,0 +1,137 @@
+"""Benchmark: path-tracing throughput of one paper-scale view on every available backend.
+
+Renders the left view of one scene (default 1280x720 at SPP 512, the paper preset's main
+render) once per available Mitsuba variant, each in its own process, after a 1-SPP warm-up
+render that pays the JIT compilation. It prints samples per second, the peak RSS and the
+ratio to ``llvm_ad_rgb`` (the named baseline, measured in the same run), and projects the
+wall time of the paper preset's whole render stage (every scene, view, seed and SPP of
+``workflow/presets/paper.yaml``) from each rate. ``scalar_rgb`` runs at ``--scalar-spp``
+(it is about two orders of magnitude slower) unless ``--variants`` names it alone.
+
+Usage::
+
+    .venv/bin/python bench/render_throughput.py                 # every available variant
+    .venv/bin/python bench/render_throughput.py --spp 64        # a quicker CPU check
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+SCHEMA = REPO / "workflow/schemas/config.schema.yaml"
+
+WORKER = r"""
+import json, resource, sys, time
+args = json.loads(sys.argv[1])
+from stereovar.backend import load_mitsuba
+from stereovar.mitsuba_scene import load_scene
+from stereovar.render import derive_seed, integrator_dict, render_view
+from stereovar.rig import make_rig
+from stereovar.scenespec import load_scene_spec
+import drjit as dr
+
+mi = load_mitsuba(args["variant"])
+if args["threads"]:
+    dr.set_thread_count(args["threads"])
+spec = load_scene_spec(args["scene_path"])
+scene, cam = load_scene(mi, spec)
+rig = make_rig(cam.to_world, cam.fov_deg, width=args["width"], height=args["height"],
+               baseline_m=args["baseline_m"], convention="paper")
+integ = integrator_dict("path", args["max_depth"])
+def render(spp, index):
+    image = render_view(mi, scene, rig, "left", spp=spp, integrator=integ, rfilter="box",
+                        sampler="independent", seed=derive_seed("bench", "left", spp, index))
+    return image
+t0 = time.perf_counter()
+render(1, 0)
+warm = time.perf_counter() - t0
+t0 = time.perf_counter()
+image = render(args["spp"], 1)
+seconds = time.perf_counter() - t0
+import numpy as np
+finite = float(np.isfinite(np.asarray(image)).mean())
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "warmup": warm, "rss_mb": rss, "finite": finite}))
+"""
+
+
+def paper_samples() -> tuple[int, dict]:
+    """Path samples of the paper preset's render stage, and the merged config."""
+    from stereovar.config import load_config
+    from stereovar.experiment import scene_spp_pairs
+
+    config = load_config(
+        [str(REPO / "config.yaml"), str(REPO / "workflow/presets/paper.yaml")], SCHEMA
+    )
+    pixels = config["resolution"]["width"] * config["resolution"]["height"]
+    n = config["render"]["n_seeds"]
+    total = sum(pixels * spp * n * 2 for _, spp in scene_spp_pairs(config))
+    return total, config
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--width", type=int, default=1280)
+    parser.add_argument("--height", type=int, default=720)
+    parser.add_argument("--spp", type=int, default=512)
+    parser.add_argument("--scalar-spp", type=int, default=4)
+    parser.add_argument("--scene", default="scene_000")
+    parser.add_argument("--threads", type=int, default=0, help="Dr.Jit CPU threads (0: all)")
+    parser.add_argument("--variants", nargs="*", help="default: every available variant")
+    args = parser.parse_args(argv)
+
+    from stereovar.backend import available_variants
+
+    variants = args.variants or available_variants()
+    total, config = paper_samples()
+    print(
+        f"one view: {args.scene}, {args.width}x{args.height}, SPP {args.spp} "
+        f"(scalar_rgb at SPP {args.scalar_spp}); variants: {', '.join(variants)}"
+    )
+    print(
+        f"paper preset render stage: {total:.3e} path samples "
+        f"({len(config['scenes'])} scenes, N = {config['render']['n_seeds']}, both views)"
+    )
+    rates = {}
+    for variant in variants:
+        slow = variant.startswith("scalar") and args.variants is None
+        spp = args.scalar_spp if slow else args.spp
+        job = {
+            "variant": variant,
+            "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
+            "width": args.width,
+            "height": args.height,
+            "spp": spp,
+            "threads": args.threads,
+            "baseline_m": config["rig"]["baseline_m"],
+            "max_depth": config["render"]["max_depth"],
+        }
+        proc = subprocess.run(
+            [sys.executable, "-c", WORKER, json.dumps(job)], capture_output=True, text=True
+        )
+        if proc.returncode != 0:
+            print(f"{variant:12s}: failed: {proc.stderr.strip().splitlines()[-1:]}")
+            continue
+        out = json.loads(proc.stdout.strip().splitlines()[-1])
+        samples = args.width * args.height * spp
+        rates[variant] = samples / out["seconds"]
+        print(
+            f"{variant:12s}: {out['seconds']:8.2f} s for {samples / 1e6:8.1f} M samples = "
+            f"{rates[variant] / 1e6:8.2f} M samples/s (warm-up {out['warmup']:.1f} s, peak RSS "
+            f"{out['rss_mb']:.0f} MB, finite {out['finite']:.4f})"
+        )
+    base = rates.get("llvm_ad_rgb")
+    for variant, rate in rates.items():
+        hours = total / rate / 3600
+        ratio = f", {rate / base:6.2f}x llvm_ad_rgb" if base else ""
+        print(f"{variant:12s}: paper preset render stage projected at {hours:10.1f} h{ratio}")
+    return 0 if rates else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
