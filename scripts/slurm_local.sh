@@ -82,6 +82,7 @@ write_configs() {
     mem=$((mem > 4096 ? mem - 2048 : mem))
     cat >"$STATE/slurm.conf" <<EOF
 ClusterName=$CLUSTER
+SlurmctldParameters=enable_configless
 SlurmctldHost=$host(127.0.0.1)
 SlurmctldPort=$CTLD_PORT
 SlurmdPort=$SLURMD_PORT
@@ -103,6 +104,7 @@ JobAcctGatherFrequency=10
 AccountingStorageType=accounting_storage/slurmdbd
 AccountingStorageHost=127.0.0.1
 AccountingStoragePort=$DBD_PORT
+AccountingStoreFlags=job_comment
 JobCompType=jobcomp/none
 SchedulerType=sched/backfill
 SelectType=select/cons_tres
@@ -192,7 +194,9 @@ EOF
 
     launch slurmctld slurmctld -D -i -f "$STATE/slurm.conf"
     wait_for 60 slurmctld scontrol ping
-    launch slurmd slurmd -D -f "$STATE/slurm.conf"
+    # Configless slurmd: it fetches slurm.conf from slurmctld and points each job's SLURM_CONF
+    # at its cached copy, so srun inside a job finds the cluster.
+    launch slurmd slurmd -D --conf-server "127.0.0.1:$CTLD_PORT"
     wait_for 60 "slurmd (node idle)" bash -c "sinfo -h -o '%t' | grep -qx idle"
     say "up: cluster $CLUSTER, account $ACCOUNT, node $(hostname -s); export SLURM_CONF=$SLURM_CONF"
 }

@@ -44,6 +44,12 @@ DEFAULTS = {
         "disparity_margin": 4,
         "margin_samples": 2000,
     },
+    "cluster": {
+        "render_samples_per_second": 1.0e6,
+        "render_threads": 2,
+        "gpus_per_render": 0,
+        "gpu_model": None,
+    },
     "preview": {"spp": 32},
 }
 
@@ -83,7 +89,7 @@ BAD_CONFIGS = [
         [
             "'colour'",
             "not known",
-            "scenes, generator, resolution, rig, render, analysis, intervention, preview",
+            "scenes, generator, resolution, rig, render, analysis, intervention, cluster, preview",
         ],
         id="unknown-top-level-key",
     ),
@@ -273,3 +279,26 @@ def test_intervention_settings_are_checked(override, needles):
     assert "\n" not in message
     for needle in needles:
         assert needle in message
+
+
+def test_command_line_strings_become_the_scalars_the_schema_asks_for():
+    # `snakemake --config cluster={gpus_per_render: 1, gpu_model: null}` passes strings.
+    given = {
+        "cluster": {"gpus_per_render": "1", "gpu_model": "null", "render_threads": "4"},
+        "render": {"spp": "16", "spp_sweep": {"spp": [16]}},
+        "intervention": {"max_disparity": "~"},
+    }
+    config = validate_config(copy.deepcopy(given), SCHEMA, command_line=given)
+    assert config["cluster"]["gpus_per_render"] == 1
+    assert config["cluster"]["gpu_model"] is None
+    assert config["cluster"]["render_threads"] == 4
+    assert config["render"]["spp"] == 16
+    assert config["intervention"]["max_disparity"] is None
+    kept = validate_config({"cluster": {"gpu_model": "a100"}}, SCHEMA)
+    assert kept["cluster"]["gpu_model"] == "a100"
+    bad = {"cluster": {"gpus_per_render": "two"}}
+    with pytest.raises(ConfigError, match="cluster.gpus_per_render"):
+        validate_config(bad, SCHEMA, command_line=bad)
+    # The same string in a config file (not given on the command line) stays an error.
+    with pytest.raises(ConfigError, match="cluster.gpus_per_render"):
+        validate_config({"cluster": {"gpus_per_render": "1"}}, SCHEMA)

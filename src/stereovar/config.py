@@ -81,6 +81,49 @@ def _fill_defaults(instance: dict, schema: Mapping) -> None:
             _fill_defaults(instance[key], subschema)
 
 
+def _coerce_strings(instance: dict, schema: Mapping, given: Mapping) -> None:
+    """Turn the strings given on the command line into the numbers, booleans or nulls the
+    schema asks for, in place.
+
+    ``snakemake --config key={a: 1}`` (and a profile's ``config:``) passes nested values as
+    strings ("1"); a string there that parses as an allowed scalar type becomes that scalar.
+    Only keys present in ``given`` (the ``--config`` mapping) are touched: a quoted number in
+    a YAML config file stays an error.
+    """
+    for key, subschema in schema.get("properties", {}).items():
+        if key not in given:
+            continue
+        value = instance.get(key)
+        if isinstance(value, dict) and "properties" in subschema:
+            if isinstance(given[key], Mapping):
+                _coerce_strings(value, subschema, given[key])
+            continue
+        if not isinstance(value, str) or given[key] != value:
+            continue
+        kinds = subschema.get("type", [])
+        kinds = [kinds] if isinstance(kinds, str) else list(kinds)
+        if "null" in kinds and value.strip().lower() in ("null", "~"):
+            instance[key] = None
+            continue
+        if "string" in kinds:
+            continue
+        if "boolean" in kinds and value.strip().lower() in ("true", "false"):
+            instance[key] = value.strip().lower() == "true"
+            continue
+        for kind in ("integer", "number"):
+            if kind in kinds:
+                try:
+                    number = float(value)
+                except ValueError:
+                    continue
+                if kind == "integer" and number.is_integer():
+                    instance[key] = int(number)
+                    break
+                if kind == "number":
+                    instance[key] = number
+                    break
+
+
 def _key(path) -> str:
     text = ""
     for part in path:
@@ -214,7 +257,7 @@ def _check_intervention(config: dict) -> None:
         )
 
 
-def validate_config(config: Mapping, schema_path) -> dict:
+def validate_config(config: Mapping, schema_path, *, command_line: Mapping | None = None) -> dict:
     """Check a workflow config and return it with every default filled in.
 
     Parameters
@@ -223,6 +266,8 @@ def validate_config(config: Mapping, schema_path) -> dict:
         The config as loaded from YAML (Snakemake's ``config``); it is not modified.
     schema_path : str or os.PathLike
         The JSON Schema (YAML), ``workflow/schemas/config.schema.yaml``.
+    command_line : Mapping, optional
+        The ``--config`` entries; their string values are read as the schema's scalar type.
 
     Returns
     -------
@@ -245,13 +290,16 @@ def validate_config(config: Mapping, schema_path) -> dict:
             f"({_type_name(config)})"
         )
     filled = _plain(config)
+    _coerce_strings(filled, schema, _plain(command_line or {}))
     _fill_defaults(filled, schema)
     _check_schema(filled, schema)
     _check_cross_fields(filled)
     return filled
 
 
-def validate_config_or_exit(config: Mapping, schema_path) -> dict:
+def validate_config_or_exit(
+    config: Mapping, schema_path, *, command_line: Mapping | None = None
+) -> dict:
     """:func:`validate_config` for Snakefiles: on error print one line and exit.
 
     Raising :class:`ConfigError` inside a Snakefile makes Snakemake print the error type,
@@ -264,6 +312,8 @@ def validate_config_or_exit(config: Mapping, schema_path) -> dict:
         Snakemake's ``config``.
     schema_path : str or os.PathLike
         The JSON Schema (YAML), e.g. ``workflow.source_path("../schemas/config.schema.yaml")``.
+    command_line : Mapping, optional
+        The ``--config`` entries (``workflow.config_settings.config``).
 
     Returns
     -------
@@ -276,7 +326,7 @@ def validate_config_or_exit(config: Mapping, schema_path) -> dict:
         With the message ``stereovar: <one-line ConfigError message>``.
     """
     try:
-        return validate_config(config, schema_path)
+        return validate_config(config, schema_path, command_line=command_line)
     except ConfigError as err:
         raise SystemExit(f"stereovar: {err}") from None
 

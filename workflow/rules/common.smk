@@ -1,4 +1,5 @@
 # Configuration validation, wildcard constraints, input functions and target lists.
+import math
 import re
 from pathlib import Path
 
@@ -7,10 +8,17 @@ from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
 from stereovar.experiment import render_store, render_stores, scene_spp_pairs, seed_batches
+from stereovar import resources as sizing
 
 CONFIG_SCHEMA = "../schemas/config.schema.yaml"
 
-config.update(validate_config_or_exit(config, workflow.source_path(CONFIG_SCHEMA)))
+config.update(
+    validate_config_or_exit(
+        config,
+        workflow.source_path(CONFIG_SCHEMA),
+        command_line=workflow.config_settings.config,
+    )
+)
 
 
 validate(config, CONFIG_SCHEMA, set_default=True)
@@ -27,6 +35,10 @@ wildcard_constraints:
     spp=r"\d+",
 
 
+WIDTH = config["resolution"]["width"]
+HEIGHT = config["resolution"]["height"]
+CLUSTER = config["cluster"]
+RENDER_THREADS = CLUSTER["render_threads"]
 N_SEEDS = config["render"]["n_seeds"]
 MAIN_SPP = config["render"]["spp"]
 SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
@@ -124,3 +136,62 @@ def all_targets():
         "results/figures/fig3_material_scatter.png",
         "results/figures/fig4_intervention_margins.png",
     ]
+
+
+# Cluster requests, from each job's size (stereovar.resources). Account, partition and the
+# GPU model stay out of the rules: they come from the profile (profiles/slurm*).
+
+
+def render_resources(n_renders, spp=None, gpu=True, cpus=None):
+    """Memory, runtime and (with ``gpu``) GPU requests of a Mitsuba job rendering
+    ``n_renders`` images at ``spp`` (the job's ``spp`` wildcard when None)."""
+
+    def runtime(wildcards, attempt):
+        return sizing.render_runtime(
+            WIDTH,
+            HEIGHT,
+            int(wildcards.spp if spp is None else spp),
+            n_renders,
+            samples_per_second=CLUSTER["render_samples_per_second"],
+            attempt=attempt,
+        )
+
+    requests = {
+        "mem_mb": lambda wildcards, attempt: sizing.render_mem_mb(WIDTH, HEIGHT, attempt=attempt),
+        "runtime": runtime,
+        "cpus_per_task": RENDER_THREADS if cpus is None else cpus,
+    }
+    if gpu and CLUSTER["gpus_per_render"]:
+        requests["gpu"] = CLUSTER["gpus_per_render"]
+        if CLUSTER["gpu_model"]:
+            requests["gpu_model"] = CLUSTER["gpu_model"]
+    return requests
+
+
+def analysis_resources(images, n_reads):
+    """Memory and runtime requests of an analysis job holding ``images`` images at once and
+    reading ``n_reads`` renders."""
+    return {
+        "mem_mb": lambda wildcards, attempt: sizing.analysis_mem_mb(
+            WIDTH, HEIGHT, images, attempt=attempt
+        ),
+        "runtime": lambda wildcards, attempt: sizing.analysis_runtime(
+            WIDTH, HEIGHT, n_reads, attempt=attempt
+        ),
+    }
+
+
+def intervention_resources():
+    """Memory and runtime requests of one scene's intervention (D estimated before the
+    ground truth exists: the configured one, else 5% of the width plus the margin)."""
+    iv = config["intervention"]
+    d = iv["max_disparity"] or math.ceil(0.05 * WIDTH) + iv["disparity_margin"]
+    return {
+        "mem_mb": lambda wildcards, attempt: sizing.analysis_mem_mb(
+            WIDTH, HEIGHT, 24, attempt=attempt
+        ),
+        "runtime": lambda wildcards, attempt: sizing.intervention_runtime(
+            WIDTH, HEIGHT, N_SEEDS, d + 1, attempt=attempt
+        ),
+        "cpus_per_task": 2,
+    }

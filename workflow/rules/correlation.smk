@@ -10,6 +10,10 @@ rule warp:
     log:
         "logs/warped/{scene}/spp{spp}.log",
     threads: 1
+    resources:
+        **analysis_resources(images=8, n_reads=0),
+    group:
+        "analysis"
     conda:
         ENV
     script:
@@ -28,6 +32,10 @@ rule correlation:
     log:
         "logs/correlation/{scene}/spp{spp}.log",
     threads: 1
+    resources:
+        **analysis_resources(images=8, n_reads=0),
+    group:
+        "analysis"
     conda:
         ENV
     script:

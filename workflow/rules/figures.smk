@@ -14,6 +14,7 @@ rule teaser_figure:
         ),
     log:
         "logs/figures/fig1_teaser.log",
+    localrule: True
     conda:
         ENV
     script:
@@ -32,6 +33,7 @@ rule rho_vs_spp_figure:
         ),
     log:
         "logs/figures/fig2_rho_vs_spp.log",
+    localrule: True
     conda:
         ENV
     script:
@@ -52,6 +54,7 @@ rule material_scatter_figure:
         ),
     log:
         "logs/figures/fig3_material_scatter.log",
+    localrule: True
     conda:
         ENV
     script:

@@ -14,7 +14,9 @@ rule ground_truth:
         "benchmarks/ground_truth/{scene}.tsv"
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: 1000 + attempt * 500,
+        **render_resources(2, spp=1, gpu=False, cpus=1),
+    group:
+        "scene_setup"
     conda:
         ENV
     script:

@@ -16,7 +16,7 @@ rule intervention:
         "benchmarks/intervention/{scene}.tsv"
     threads: 2
     resources:
-        mem_mb=lambda wc, attempt: 3000 * attempt,
+        **intervention_resources(),
     conda:
         ENV
     script:
@@ -56,6 +56,7 @@ rule margin_figure:
         ),
     log:
         "logs/figures/fig4_intervention_margins.log",
+    localrule: True
     conda:
         ENV
     script:

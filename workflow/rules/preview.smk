@@ -20,7 +20,11 @@ rule preview:
         "logs/previews/{scene}.log",
     benchmark:
         "benchmarks/previews/{scene}.tsv"
-    threads: 2
+    threads: RENDER_THREADS
+    resources:
+        **render_resources(2, spp=config["preview"]["spp"]),
+    group:
+        "scene_setup"
     conda:
         ENV
     script:

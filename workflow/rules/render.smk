@@ -26,9 +26,9 @@ for _batch in seed_batches(N_SEEDS, config["render"]["seeds_per_job"]):
             f"logs/renders/{{scene}}/spp{{spp}}/seeds{_first}-{_last}.log",
         benchmark:
             f"benchmarks/renders/{{scene}}/spp{{spp}}/seeds{_first}-{_last}.tsv"
-        threads: 2
+        threads: RENDER_THREADS
         resources:
-            mem_mb=lambda wc, attempt: 1500 + attempt * 500,
+            **render_resources(2 * len(_batch)),
         conda:
             ENV
         script:

@@ -12,7 +12,9 @@ rule variance:
         "benchmarks/variance/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: 2000 * attempt,
+        **analysis_resources(images=12, n_reads=2 * N_SEEDS),
+    group:
+        "analysis"
     conda:
         ENV
     script:

@@ -1,0 +1,231 @@
+"""The workflow on a real single-node SLURM cluster (scripts/slurm_local.sh) via profiles/slurm.
+
+The cluster (munge, MariaDB, slurmdbd, slurmctld, slurmd) is started for this module and
+stopped by process id at its end. Where it cannot be provided (not root, no apt-get, or a
+munged already serving the standard socket) every test here is skipped with the script's
+reason, which pytest's summary (``-ra``) prints.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from .test_workflow import SCENES, TINY
+
+REPO = Path(__file__).resolve().parents[1]
+SCRIPT = REPO / "scripts/slurm_local.sh"
+#: Status checks every 2 s instead of the profile's cluster-friendly 30 s.
+FAST = ["--slurm-init-seconds-before-status-checks", "1", "--seconds-between-status-checks", "2"]
+
+pytestmark = [pytest.mark.slurm, pytest.mark.workflow]
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """Environment of a running local cluster (SLURM_CONF set)."""
+    state = tmp_path_factory.mktemp("slurm-state")
+    env = {**os.environ, "STEREOVAR_SLURM_DIR": str(state)}
+    proc = subprocess.run(["bash", str(SCRIPT), "start"], env=env, capture_output=True, text=True)
+    if proc.returncode == 3:
+        pytest.skip(f"no local SLURM cluster on this machine: {proc.stderr.strip()}")
+    if proc.returncode != 0:
+        logs = "\n".join(
+            f"--- {p.name}\n{p.read_text()[-2000:]}" for p in sorted((state / "log").glob("*"))
+        )
+        subprocess.run(["bash", str(SCRIPT), "stop"], env=env, capture_output=True)
+        pytest.fail(f"slurm_local.sh start failed: {proc.stderr}\n{logs}")
+    env["SLURM_CONF"] = str(state / "slurm.conf")
+    yield env
+    stop = subprocess.run(["bash", str(SCRIPT), "stop"], env=env, capture_output=True, text=True)
+    assert stop.returncode == 0, stop.stderr
+    pids = (state / "pids").exists()
+    assert not pids, "the stop left the pid file behind"
+
+
+def copy_workflow(root: Path, config: dict) -> Path:
+    root.mkdir(parents=True)
+    for name in ("Snakefile", "config.yaml"):
+        shutil.copy(REPO / name, root / name)
+    for name in ("workflow", "profiles", "envs"):
+        shutil.copytree(REPO / name, root / name)
+    (root / "scenes").mkdir()
+    for scene in SCENES:
+        shutil.copy(REPO / "scenes" / f"{scene}.yaml", root / "scenes")
+    (root / "tiny.yaml").write_text(yaml.safe_dump(config))
+    return root
+
+
+def snakemake_cmd(*args):
+    return [sys.executable, "-m", "snakemake", *args, "--configfile", "tiny.yaml"]
+
+
+def run(workdir, env, *args, check=True):
+    proc = subprocess.run(
+        snakemake_cmd(*args), cwd=workdir, env=env, capture_output=True, text=True, timeout=1200
+    )
+    if check and proc.returncode != 0:
+        raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+def sacct(env, workdir) -> list[dict]:
+    """This workflow's SLURM jobs (allocations only) from the accounting database."""
+    out = subprocess.run(
+        ["sacct", "-X", "-P", "-n", "-S", "now-6hours", "-a",
+         "--format", "JobID,State,WorkDir,Comment"],
+        env=env, capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    jobs = []
+    for line in out.splitlines():
+        job_id, state, work, comment = line.split("|", 3)
+        if Path(work) == Path(workdir):
+            jobs.append({"id": int(job_id), "state": state.split()[0], "comment": comment})
+    return jobs
+
+
+def outputs(workdir) -> dict:
+    """Every table and per-scene CSV, as bytes."""
+    root = Path(workdir) / "results"
+    files = [
+        *root.glob("tables/*"),
+        *root.glob("correlation/*/*.csv"),
+        *root.glob("intervention/**/*.csv"),
+    ]  # noqa: E501
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(files)}
+
+
+@pytest.fixture(scope="module")
+def local_reference(tmp_path_factory):
+    """The tiny config run locally with -j2."""
+    workdir = copy_workflow(tmp_path_factory.mktemp("local") / "wf", TINY)
+    run(workdir, os.environ, "-j2", "all")
+    return workdir
+
+
+@pytest.fixture(scope="module")
+def slurm_run(cluster, tmp_path_factory):
+    workdir = copy_workflow(tmp_path_factory.mktemp("slurm") / "wf", TINY)
+    start = time.perf_counter()
+    run(workdir, cluster, "--profile", "profiles/slurm", "all", *FAST)
+    return workdir, time.perf_counter() - start
+
+
+def test_slurm_tables_equal_the_local_run_bit_for_bit(slurm_run, local_reference):
+    workdir, _ = slurm_run
+    cluster_out, local_out = outputs(workdir), outputs(local_reference)
+    assert len(local_out) >= 15
+    assert cluster_out.keys() == local_out.keys()
+    for name, data in local_out.items():
+        assert cluster_out[name] == data, f"{name} differs between SLURM and local runs"
+
+
+def test_jobs_went_through_sbatch_and_are_accounted(slurm_run, cluster):
+    workdir, _ = slurm_run
+    jobs = sacct(cluster, workdir)
+    assert jobs and all(j["state"] == "COMPLETED" for j in jobs)
+    comments = [j["comment"] for j in jobs]
+    # Render batches: 2 scenes at the main SPP + the sweep scene at its other SPP.
+    assert sum(c.startswith("rule_render_seeds_0_1") for c in comments) == 3
+    assert sum("intervention" in c for c in comments) == len(SCENES)
+    # Local rules (tables, figures) never reach SLURM.
+    assert not any("table" in c or "figure" in c for c in comments)
+
+
+def wait_for_running_render(env, workdir, proc, timeout=600):
+    """Job id of a render job of this workflow once SLURM runs it."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        assert proc.poll() is None, "the workflow ended before a render job ran"
+        out = subprocess.run(
+            ["squeue", "-h", "-t", "RUNNING", "-o", "%i|%Z|%k"],
+            env=env, capture_output=True, text=True,
+        ).stdout  # fmt: skip
+        for line in out.splitlines():
+            job_id, work, comment = line.split("|", 2)
+            if Path(work) == Path(workdir) and comment.startswith("rule_render"):
+                return int(job_id), comment
+        time.sleep(0.2)
+    raise AssertionError("no render job ran within the timeout")
+
+
+def kill_job_processes(env, job_id):
+    """SIGKILL every process of a running SLURM job, as an OOM killer or a crash would.
+
+    (``scancel`` is not used: sacct then reports the state as ``CANCELLED by <uid>``, which
+    snakemake-executor-plugin-slurm 2.8 does not recognise, so the workflow would wait on
+    the job forever.)
+    """
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        out = subprocess.run(
+            ["scontrol", "listpids", str(job_id)], env=env, capture_output=True, text=True
+        ).stdout
+        pids = [int(line.split()[0]) for line in out.splitlines()[1:] if line.split()]
+        if pids:
+            for pid in pids:
+                try:
+                    os.kill(pid, 9)
+                except ProcessLookupError:
+                    pass
+            return
+        time.sleep(0.2)
+    raise AssertionError(f"no process of SLURM job {job_id} found")
+
+
+def kill_one_render(env, workdir, *args):
+    """Start the workflow on SLURM, kill the first render job that runs, wait for the end."""
+    proc = subprocess.Popen(
+        snakemake_cmd("--profile", "profiles/slurm", "all", *FAST, *args),
+        cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    job_id, comment = wait_for_running_render(env, workdir, proc)
+    kill_job_processes(env, job_id)
+    output, _ = proc.communicate(timeout=1200)
+    return proc.returncode, output, job_id, comment
+
+
+def render_submissions(env, workdir) -> dict:
+    counts: dict = {}
+    for job in sacct(env, workdir):
+        if job["comment"].startswith("rule_render"):
+            counts.setdefault(job["comment"], []).append(job["state"])
+    return counts
+
+
+def test_killed_render_is_retried_and_nothing_finished_is_rerendered(
+    cluster, tmp_path_factory, local_reference
+):
+    workdir = copy_workflow(tmp_path_factory.mktemp("retry") / "wf", TINY)
+    rc, output, job_id, comment = kill_one_render(cluster, workdir)
+    assert rc == 0, output[-4000:]
+    submissions = render_submissions(cluster, workdir)
+    assert submissions[comment] == ["FAILED", "COMPLETED"]  # the profile's retries
+    assert all(states == ["COMPLETED"] for c, states in submissions.items() if c != comment)
+    assert outputs(workdir) == outputs(local_reference)
+    assert not list((workdir / "results").rglob(".*tmp-*"))
+
+
+def test_failed_run_is_reported_and_a_rerun_completes_only_what_is_missing(
+    cluster, tmp_path_factory, local_reference
+):
+    workdir = copy_workflow(tmp_path_factory.mktemp("resume") / "wf", TINY)
+    rc, output, job_id, comment = kill_one_render(cluster, workdir, "--retries", "0")
+    assert rc != 0 and "Error in rule render_seeds" in output
+    before = render_submissions(cluster, workdir)
+    assert before[comment] == ["FAILED"]
+    finished = {c for c, states in before.items() if states == ["COMPLETED"]}
+    run(workdir, cluster, "--profile", "profiles/slurm", "all", *FAST)
+    after = render_submissions(cluster, workdir)
+    assert after[comment] == ["FAILED", "COMPLETED"]
+    for done in finished:
+        assert after[done] == ["COMPLETED"], f"{done} was rendered again"
+    assert outputs(workdir) == outputs(local_reference)
+    assert not list((workdir / "results").rglob(".*tmp-*"))
