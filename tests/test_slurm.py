@@ -43,11 +43,23 @@ def cluster(tmp_path_factory):
         subprocess.run(["bash", str(SCRIPT), "stop"], env=env, capture_output=True)
         pytest.fail(f"slurm_local.sh start failed: {proc.stderr}\n{logs}")
     env["SLURM_CONF"] = str(state / "slurm.conf")
+    daemons = dict(line.split() for line in (state / "pids").read_text().splitlines())
+    assert set(daemons) == {"munged", "mariadbd", "slurmdbd", "slurmctld", "slurmd"}
     yield env
     stop = subprocess.run(["bash", str(SCRIPT), "stop"], env=env, capture_output=True, text=True)
     assert stop.returncode == 0, stop.stderr
-    pids = (state / "pids").exists()
-    assert not pids, "the stop left the pid file behind"
+    assert not (state / "pids").exists(), "the stop left the pid file behind"
+    alive = [name for name, pid in daemons.items() if running(int(pid))]
+    assert not alive, f"still running after stop: {alive}"
+
+
+def running(pid: int) -> bool:
+    """Whether a process exists and is not a zombie waiting to be reaped."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
 def copy_workflow(root: Path, config: dict) -> Path:
