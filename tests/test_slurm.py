@@ -9,16 +9,14 @@ reason, which pytest's summary (``-ra``) prints.
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
-import yaml
 
-from .test_workflow import SCENES, TINY
+from .test_workflow import SCENES, TINY, copy_workflow
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "scripts/slurm_local.sh"
@@ -60,19 +58,6 @@ def running(pid: int) -> bool:
     except OSError:
         return False
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
-
-
-def copy_workflow(root: Path, config: dict) -> Path:
-    root.mkdir(parents=True)
-    for name in ("Snakefile", "config.yaml"):
-        shutil.copy(REPO / name, root / name)
-    for name in ("workflow", "profiles", "envs"):
-        shutil.copytree(REPO / name, root / name)
-    (root / "scenes").mkdir()
-    for scene in SCENES:
-        shutil.copy(REPO / "scenes" / f"{scene}.yaml", root / "scenes")
-    (root / "tiny.yaml").write_text(yaml.safe_dump(config))
-    return root
 
 
 def snakemake_cmd(*args):

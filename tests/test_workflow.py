@@ -65,10 +65,9 @@ def planned_jobs(workdir, *targets, config=None) -> dict:
     return counts
 
 
-@pytest.fixture(scope="module")
-def workdir(tmp_path_factory):
-    """A copy of the workflow with two scenes, run once to completion."""
-    root = tmp_path_factory.mktemp("wf")
+def copy_workflow(root: Path, config: dict) -> Path:
+    """A copy of the workflow in ``root`` with the tiny scenes and ``config`` as tiny.yaml."""
+    root.mkdir(parents=True, exist_ok=True)
     for name in ("Snakefile", "config.yaml"):
         shutil.copy(REPO / name, root / name)
     for name in ("workflow", "profiles", "envs"):
@@ -76,7 +75,14 @@ def workdir(tmp_path_factory):
     (root / "scenes").mkdir()
     for scene in SCENES:
         shutil.copy(REPO / "scenes" / f"{scene}.yaml", root / "scenes")
-    (root / "tiny.yaml").write_text(yaml.safe_dump(TINY))
+    (root / "tiny.yaml").write_text(yaml.safe_dump(config))
+    return root
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A copy of the workflow with two scenes, run once to completion."""
+    root = copy_workflow(tmp_path_factory.mktemp("wf"), TINY)
     snakemake(root, "-j2", "all")
     return root
 

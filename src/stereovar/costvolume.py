@@ -397,19 +397,8 @@ def scan_hit_rate(scan: CostScan, d_gt, mask=None) -> dict:
     if region.shape != g.shape:
         raise ValueError(f"mask shape {region.shape} does not match the scan's {g.shape}")
     keep = region & np.isfinite(g) & (scan.n_near > 0)
-    n = int(keep.sum())
-    if n == 0:
-        nan = float("nan")
-        return {"accuracy": nan, "n_pixels": 0, "n_hits": 0, "chance": nan, "reason": NO_PIXELS}
     hits = np.abs(scan.disparity[keep] - g[keep]) < 1.0
-    chance = scan.n_near[keep] / scan.n_scored[keep]
-    return {
-        "accuracy": float(hits.mean()),
-        "n_pixels": n,
-        "n_hits": int(hits.sum()),
-        "chance": float(chance.mean()),
-        "reason": "",
-    }
+    return _rate_result(hits, scan.n_near[keep] / scan.n_scored[keep])
 
 
 def wta_disparity(
@@ -652,6 +641,20 @@ def gt_margin(cost, scored, d_gt) -> np.ndarray:
     return np.where(ok, best_other - np.where(ok, c_gt, 0.0), np.nan)
 
 
+def _rate_result(hits: np.ndarray, chance: np.ndarray) -> dict:
+    """The accuracy dict of :func:`wta_accuracy` from per-pixel hits and chance levels."""
+    if hits.size == 0:
+        nan = float("nan")
+        return {"accuracy": nan, "n_pixels": 0, "n_hits": 0, "chance": nan, "reason": NO_PIXELS}
+    return {
+        "accuracy": float(hits.mean()),
+        "n_pixels": int(hits.size),
+        "n_hits": int(hits.sum()),
+        "chance": float(chance.mean()),
+        "reason": "",
+    }
+
+
 def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
     values, scored = _volume(values, scored)
     n_disp = values.shape[0]
@@ -663,8 +666,7 @@ def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
     eligible = region & (n_scored > 0) & np.isfinite(d_gt)
     n = int(eligible.sum())
     if n == 0:
-        nan = float("nan")
-        return {"accuracy": nan, "n_pixels": 0, "n_hits": 0, "chance": nan, "reason": NO_PIXELS}
+        return _rate_result(np.empty(0, bool), np.empty(0))
     v = values[:, eligible].astype(np.float64)
     s = scored[:, eligible]
     g = d_gt[eligible]
@@ -674,20 +676,11 @@ def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
     keep = near.any(axis=0)
     n = int(keep.sum())
     if n == 0:
-        nan = float("nan")
-        return {"accuracy": nan, "n_pixels": 0, "n_hits": 0, "chance": nan, "reason": NO_PIXELS}
+        return _rate_result(np.empty(0, bool), np.empty(0))
     v, s, g, near = v[:, keep], s[:, keep], g[keep], near[:, keep]
     v = np.where(s, -v if maximise else v, np.inf)
     best = np.argmin(v, axis=0)
-    hits = np.abs(best - g) < 1.0
-    chance = near.sum(axis=0) / s.sum(axis=0)
-    return {
-        "accuracy": float(hits.mean()),
-        "n_pixels": n,
-        "n_hits": int(hits.sum()),
-        "chance": float(chance.mean()),
-        "reason": "",
-    }
+    return _rate_result(np.abs(best - g) < 1.0, near.sum(axis=0) / s.sum(axis=0))
 
 
 def wta_accuracy(cost, scored, d_gt, mask=None) -> dict:
