@@ -55,10 +55,14 @@ def _as_float(render) -> np.ndarray:
 
 
 def _seed_mean(renders: Sequence) -> np.ndarray:
+    """:math:`\\bar I`, the mean over seeds, reading one render at a time."""
     total = None
     for render in renders:
         a = _as_float(render)
-        total = a.copy() if total is None else total.__iadd__(a)
+        if total is None:
+            total = a.copy()
+        else:
+            total += a
     return total / len(renders)
 
 
