@@ -1,5 +1,6 @@
 """Tiny end-to-end Snakemake runs: outputs, no-op reruns, partial reruns, config errors."""
 
+import math
 import re
 import shutil
 import subprocess
@@ -229,3 +230,34 @@ def test_unknown_scene_without_spec_is_one_line_error(workdir):
     assert proc.returncode != 0
     assert "my_room" in proc.stdout + proc.stderr
     assert "Traceback" not in proc.stdout + proc.stderr
+
+
+def job_resources(dry_run: str) -> dict:
+    """Rule name -> list of its jobs' resource dicts, from a dry run's listing."""
+    jobs: dict = {}
+    rule = None
+    for line in dry_run.splitlines():
+        m = re.match(r"^\s*(?:local)?rule (\w+):$", line)
+        if m:
+            rule = m.group(1)
+        elif rule and line.strip().startswith("resources:"):
+            items = dict(kv.split("=", 1) for kv in line.split(":", 1)[1].strip().split(", "))
+            jobs.setdefault(rule, []).append(items)
+            rule = None
+    return jobs
+
+
+def test_cluster_profiles_size_jobs_and_request_gpus_for_renders_only(workdir):
+    for profile, gpus in (("profiles/slurm", None), ("profiles/slurm-gpu", "1")):
+        proc = snakemake(workdir, "--profile", profile, "--executor", "dryrun", "all", "--forceall")
+        jobs = job_resources(proc.stdout + proc.stderr)
+        renders = [r for name, rs in jobs.items() if name.startswith("render_seeds") for r in rs]
+        assert len(renders) == 3
+        assert all(r.get("gpu") == gpus for r in renders)
+        assert all(r.get("gpu") == gpus for r in jobs["preview"])
+        for name in ("ground_truth", "variance", "warp", "correlation", "intervention"):
+            assert all("gpu" not in r for r in jobs[name]), name
+        # Sized from the job: 48x27 renders ask for the base memory plus 64 B per pixel.
+        assert {r["mem_mb"] for r in renders} == {str(1536 + math.ceil(64 * 48 * 27 / 2**20))}
+        threads = "4" if gpus else "2"
+        assert {r["cpus_per_task"] for r in renders} == {threads}
