@@ -221,6 +221,15 @@ def intervention_metrics(
         (cost, condition): _RegionAccumulator(masks) for cost in COSTS for condition in CONDITIONS
     }
     samples: list[dict] = []
+
+    def score(cost, condition, a, b, plan, run, seed_label):
+        """Scan one cost volume, pool its metrics and keep its share of the margin sample."""
+        result = scan_cost_volume(a, b, window=window, **scan)
+        acc[(cost, condition)].add(result, d_gt)
+        _take_samples(
+            samples, plan, run, result.margin, cost=cost, condition=condition, seed=seed_label
+        )
+
     square_l = np.zeros_like(mean_l)
     square_r = np.zeros_like(mean_r)
     for k, (render_l, render_r) in enumerate(zip(left, right, strict=True)):
@@ -232,23 +241,13 @@ def intervention_metrics(
         for condition in CONDITIONS:
             if condition == "decorrelated":
                 eps_r = apply_block_permutation(eps_r, perm, block=block)
-            result = scan_cost_volume(eps_l, eps_r, window=window, **scan)
-            acc[("residual_sad", condition)].add(result, d_gt)
-            _take_samples(
-                samples, residual_plan, k, result.margin, cost="residual_sad",
-                condition=condition, seed=k,
-            )  # fmt: skip
+            score("residual_sad", condition, eps_l, eps_r, residual_plan, k, k)
     sigma_l = (square_l / n).mean(axis=-1)
     sigma_r = (square_r / n).mean(axis=-1)
     for condition in CONDITIONS:
         if condition == "decorrelated":
             sigma_r = apply_block_permutation(sigma_r, perm, block=block)
-        result = scan_cost_volume(sigma_l, sigma_r, window=window, **scan)
-        acc[("variance_cost", condition)].add(result, d_gt)
-        _take_samples(
-            samples, variance_plan, 0, result.margin, cost="variance_cost",
-            condition=condition, seed=-1,
-        )  # fmt: skip
+        score("variance_cost", condition, sigma_l, sigma_r, variance_plan, 0, -1)
         peak = scan_cost_volume(sigma_l, sigma_r, window=1, **scan)
         acc[("variance_peak", condition)].add(peak, d_gt, margin=False)
 
