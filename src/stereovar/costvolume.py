@@ -664,9 +664,6 @@ def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
         raise ValueError(f"mask shape {region.shape} does not match the volume's")
     n_scored = scored.sum(axis=0)
     eligible = region & (n_scored > 0) & np.isfinite(d_gt)
-    n = int(eligible.sum())
-    if n == 0:
-        return _rate_result(np.empty(0, bool), np.empty(0))
     v = values[:, eligible].astype(np.float64)
     s = scored[:, eligible]
     g = d_gt[eligible]
@@ -674,8 +671,7 @@ def _hit_rate(values, scored, d_gt, mask, *, maximise: bool) -> dict:
     near = (np.abs(d - g[None]) < 1.0) & s
     # A pixel is scoreable only if some disparity within 1 px of its ground truth is scored.
     keep = near.any(axis=0)
-    n = int(keep.sum())
-    if n == 0:
+    if not keep.any():
         return _rate_result(np.empty(0, bool), np.empty(0))
     v, s, g, near = v[:, keep], s[:, keep], g[keep], near[:, keep]
     v = np.where(s, -v if maximise else v, np.inf)
