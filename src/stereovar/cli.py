@@ -26,7 +26,7 @@ PROG = "stereovar"
 
 
 def _cmd_scenes_generate(args: argparse.Namespace) -> int:
-    from .scenegen import write_scenes
+    from .scenes.generate import write_scenes
 
     if args.count < 1:
         raise StereovarError(f"--count must be >= 1, got {args.count}")
@@ -39,7 +39,7 @@ def _cmd_scenes_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_scenes_validate(args: argparse.Namespace) -> int:
-    from .scenespec import load_scene_spec, scene_spec_digest
+    from .scenes.spec import load_scene_spec, scene_spec_digest
 
     for file in args.files:
         spec = load_scene_spec(file)

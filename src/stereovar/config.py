@@ -13,15 +13,13 @@ without a Python traceback.
 
 from __future__ import annotations
 
-import copy
 import os
 from collections.abc import Mapping
-from pathlib import Path
 
 import jsonschema
-import yaml
 
-from stereovar.errors import ConfigError
+from .errors import ConfigError
+from .schema import fill_defaults, load_yaml, plain
 
 __all__ = ["load_config", "merge_configs", "validate_config", "validate_config_or_exit"]
 
@@ -36,49 +34,14 @@ _TYPE_NAMES = {
 }
 
 
-def _plain(value):
-    """Deep copy with mappings as dict and sequences as list (what JSON Schema expects)."""
-    if isinstance(value, Mapping):
-        return {key: _plain(item) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(item) for item in value]
-    return copy.deepcopy(value)
-
-
-def _load_yaml(path, what: str):
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigError(f"{what} '{path}' does not exist") from None
-    except OSError as err:
-        raise ConfigError(f"{what} '{path}' cannot be read: {err.strerror}") from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(err, "problem", None) or "syntax error"
-        raise ConfigError(f"{what} '{path}' is not valid YAML{where}: {problem}") from None
-
-
 def _load_schema(schema_path) -> dict:
     schema_path = os.fspath(schema_path)
     if schema_path.startswith("file://"):
         schema_path = schema_path[len("file://") :]
-    schema = _load_yaml(schema_path, "config schema")
+    schema = load_yaml(schema_path, "config schema")
     if not isinstance(schema, dict):
         raise ConfigError(f"config schema '{schema_path}' is not a mapping")
     return schema
-
-
-def _fill_defaults(instance: dict, schema: Mapping) -> None:
-    """Insert schema defaults for missing keys, recursively, in place."""
-    for key, subschema in schema.get("properties", {}).items():
-        if key not in instance and "default" in subschema:
-            instance[key] = copy.deepcopy(subschema["default"])
-        if isinstance(instance.get(key), dict) and "properties" in subschema:
-            _fill_defaults(instance[key], subschema)
 
 
 def _coerce_strings(instance: dict, schema: Mapping, given: Mapping) -> None:
@@ -289,9 +252,9 @@ def validate_config(config: Mapping, schema_path, *, command_line: Mapping | Non
             f"config: expected a mapping of keys to values, got {_show(config)} "
             f"({_type_name(config)})"
         )
-    filled = _plain(config)
-    _coerce_strings(filled, schema, _plain(command_line or {}))
-    _fill_defaults(filled, schema)
+    filled = plain(config)
+    _coerce_strings(filled, schema, plain(command_line or {}))
+    fill_defaults(filled, schema)
     _check_schema(filled, schema)
     _check_cross_fields(filled)
     return filled
@@ -345,12 +308,12 @@ def merge_configs(base: Mapping, override: Mapping) -> dict:
     dict
         A new config; the inputs are not modified.
     """
-    merged = _plain(base)
+    merged = plain(base)
     for key, value in override.items():
         if isinstance(value, Mapping) and isinstance(merged.get(key), dict):
             merged[key] = merge_configs(merged[key], value)
         else:
-            merged[key] = _plain(value)
+            merged[key] = plain(value)
     return merged
 
 
@@ -381,7 +344,7 @@ def load_config(path, schema_path) -> dict:
         raise ConfigError("load_config: give at least one config file")
     merged: dict = {}
     for one in paths:
-        loaded = _load_yaml(one, "config file")
+        loaded = load_yaml(one, "config file")
         if loaded is None:
             loaded = {}
         if not isinstance(loaded, Mapping):

@@ -1,14 +1,29 @@
 """What an experiment config asks for: scene/SPP pairs, seed batches and result paths.
 
 Shared by the workflow's target lists (``workflow/rules/common.smk``) and the benchmarks, so
-both enumerate exactly the same renders.
+both enumerate exactly the same renders. The result paths name the renderer and the
+estimator that made them:
+
+``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{first}-{last}.zarr``
+    one batch of renders of one view (:mod:`stereovar.io.renders`);
+``results/{renderer}/{estimator}/...``
+    everything computed from the renders: variance, warped, correlation, intervention,
+    tables and figures.
 """
 
 from __future__ import annotations
 
 from .rig import VIEWS
 
-__all__ = ["VIEWS", "render_store", "render_stores", "scene_spp_pairs", "seed_batches"]
+__all__ = [
+    "VIEWS",
+    "batch_label",
+    "render_store",
+    "render_stores",
+    "run_prefix",
+    "scene_spp_pairs",
+    "seed_batches",
+]
 
 
 def scene_spp_pairs(config: dict) -> list[tuple[str, int]]:
@@ -44,17 +59,40 @@ def seed_batches(n_seeds: int, seeds_per_job: int) -> list[list[int]]:
     ]
 
 
-def render_store(scene: str, view: str, spp, seed) -> str:
-    """Path of one render: ``results/renders/{scene}/{view}/spp{spp}/seed{seed}.zarr``."""
-    return f"results/renders/{scene}/{view}/spp{spp}/seed{seed}.zarr"
+def batch_label(seeds) -> str:
+    """The ``{batch}`` wildcard of a batch of consecutive seed indices: ``first-last``."""
+    seeds = list(seeds)
+    if not seeds or seeds != list(range(seeds[0], seeds[-1] + 1)):
+        raise ValueError(f"a batch is a run of consecutive seed indices, got {seeds}")
+    return f"{seeds[0]}-{seeds[-1]}"
+
+
+def batch_seeds(label: str) -> list[int]:
+    """The seed indices of a ``first-last`` batch label (inverse of :func:`batch_label`)."""
+    first, _, last = str(label).partition("-")
+    if not (first.isdigit() and last.isdigit()) or int(last) < int(first):
+        raise ValueError(f"a seed batch is 'first-last' with first <= last, got {label!r}")
+    return list(range(int(first), int(last) + 1))
+
+
+def render_store(renderer: str, scene: str, view: str, spp, batch) -> str:
+    """Path of one batch of renders:
+    ``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr``."""
+    return f"results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"
+
+
+def run_prefix(renderer: str, estimator: str) -> str:
+    """Directory of everything computed from one renderer's renders by one estimator."""
+    return f"results/{renderer}/{estimator}"
 
 
 def render_stores(config: dict) -> list[str]:
     """Every render store the config asks for."""
-    n = int(config["render"]["n_seeds"])
+    render = config["render"]
+    batches = seed_batches(int(render["n_seeds"]), int(render["seeds_per_job"]))
     return [
-        render_store(scene, view, spp, seed)
+        render_store(render["renderer"], scene, view, spp, batch_label(batch))
         for scene, spp in scene_spp_pairs(config)
         for view in VIEWS
-        for seed in range(n)
+        for batch in batches
     ]

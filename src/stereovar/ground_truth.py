@@ -11,137 +11,11 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .rig import VIEWS, StereoRig, sensor_dict
+from .io.renders import pixel_coords
+from .rig import VIEWS, StereoRig
 
 MATERIAL_CLASSES = ("background", "diffuse", "glossy", "conductor", "glass", "emitter")
 """Material class names; the stored ``material`` code is the index into this tuple."""
-
-_BSDF_CLASS_BY_NAME = {
-    "SmoothDiffuse": "diffuse",
-    "SmoothPlastic": "glossy",
-    "RoughPlastic": "glossy",
-    "Principled": "glossy",
-    "PrincipledThin": "glossy",
-    "SmoothConductor": "conductor",
-    "RoughConductor": "conductor",
-    "SmoothDielectric": "glass",
-    "RoughDielectric": "glass",
-    "ThinDielectric": "glass",
-}
-
-
-def classify_bsdf(mi, bsdf) -> str:
-    """Material class of a Mitsuba BSDF, from its plugin type.
-
-    Known plugin classes map directly (dielectric, roughdielectric and thindielectric are
-    glass). Wrappers and unknown plugins fall back to their lobe flags: any transmission lobe
-    makes glass; a diffuse lobe alone makes diffuse; diffuse plus glossy or delta reflection
-    makes glossy; glossy or delta reflection alone makes conductor.
-    """
-    name = bsdf.class_name()
-    if name in _BSDF_CLASS_BY_NAME:
-        return _BSDF_CLASS_BY_NAME[name]
-    flags = int(np.asarray(bsdf.flags()).ravel()[0])
-    f = mi.BSDFFlags
-    transmission = int(f.DeltaTransmission) | int(f.GlossyTransmission)
-    transmission |= int(f.DiffuseTransmission)
-    specular = int(f.DeltaReflection) | int(f.GlossyReflection)
-    if flags & transmission:
-        return "glass"
-    if flags & int(f.DiffuseReflection):
-        return "glossy" if flags & specular else "diffuse"
-    if flags & specular:
-        return "conductor"
-    return "diffuse"
-
-
-def shape_classes(mi, scene) -> tuple[np.ndarray, list[str]]:
-    """Material class code and id of every shape of ``scene``, in ``scene.shapes()`` order.
-
-    Emitting shapes are class ``emitter`` whatever their BSDF.
-    """
-    codes, names = [], []
-    for shape in scene.shapes():
-        cls = "emitter" if shape.is_emitter() else classify_bsdf(mi, shape.bsdf())
-        codes.append(MATERIAL_CLASSES.index(cls))
-        names.append(shape.id())
-    return np.asarray(codes, dtype=np.uint8), names
-
-
-def trace_pixel_centres(mi, scene, sensor, width: int, height: int):
-    """Intersect one ray through each pixel centre with the scene.
-
-    Parameters
-    ----------
-    mi : module
-        ``mitsuba`` with a variant set.
-    scene : mitsuba.Scene
-    sensor : mitsuba.Sensor
-    width, height : int
-
-    Returns
-    -------
-    hit : numpy.ndarray, shape (height, width), bool
-    points : numpy.ndarray, shape (height, width, 3), float64
-        First-hit points (undefined where not ``hit``).
-    normals : numpy.ndarray, shape (height, width, 3), float64
-        Geometric normals at the hits.
-    shape_index : numpy.ndarray, shape (height, width), int32
-        Index into ``scene.shapes()``; -1 where not ``hit``.
-    """
-    if mi.variant().startswith("scalar"):
-        return _trace_scalar(mi, scene, sensor, width, height)
-    import drjit as dr
-
-    idx = dr.arange(mi.UInt32, width * height)
-    x = mi.Float(idx % width) + 0.5
-    y = mi.Float(idx // width) + 0.5
-    ray, _ = sensor.sample_ray(
-        0.0, 0.5, mi.Point2f(x / width, y / height), mi.Point2f(0.5, 0.5), True
-    )
-    si = scene.ray_intersect(ray)
-    hit = np.asarray(si.is_valid(), dtype=bool)
-    points = np.stack([np.asarray(c, dtype=np.float64) for c in si.p], axis=-1)
-    normals = np.stack([np.asarray(c, dtype=np.float64) for c in si.n], axis=-1)
-    ids = np.asarray(dr.reinterpret_array(mi.UInt32, si.shape), dtype=np.int64)
-    registry = np.asarray(
-        [
-            int(np.asarray(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s)))[0])
-            for s in scene.shapes()
-        ],
-        dtype=np.int64,
-    )
-    order = np.argsort(registry)
-    pos = np.clip(np.searchsorted(registry[order], ids), 0, len(registry) - 1)
-    found = hit & (registry[order][pos] == ids)
-    shape_index = np.where(found, order[pos], -1).astype(np.int32)
-    shape = (height, width)
-    return (
-        found.reshape(shape),
-        points.reshape(*shape, 3),
-        normals.reshape(*shape, 3),
-        shape_index.reshape(shape),
-    )
-
-
-def _trace_scalar(mi, scene, sensor, width, height):
-    shapes = list(scene.shapes())
-    hit = np.zeros((height, width), dtype=bool)
-    points = np.zeros((height, width, 3))
-    normals = np.zeros((height, width, 3))
-    shape_index = np.full((height, width), -1, dtype=np.int32)
-    for j in range(height):
-        for i in range(width):
-            pos = mi.Point2f((i + 0.5) / width, (j + 0.5) / height)
-            ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5), True)
-            si = scene.ray_intersect(ray)
-            if not si.is_valid():
-                continue
-            hit[j, i] = True
-            points[j, i] = [si.p[0], si.p[1], si.p[2]]
-            normals[j, i] = [si.n[0], si.n[1], si.n[2]]
-            shape_index[j, i] = next(k for k, s in enumerate(shapes) if s == si.shape)
-    return hit, points, normals, shape_index
 
 
 def refine_hits(origin, directions, points, normals) -> np.ndarray:
@@ -251,15 +125,22 @@ def occlusion_mask(corr: dict, other_depth, other_hit, *, rel_tol: float = 0.01)
     return valid & hidden
 
 
-def compute_ground_truth(mi, scene, rig: StereoRig, *, attrs: dict | None = None) -> xr.Dataset:
-    """Ground truth of both views of ``scene`` under ``rig``.
+def compute_ground_truth(prepared, *, attrs: dict | None = None) -> xr.Dataset:
+    """Ground truth of both views of a prepared scene under its rig (paper Sec. 3.1).
+
+    The renderer traces one ray through each pixel centre
+    (:meth:`~stereovar.renderers.base.PreparedScene.trace`); everything else is
+    renderer-neutral: each float32 hit is re-intersected in float64 with its tangent plane
+    (:func:`refine_hits`) and projected into the other camera (:func:`correspondence`),
+
+    .. math:: d = s\\,(u_R - u_L), \\qquad x_R = x_L + s\\,d,
+
+    and the left-right depth check flags occlusions (:func:`occlusion_mask`).
 
     Parameters
     ----------
-    mi : module
-        ``mitsuba`` with a variant set.
-    scene : mitsuba.Scene
-    rig : StereoRig
+    prepared : stereovar.renderers.base.PreparedScene
+        A scene compiled by a renderer, with its rig.
     attrs : dict, optional
         Extra provenance attributes (scene name, digest, variant, ...).
 
@@ -272,13 +153,12 @@ def compute_ground_truth(mi, scene, rig: StereoRig, *, attrs: dict | None = None
         ``shape_index`` (int16, -1 for background). Attributes record the convention,
         ``disparity_sign``, ``baseline_m``, ``focal_px``, ``fov_deg``, ``width``, ``height``.
     """
-    codes, shape_ids = shape_classes(mi, scene)
+    rig = prepared.rig
+    codes, shape_ids = prepared.shape_materials()
+    codes = np.asarray(codes, dtype=np.uint8)
     traced = {}
     for view in VIEWS:
-        sensor = mi.load_dict(sensor_dict(mi, rig, view))
-        hit, points, normals, shape_index = trace_pixel_centres(
-            mi, scene, sensor, rig.width, rig.height
-        )
+        hit, points, normals, shape_index = prepared.trace(view)
         points = refine_hits(rig.origin(view), rig.pixel_rays(view), points, normals)
         traced[view] = (hit, points, shape_index)
     corr = {view: correspondence(traced[view][1], traced[view][0], rig, view) for view in VIEWS}
@@ -300,7 +180,7 @@ def compute_ground_truth(mi, scene, rig: StereoRig, *, attrs: dict | None = None
         if c["valid"].any():
             vertical = max(vertical, float(c["vertical_error"][c["valid"]].max()))
     dims = ("view", "y", "x")
-    coords = {"view": list(VIEWS), "y": np.arange(rig.height), "x": np.arange(rig.width)}
+    coords = {"view": list(VIEWS), **pixel_coords(rig.height, rig.width)}
     material = np.stack(fields["material"])
     glass_code = MATERIAL_CLASSES.index("glass")
     ds = xr.Dataset(

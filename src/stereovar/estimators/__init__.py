@@ -1,0 +1,21 @@
+"""Variance estimators behind one interface (:mod:`stereovar.estimators.base`), selected by
+``render.estimator``.
+
+:data:`ESTIMATORS` maps each name to its :class:`~stereovar.estimators.base.VarianceEstimator`
+class, imported on first use; :func:`get_estimator` builds one. A new estimator is one module
+plus one :meth:`~stereovar.registry.Registry.register` call below and the name in the config
+schema's ``render.estimator`` enum.
+"""
+
+from __future__ import annotations
+
+from ..registry import Registry, factory
+
+ESTIMATORS = Registry("estimator", config_key="render.estimator")
+ESTIMATORS.register("seeds", "stereovar.estimators.seeds:SeedEstimator")
+
+get_estimator = factory(ESTIMATORS)
+"""``get_estimator(name, **options)``: a
+:class:`~stereovar.estimators.base.VarianceEstimator`."""
+
+__all__ = ["ESTIMATORS", "get_estimator"]

@@ -1,0 +1,102 @@
+"""Atomic writes of results: a finished path is either absent or complete.
+
+Every artefact is written to a hidden temporary sibling first and renamed into place, so a
+job killed mid-write leaves nothing that looks complete, and an existing result is replaced
+only by a complete new one.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import uuid
+from collections.abc import Callable
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+ZARR_FORMAT = 2
+"""Zarr format of stored datasets (v2 stores with consolidated metadata, readable by
+zarr-python 2 and 3 alike)."""
+
+
+def _temporary_sibling(path: Path) -> Path:
+    return path.with_name(f".{path.name}.tmp-{os.getpid()}-{uuid.uuid4().hex[:8]}")
+
+
+def _replace(tmp: Path, path: Path) -> None:
+    """Move ``tmp`` onto ``path``; a directory already at ``path`` is removed only afterwards."""
+    if path.is_dir() and not path.is_symlink():
+        old = _temporary_sibling(path)
+        os.rename(path, old)
+        os.rename(tmp, path)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(tmp, path)
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path to write to; rename it onto ``path`` if the block succeeds.
+
+    On an exception the temporary file or directory is removed and ``path`` is untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _temporary_sibling(path)
+    try:
+        yield tmp
+        _replace(tmp, path)
+    finally:
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        elif tmp.exists():
+            tmp.unlink()
+
+
+CHUNK_BYTES = 32 * 2**20
+"""Target chunk size: arrays are chunked along their first dimension only, in blocks of at
+most this many bytes, so a whole image is one or a few chunks (cheap to read and stream)."""
+
+
+def _chunks(variable, fixed: dict) -> tuple[int, ...]:
+    """Chunks of ``variable``: ``fixed`` sizes for the dims it names; the first other dim in
+    blocks of at most :data:`CHUNK_BYTES`; every remaining dim whole."""
+    sizes = [min(int(fixed[d]), n) if d in fixed else n for d, n in variable.sizes.items()]
+    free = [k for k, d in enumerate(variable.dims) if d not in fixed]
+    if free:
+        k = free[0]
+        rest = int(np.prod([sizes[j] for j in range(len(sizes)) if j != k], dtype=np.int64))
+        row_bytes = max(1, variable.dtype.itemsize * rest)
+        sizes[k] = max(1, min(sizes[k], CHUNK_BYTES // row_bytes))
+    return tuple(max(1, s) for s in sizes)
+
+
+def write_dataset(ds: xr.Dataset | xr.DataArray, path, *, chunk_dims: dict | None = None) -> Path:
+    """Write an xarray object to a Zarr store at ``path`` atomically.
+
+    Every variable is chunked along its first dimension only (:data:`CHUNK_BYTES`), or with
+    ``chunk_dims`` sizes for the dims named there (e.g. ``{"seed": 1}``: one render a chunk)
+    and byte-sized blocks along the next one.
+    """
+    if isinstance(ds, xr.DataArray):
+        ds = ds.to_dataset(name=ds.name or "data", promote_attrs=False)
+    fixed = dict(chunk_dims or {})
+    encoding = {name: {"chunks": _chunks(v, fixed)} for name, v in ds.data_vars.items() if v.ndim}
+    with atomic_path(path) as tmp:
+        ds.to_zarr(tmp, mode="w", zarr_format=ZARR_FORMAT, consolidated=True, encoding=encoding)
+    return Path(path)
+
+
+def open_dataset(path) -> xr.Dataset:
+    """Open a stored Zarr dataset lazily (``xarray.open_zarr``)."""
+    return xr.open_zarr(path, consolidated=True, zarr_format=ZARR_FORMAT)
+
+
+def write_file(path, writer: Callable[[Path], None]) -> Path:
+    """Write a file atomically: ``writer(tmp_path)`` writes, then the file is renamed."""
+    with atomic_path(path) as tmp:
+        writer(tmp)
+    return Path(path)

@@ -1,0 +1,96 @@
+"""What every workflow job shares: logging, scene preparation and figure saving.
+
+The modules of :mod:`stereovar.jobs` hold one function per workflow job, one module per
+``workflow/rules/*.smk`` file; the Snakemake scripts in ``workflow/scripts`` are thin adapters
+that call them, so every job also runs from a notebook or a shell without Snakemake.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from pathlib import Path
+
+from ..errors import StereovarError
+
+log = logging.getLogger("stereovar")
+
+
+def run_job(log_path, job, **kwargs) -> None:
+    """Run ``job(**kwargs)`` with logging to ``log_path`` and to stderr.
+
+    A :class:`~stereovar.errors.StereovarError` becomes one ``error:`` line on stderr and in
+    the log, and exit status 1, without a traceback; other exceptions propagate.
+    """
+    handlers = [logging.StreamHandler(sys.stderr)]
+    if log_path:
+        Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+        handlers.append(logging.FileHandler(log_path, mode="w"))
+    logging.basicConfig(
+        level=logging.INFO,
+        format="%(asctime)s %(levelname)s %(message)s",
+        handlers=handlers,
+        force=True,
+    )
+    start = time.perf_counter()
+    try:
+        job(**kwargs)
+    except StereovarError as err:
+        log.error("error: %s", err)
+        raise SystemExit(1) from None
+    log.info("done in %.2f s", time.perf_counter() - start)
+
+
+def prepare_scene(
+    spec_path,
+    *,
+    renderer: str = "mitsuba",
+    variant: str = "auto",
+    width: int,
+    height: int,
+    baseline_m: float,
+    convention: str,
+    threads: int | None = None,
+):
+    """Load a spec and compile it with ``renderer`` for the rig.
+
+    Returns
+    -------
+    stereovar.renderers.base.PreparedScene
+        The compiled scene, its rig and its provenance attrs.
+    """
+    from ..renderers import get_renderer
+    from ..scenes.spec import load_scene_spec
+
+    spec = load_scene_spec(spec_path)
+    return get_renderer(renderer).prepare(
+        spec,
+        width=width,
+        height=height,
+        baseline_m=baseline_m,
+        convention=convention,
+        variant=variant,
+        threads=threads,
+    )
+
+
+def save_figure(fig, out, *, dpi: int = 120) -> None:
+    """Save a matplotlib figure as PNG atomically and close it."""
+    import matplotlib.pyplot as plt
+
+    from ..io.store import write_file
+
+    write_file(out, lambda tmp: fig.savefig(tmp, format="png", dpi=dpi))
+    plt.close(fig)
+
+
+def left_right(ds, name):
+    """``ds[name]`` of the left and of the right view."""
+    return ds[name].sel(view="left"), ds[name].sel(view="right")
+
+
+def run_label(renderer: str, estimator: str | None = None) -> str:
+    """``renderer mitsuba, estimator seeds``: which renders a table or figure shows."""
+    text = f"renderer {renderer}"
+    return f"{text}, estimator {estimator}" if estimator else text

@@ -1,0 +1,68 @@
+"""Jobs of ``workflow/rules/figures.smk``: Figures 1-3 on the representative scene."""
+
+from __future__ import annotations
+
+from .common import left_right, run_label, save_figure
+
+
+def _title(attrs, text: str) -> str:
+    return f"{text} ({run_label(attrs.get('renderer', '?'), attrs.get('estimator'))})"
+
+
+def teaser_figure_job(variance, warped, out) -> None:
+    """Fig. 1: sigma_L^2, sigma_R^2, the warped field and their joint histogram over Omega."""
+    from ..figures.paper import teaser_figure
+    from ..io.store import open_dataset
+
+    v = open_dataset(variance).load()
+    w = open_dataset(warped).load()
+    sigma_l, sigma_r = left_right(v, "variance")
+    title = _title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}, N = {v.attrs['n_seeds']}")
+    save_figure(teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out)
+
+
+def rho_vs_spp_figure_job(correlations, out) -> None:
+    """Fig. 2: rho against SPP per region, with Fisher-z intervals for the primary statistic
+    and dashed lines for the other registered statistics."""
+    from ..figures.paper import rho_vs_spp_figure
+    from ..io.tables import read_rows
+    from ..statistics.registry import PRIMARY_METHOD
+
+    rows = [r for path in correlations for r in read_rows(path)]
+    scene = rows[0]["scene"] if rows else ""
+    attrs = rows[0] if rows else {}
+    fig = rho_vs_spp_figure(
+        rows, title=_title(attrs, f"{scene}: rho against SPP"), primary=PRIMARY_METHOD
+    )
+    save_figure(fig, out)
+
+
+def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
+    """Fig. 3: (sigma_L^2, warped sigma_R^2) over Omega, glass against non-glass."""
+    from ..figures.paper import material_scatter_figure
+    from ..io.store import open_dataset
+
+    v = open_dataset(variance).load()
+    w = open_dataset(warped).load()
+    gt = open_dataset(ground_truth)
+    fig = material_scatter_figure(
+        v["variance"].sel(view="left"),
+        w["warped_variance"],
+        w["omega"],
+        gt["glass"].sel(view="left").values,
+        title=_title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}"),
+    )
+    save_figure(fig, out)
+
+
+def margin_figure_job(margins, out) -> None:
+    """The intervention's GT-margin distributions per region, normal against decorrelated."""
+    from ..figures.paper import margin_distribution_figure
+    from ..io.tables import read_rows
+
+    rows = [r for path in margins for r in read_rows(path)]
+    n_scenes = len({r["scene"] for r in rows})
+    title = f"GT margins, normal vs decorrelated ({n_scenes} scenes, sampled pixels)"
+    if rows and rows[0].get("renderer"):
+        title += f"\n{run_label(rows[0]['renderer'], rows[0].get('estimator'))}"
+    save_figure(margin_distribution_figure(rows, title=title), out)

@@ -1,0 +1,73 @@
+"""Jobs of ``workflow/rules/tables.smk``: Table 1 (cross-scene) and Table 2 (SPP sweep)."""
+
+from __future__ import annotations
+
+from .common import log
+
+
+def _run(rows: list[dict]) -> dict:
+    """The renderer and estimator that every correlation row names (one of each)."""
+    out = {}
+    for key in ("renderer", "estimator"):
+        values = sorted({str(r[key]) for r in rows if r.get(key) not in (None, "")})
+        if len(values) > 1:
+            raise ValueError(f"correlation rows mix several {key}s: {values}")
+        if values:
+            out[key] = values[0]
+    return out
+
+
+def cross_scene_job(correlations, outputs: dict, *, spp) -> list[dict]:
+    """Table 1: rho across scenes per region at the main SPP, with the other statistics'
+    means (``mean_rho_no_warp``, ...)."""
+    from ..io.tables import read_rows, write_tables
+    from ..statistics.summary import cross_scene_columns, cross_scene_table
+
+    rows = [r for path in correlations for r in read_rows(path)]
+    table = cross_scene_table(rows, spp=int(spp))
+    write_tables(
+        table,
+        cross_scene_columns(),
+        outputs,
+        caption=f"Cross-scene correlation at SPP={spp} (Table 1)",
+        constants=_run(rows),
+    )
+    return table
+
+
+def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: dict) -> dict:
+    """Table 2: mean left variance by region and rho by region at each SPP, plus the
+    log-log slope of mean variance against SPP."""
+    from ..io.store import open_dataset
+    from ..io.tables import read_rows, write_tables
+    from ..statistics.regions import REGIONS
+    from ..statistics.summary import (
+        SPP_SWEEP_COLUMNS,
+        mean_variance_by_region,
+        spp_sweep_table,
+        sweep_entry,
+    )
+
+    entries, every = [], []
+    for csv_path, var_path, warp_path in zip(correlations, variances, warped, strict=True):
+        v = open_dataset(var_path)
+        w = open_dataset(warp_path)
+        masks = {k: w[f"region_{k}"].values for k in REGIONS}
+        means = mean_variance_by_region(v["variance"].sel(view="left").values, masks)
+        rows = read_rows(csv_path)
+        every += rows
+        entries.append(sweep_entry(int(v.attrs["spp"]), rows, means))
+    rows, fit = spp_sweep_table(entries)
+    run = _run(every)
+    write_tables(rows, SPP_SWEEP_COLUMNS, outputs, caption="SPP sweep (Table 2)", constants=run)
+    fit_rows = [{"region": k, **f} for k, f in fit.items()]
+    write_tables(
+        fit_rows,
+        ["region", "slope", "intercept", "r2", "n_points", "reason"],
+        fit_outputs,
+        caption="Log-log slope of mean variance against SPP",
+        constants=run,
+    )
+    for row in fit_rows:
+        log.info("log-log slope of mean variance vs SPP, %s: %.4f", row["region"], row["slope"])
+    return fit

@@ -1,0 +1,32 @@
+"""Job of ``workflow/rules/variance.smk``: the variance fields of one scene at one SPP (Eq. 1)."""
+
+from __future__ import annotations
+
+from .common import log
+
+
+def variance_job(left, right, out, *, estimator="seeds") -> None:
+    """Run the estimator on one scene's render stores at one SPP and store its fields.
+
+    Writes ``results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr``
+    (:func:`stereovar.io.contracts.variance_store`), with the renders' provenance.
+    """
+    from ..estimators import get_estimator
+    from ..io.contracts import render_provenance, variance_store
+    from ..io.renders import RenderStore
+    from ..io.store import write_dataset
+    from ..rig import VIEWS
+
+    left, right = list(left), list(right)
+    ds = get_estimator(estimator).estimate(left, right)
+    provenance = render_provenance(RenderStore(left[0]).attrs)
+    ds = variance_store(ds, estimator=estimator, provenance=provenance)
+    n_bad = {v: int((~ds["finite"].sel(view=v).values).sum()) for v in VIEWS}
+    write_dataset(ds, out)
+    log.info(
+        "%s variance over %d seeds; pixels with a non-finite render: left %d, right %d",
+        estimator,
+        ds.attrs["n_seeds"],
+        n_bad["left"],
+        n_bad["right"],
+    )

@@ -1,0 +1,150 @@
+"""The renderer protocol: what every renderer behind ``render.renderer`` provides.
+
+A renderer compiles a renderer-neutral scene spec (:mod:`stereovar.scenes.spec`) for the
+stereo rig, renders one view with an explicit seed and sample count, traces one ray through
+each pixel centre for the ground truth, and reports its provenance. Everything renderer-neutral
+(the rig, correspondence, occlusion, the stored contracts, the statistics) stays outside, so a
+second renderer is one new subpackage plus one registry entry
+(:data:`stereovar.renderers.RENDERERS`) and one value of the config schema's
+``render.renderer`` enum.
+
+Importing this module pulls in no third-party package.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Renderer settings shared by every render of a job.
+
+    Attributes
+    ----------
+    integrator : str
+        Integrator name (``path`` for a unidirectional path tracer).
+    max_depth : int
+        Longest path, in bounces (-1 unbounded).
+    rfilter : str
+        Reconstruction filter (``box``: a pixel's variance is its own estimator's).
+    sampler : str
+        Sampler (``independent``).
+    """
+
+    integrator: str = "path"
+    max_depth: int = 8
+    rfilter: str = "box"
+    sampler: str = "independent"
+
+    def as_attrs(self) -> dict:
+        """The settings as store attributes."""
+        return {
+            "integrator": self.integrator,
+            "max_depth": int(self.max_depth),
+            "rfilter": self.rfilter,
+            "sampler": self.sampler,
+        }
+
+
+class FirstHits(NamedTuple):
+    """One ray through each pixel centre of one view, intersected with the scene.
+
+    Attributes
+    ----------
+    hit : numpy.ndarray, shape (H, W), bool
+        The ray hit a shape the renderer knows.
+    points : numpy.ndarray, shape (H, W, 3), float64
+        First-hit points in world space (undefined where not ``hit``).
+    normals : numpy.ndarray, shape (H, W, 3), float64
+        Geometric normals at the hits.
+    shape_index : numpy.ndarray, shape (H, W), int32
+        Index into :meth:`PreparedScene.shape_materials`; -1 where not ``hit``.
+    """
+
+    hit: Any
+    points: Any
+    normals: Any
+    shape_index: Any
+
+
+@dataclass
+class PreparedScene(ABC):
+    """A scene compiled by one renderer for one stereo rig, ready to render and trace.
+
+    Attributes
+    ----------
+    rig : stereovar.rig.StereoRig
+        The stereo rig (the scene camera as the left view).
+    spec : dict
+        The renderer-neutral spec it was compiled from (empty when built from a loaded scene).
+    provenance : dict
+        Store attributes: ``scene``, ``scene_digest``, ``renderer``, ``renderer_version``,
+        ``variant``, ``stereovar_version`` and any renderer-specific versions.
+    """
+
+    rig: Any
+    spec: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+
+    @abstractmethod
+    def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+        """Render ``view`` (``"left"`` or ``"right"``) of the rig.
+
+        Returns
+        -------
+        numpy.ndarray, shape (H, W, 3), float32
+            Linear RGB radiance, with ``seed`` passed to the renderer's sampler unchanged.
+        """
+
+    @abstractmethod
+    def trace(self, view: str) -> FirstHits:
+        """First hits of one ray through each pixel centre of ``view``."""
+
+    @abstractmethod
+    def shape_materials(self) -> tuple[Any, list[str]]:
+        """Material class code (an index into
+        :data:`stereovar.ground_truth.MATERIAL_CLASSES`, uint8) and id of every shape, in the
+        order :attr:`FirstHits.shape_index` refers to."""
+
+
+class Renderer(ABC):
+    """A renderer: compiles scene specs into :class:`PreparedScene` objects.
+
+    Subclasses set :attr:`name` (the ``render.renderer`` value) and implement
+    :meth:`prepare`.
+    """
+
+    name: str = ""
+
+    @abstractmethod
+    def prepare(
+        self,
+        spec: dict,
+        *,
+        width: int,
+        height: int,
+        baseline_m: float,
+        convention: str,
+        variant: str = "auto",
+        threads: int | None = None,
+    ) -> PreparedScene:
+        """Compile a validated spec and build the rig around its camera.
+
+        Parameters
+        ----------
+        spec : dict
+            A validated scene spec (:func:`stereovar.scenes.spec.load_scene_spec`).
+        width, height : int
+            Image size in pixels.
+        baseline_m : float
+            Stereo baseline in metres.
+        convention : {"paper", "conventional"}
+            Which side the second camera goes (:func:`stereovar.rig.make_rig`).
+        variant : str
+            Renderer back end (``auto`` picks the best available).
+        threads : int, optional
+            Worker threads.
+        """

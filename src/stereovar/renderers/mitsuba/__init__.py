@@ -1,0 +1,124 @@
+"""Mitsuba 3 behind the renderer protocol (:mod:`stereovar.renderers.base`).
+
+:mod:`.backend` picks the variant, :mod:`.scene` compiles specs, :mod:`.sensor` builds the rig's
+sensors, :mod:`.render` renders a view and :mod:`.trace` intersects pixel-centre rays. Only
+this subpackage imports ``mitsuba`` or ``drjit`` (through :func:`.backend.load_mitsuba`).
+
+Importing this package pulls in no third-party module; the back end loads in
+:meth:`MitsubaRenderer.prepare`.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+from ..base import FirstHits, PreparedScene, Renderer, RenderSettings
+
+log = logging.getLogger("stereovar")
+
+__all__ = ["MitsubaRenderer", "MitsubaScene"]
+
+
+@dataclass
+class MitsubaScene(PreparedScene):
+    """A compiled Mitsuba scene and its rig.
+
+    Build one with :meth:`MitsubaRenderer.prepare`, or directly from a loaded scene:
+    ``MitsubaScene(rig, mi=mi, scene=scene)``.
+    """
+
+    mi: Any = None
+    scene: Any = None
+
+    def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+        from .render import render_view
+        from .sensor import integrator_dict
+
+        return render_view(
+            self.mi,
+            self.scene,
+            self.rig,
+            view,
+            spp=spp,
+            seed=seed,
+            integrator=integrator_dict(settings.integrator, settings.max_depth),
+            rfilter=settings.rfilter,
+            sampler=settings.sampler,
+        )
+
+    def trace(self, view: str) -> FirstHits:
+        from .sensor import sensor_dict
+        from .trace import trace_pixel_centres
+
+        sensor = self.mi.load_dict(sensor_dict(self.mi, self.rig, view))
+        return FirstHits(
+            *trace_pixel_centres(self.mi, self.scene, sensor, self.rig.width, self.rig.height)
+        )
+
+    def shape_materials(self):
+        from .trace import shape_classes
+
+        return shape_classes(self.mi, self.scene)
+
+
+class MitsubaRenderer(Renderer):
+    """Mitsuba 3 (``render.renderer: mitsuba``): CUDA, LLVM or scalar variants."""
+
+    name = "mitsuba"
+
+    def prepare(
+        self,
+        spec: dict,
+        *,
+        width: int,
+        height: int,
+        baseline_m: float,
+        convention: str,
+        variant: str = "auto",
+        threads: int | None = None,
+    ) -> MitsubaScene:
+        """Load the back end, compile ``spec`` and build the rig (see
+        :meth:`stereovar.renderers.base.Renderer.prepare`)."""
+        from ... import __version__
+        from ...rig import make_rig
+        from ...scenes.spec import scene_digest
+        from .backend import describe_backend, load_mitsuba
+        from .scene import load_scene
+
+        mi = load_mitsuba(variant)
+        if threads:
+            import drjit as dr
+
+            dr.set_thread_count(int(threads))
+        scene, camera = load_scene(mi, spec)
+        rig = make_rig(
+            camera.to_world,
+            camera.fov_deg,
+            width=width,
+            height=height,
+            baseline_m=baseline_m,
+            convention=convention,
+        )
+        backend = describe_backend()
+        provenance = {
+            "scene": spec["name"],
+            "scene_digest": scene_digest(spec),
+            "renderer": self.name,
+            "renderer_version": backend["mitsuba_version"],
+            "drjit_version": backend["drjit_version"],
+            "variant": backend["variant"],
+            "stereovar_version": __version__,
+        }
+        log.info(
+            "scene %s: %s %s, %dx%d, baseline %.4f m, convention %s",
+            spec["name"],
+            self.name,
+            backend["variant"],
+            width,
+            height,
+            baseline_m,
+            convention,
+        )
+        return MitsubaScene(rig, spec=spec, provenance=provenance, mi=mi, scene=scene)

@@ -1,0 +1,1 @@
+"""Dense, slow reference implementations used only by the tests and the benchmarks."""
