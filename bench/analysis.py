@@ -30,7 +30,7 @@ import xarray as xr
 
 READ = r"""
 import json, resource, sys, time
-from stereovar.store import open_dataset
+from stereovar.io.store import open_dataset
 paths = json.loads(sys.argv[1])
 start = time.perf_counter()
 total = 0.0
@@ -43,7 +43,7 @@ print(json.dumps({"seconds": seconds, "rss_mb": rss}))
 
 ANALYSE = r"""
 import json, resource, sys, time
-import stereovar.store  # xarray and zarr, imported before the clock as in the baseline
+import stereovar.io.store  # xarray and zarr, imported before the clock as in the baseline
 from stereovar.jobs import correlation_job, variance_job, warp_job
 args = json.loads(sys.argv[1])
 start = time.perf_counter()
@@ -58,7 +58,7 @@ print(json.dumps({"seconds": seconds, "rss_mb": rss}))
 
 
 def write_inputs(root: Path, n: int, width: int, height: int) -> dict:
-    from stereovar.store import write_dataset
+    from stereovar.io.store import write_dataset
 
     rng = np.random.default_rng(0)
     yy, xx = np.mgrid[0:height, 0:width]

@@ -18,7 +18,7 @@ import tracemalloc
 
 import numpy as np
 
-from stereovar.costvolume import sad_cost_volume, scan_cost_volume, wta_disparity
+from stereovar.intervention.scan import sad_cost_volume, scan_cost_volume, wta_disparity
 
 
 def textured_pair(height: int, width: int, shift: int, seed: int = 0):
@@ -42,7 +42,7 @@ def wta_full(left, right, max_disparity, window):
 
 
 def wta_streaming(left, right, max_disparity, window, dtype=np.float32):
-    """Strip-blocked threaded scan (:func:`stereovar.costvolume.wta_disparity`)."""
+    """Strip-blocked threaded scan (:func:`stereovar.intervention.scan.wta_disparity`)."""
     disp, _ = wta_disparity(
         left,
         right,

@@ -5,8 +5,8 @@ generated seed by seed (a smooth clean image plus noise; the right view is the l
 by a known disparity field), so the renders are never all in memory, exactly as the workflow
 reads its stores. It times :func:`stereovar.intervention.intervention_metrics` (streamed
 scans, 2 threads) and, as the named baseline in the same run, the full-volume reference for
-one seed: :func:`~stereovar.costvolume.sad_cost_volume` + :func:`~stereovar.costvolume.gt_margin`
-+ :func:`~stereovar.costvolume.wta_accuracy` of C_ε, which the streamed path replaces. Peak
+one seed: :func:`~stereovar.intervention.scan.sad_cost_volume` + :func:`~stereovar.intervention.scan.gt_margin`
++ :func:`~stereovar.intervention.scan.wta_accuracy` of C_ε, which the streamed path replaces. Peak
 memory is measured with :mod:`tracemalloc` (numpy reports its buffers there).
 """
 
@@ -19,8 +19,8 @@ import tracemalloc
 
 import numpy as np
 
-from stereovar.costvolume import gt_margin, sad_cost_volume, scan_cost_volume, wta_accuracy
-from stereovar.intervention import intervention_metrics
+from stereovar.intervention.scan import gt_margin, sad_cost_volume, scan_cost_volume, wta_accuracy
+from stereovar.intervention.metrics import intervention_metrics
 
 
 class SyntheticRenders:

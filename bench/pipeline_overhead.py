@@ -31,12 +31,12 @@ SCHEMA = REPO / "workflow/schemas/config.schema.yaml"
 BARE_LOOP = r"""
 import json, sys, time
 start = time.perf_counter()
-from stereovar.backend import load_mitsuba
+from stereovar.renderers.mitsuba.backend import load_mitsuba
 from stereovar.experiment import VIEWS, scene_spp_pairs
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import derive_seed, integrator_dict, render_view
 from stereovar.rig import make_rig
-from stereovar.scenespec import load_scene_spec
+from stereovar.scenes.spec import load_scene_spec
 import drjit as dr
 
 config = json.loads(sys.argv[1])

@@ -28,11 +28,11 @@ SCHEMA = REPO / "workflow/schemas/config.schema.yaml"
 WORKER = r"""
 import json, resource, sys, time
 args = json.loads(sys.argv[1])
-from stereovar.backend import load_mitsuba
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.backend import load_mitsuba
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import derive_seed, integrator_dict, render_view
 from stereovar.rig import make_rig
-from stereovar.scenespec import load_scene_spec
+from stereovar.scenes.spec import load_scene_spec
 import drjit as dr
 
 mi = load_mitsuba(args["variant"])
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     parser.add_argument("--variants", nargs="*", help="default: every available variant")
     args = parser.parse_args(argv)
 
-    from stereovar.backend import available_variants
+    from stereovar.renderers.mitsuba.backend import available_variants
 
     variants = args.variants or available_variants()
     total, config = paper_samples()

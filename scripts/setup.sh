@@ -25,12 +25,12 @@ command -v "$PYTHON" >/dev/null 2>&1 \
     || die "Python >= 3.10 is needed, '$PYTHON' is $("$PYTHON" -c 'import platform; print(platform.python_version())'); install a newer one or set PYTHON=/path/to/python3.10+"
 
 # --- libLLVM for Dr.Jit's LLVM backend ---------------------------------------
-# Reuses stereovar.backend (importable without any dependency installed).
+# Reuses stereovar.renderers.mitsuba.backend (importable without any dependency installed).
 find_llvm() {
     "$PYTHON" - <<'EOF'
 import os, sys
 sys.path.insert(0, "src")
-from stereovar.backend import configure_llvm
+from stereovar.renderers.mitsuba.backend import configure_llvm
 from stereovar.errors import BackendError
 try:
     path = configure_llvm()
@@ -129,6 +129,6 @@ else
     echo "$want" >"$STAMP"
 fi
 
-variant="$("$VENV/bin/python" -c 'import stereovar.backend as b; print(b.select_variant())')" \
+variant="$("$VENV/bin/python" -c 'import stereovar.renderers.mitsuba.backend as b; print(b.select_variant())')" \
     || die "Mitsuba could not start in $VENV (see the error above)"
 say "ready; Mitsuba variant: $variant"

@@ -16,8 +16,8 @@ from stereovar.jobs import (
     variance_job,
     warp_job,
 )
-from stereovar.store import open_dataset, write_dataset
-from stereovar.tables import read_rows, write_tables
+from stereovar.io.store import open_dataset, write_dataset
+from stereovar.io.tables import read_rows, write_tables
 
 H, W, D, N = 24, 48, 3, 6
 
@@ -180,7 +180,7 @@ def test_tables_from_several_scenes_and_spps(tmp_path):
             rows.append({**r, "scene": f"s{k}", "spp": 16})
     relabelled = tmp_path / "all.csv"
     from stereovar.jobs import CORRELATION_COLUMNS
-    from stereovar.tables import write_tables
+    from stereovar.io.tables import write_tables
 
     write_tables(rows, CORRELATION_COLUMNS, {"csv": relabelled})
     table = cross_scene_job([relabelled], {"csv": tmp_path / "t1.csv"}, spp=16)

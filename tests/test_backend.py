@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from stereovar.backend import (
+from stereovar.renderers.mitsuba.backend import (
     MIN_LLVM_MAJOR,
     NO_LIBLLVM_SENTINEL,
     find_libllvm,
@@ -111,7 +111,7 @@ def test_libllvm_version_from_name(name, version):
 
 CONFIGURE = """
 import json, os
-from stereovar.backend import configure_llvm
+from stereovar.renderers.mitsuba.backend import configure_llvm
 from stereovar.errors import BackendError
 try:
     path = configure_llvm()
@@ -164,7 +164,7 @@ def test_configure_llvm_rejects_user_path_older_than_16():
 def test_importing_the_package_loads_no_heavy_module():
     code = """
     import importlib, json, pkgutil, sys
-    import stereovar.backend
+    import stereovar.renderers.mitsuba.backend
     light = "numpy" not in sys.modules
     import stereovar
     for info in pkgutil.iter_modules(stereovar.__path__):
@@ -176,13 +176,13 @@ def test_importing_the_package_loads_no_heavy_module():
     result = run_python(code)
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout) == {"backend_without_numpy": True, "heavy": []}, (
-        "stereovar modules must import mitsuba/drjit only through stereovar.backend.load_mitsuba"
+        "stereovar modules must import mitsuba/drjit only through stereovar.renderers.mitsuba.backend.load_mitsuba"
     )
 
 
 VARIANT = """
 import json
-from stereovar import backend
+from stereovar.renderers.mitsuba import backend
 from stereovar.errors import BackendError
 out = {}
 try:
@@ -190,7 +190,7 @@ try:
 except BackendError as err:
     out["error"] = str(err)
 out["available"] = backend.available_variants()
-import drjit as dr  # already imported (and configured) by stereovar.backend
+import drjit as dr  # already imported (and configured) by stereovar.renderers.mitsuba.backend
 out["cuda"] = bool(dr.has_backend(dr.JitBackend.CUDA))
 print(json.dumps(out))
 """
@@ -245,7 +245,7 @@ def test_forced_unknown_variant_lists_known_ones():
 
 
 def test_forced_cuda_without_gpu_raises_one_line_error():
-    from stereovar.backend import available_variants, select_variant
+    from stereovar.renderers.mitsuba.backend import available_variants, select_variant
 
     if "cuda_ad_rgb" in available_variants():
         pytest.skip("a CUDA GPU is usable here")
@@ -260,7 +260,7 @@ def test_forced_cuda_without_gpu_raises_one_line_error():
 def test_load_mitsuba_caches_and_switches_variants():
     code = """
     import json
-    from stereovar.backend import describe_backend, load_mitsuba, select_variant
+    from stereovar.renderers.mitsuba.backend import describe_backend, load_mitsuba, select_variant
     auto = select_variant()
     first = load_mitsuba("scalar_rgb").variant()
     second = load_mitsuba().variant()

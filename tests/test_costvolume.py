@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from stereovar.costvolume import (
+from stereovar.intervention.scan import (
     NO_PIXELS,
     disparity_slices,
     gt_margin,
@@ -118,7 +118,7 @@ def test_sad_matches_brute_force(pair, window, sign):
 @pytest.mark.parametrize("sign", [1, -1])
 def test_running_sum_path_matches_brute_force(monkeypatch, window, sign):
     """Force the integral-image box sums (used for windows above the shifted-add limit)."""
-    import stereovar.costvolume as cv
+    import stereovar.intervention.scan as cv
 
     monkeypatch.setattr(cv, "_SHIFTED_ADD_MAX", 1)
     rng = np.random.default_rng(5)
@@ -290,7 +290,7 @@ def test_chance_is_one_over_scored_count_for_integer_gt(pair):
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("sign", [1, -1])
 def test_streamed_wta_equals_argmin_of_the_full_volume(workers, dtype, sign):
-    from stereovar.costvolume import sad_cost_volume, wta_disparity
+    from stereovar.intervention.scan import sad_cost_volume, wta_disparity
 
     rng = np.random.default_rng(7)
     # Small integers make many exact ties, which must go to the smallest d as in argmin.
@@ -330,7 +330,7 @@ def _scan_case(rng, shape, max_disparity, *, with_nan):
 @pytest.mark.parametrize("sign", [1, -1])
 @pytest.mark.parametrize("with_nan", [False, True])
 def test_scan_equals_brute_force_margins_and_wta(monkeypatch, workers, window, sign, with_nan):
-    import stereovar.costvolume as cv
+    import stereovar.intervention.scan as cv
 
     monkeypatch.setattr(cv, "_STRIP_BYTES", 1)  # 8-row strips: several strips per image
     rng = np.random.default_rng(window + 10 * workers)
@@ -359,7 +359,7 @@ def test_scan_equals_brute_force_margins_and_wta(monkeypatch, workers, window, s
 
 @pytest.mark.parametrize("sign", [1, -1])
 def test_window_one_scan_is_the_variance_peak_hit_rate(sign):
-    from stereovar.costvolume import scan_cost_volume, scan_hit_rate
+    from stereovar.intervention.scan import scan_cost_volume, scan_hit_rate
 
     rng = np.random.default_rng(3)
     left, right, d_gt = _scan_case(rng, (12, 16), 4, with_nan=False)
@@ -375,7 +375,7 @@ def test_window_one_scan_is_the_variance_peak_hit_rate(sign):
     ("high", "window", "expected"), [(255, 5, np.int16), (255, 13, np.int32), (60000, 3, np.int32)]
 )
 def test_integer_images_are_summed_exactly_in_integers(monkeypatch, high, window, expected):
-    import stereovar.costvolume as cv
+    import stereovar.intervention.scan as cv
 
     rng = np.random.default_rng(high + window)
     dtype = np.uint8 if high < 256 else np.uint16
@@ -397,7 +397,7 @@ def test_integer_images_are_summed_exactly_in_integers(monkeypatch, high, window
 
 
 def test_scan_hit_rate_needs_the_ground_truth_counts(pair):
-    from stereovar.costvolume import scan_cost_volume, scan_hit_rate
+    from stereovar.intervention.scan import scan_cost_volume, scan_hit_rate
 
     scan = scan_cost_volume(*pair, max_disparity=2, window=3)
     assert scan.margin is None

@@ -12,7 +12,7 @@ import xarray as xr
 from matplotlib.collections import PathCollection, QuadMesh
 from matplotlib.colors import LogNorm, to_rgba
 
-from stereovar.figures import (
+from stereovar.figures.paper import (
     GLASS_COLOUR,
     NON_GLASS_COLOUR,
     REGION_LABELS,
@@ -392,7 +392,7 @@ def _margin_rows(rng):
 
 
 def test_margin_figure_legends_give_median_and_share_won_by_the_ground_truth():
-    from stereovar.figures import margin_distribution_figure
+    from stereovar.figures.paper import margin_distribution_figure
 
     rows = _margin_rows(np.random.default_rng(0))
     fig = margin_distribution_figure(rows, title="t")
@@ -429,14 +429,14 @@ def test_margin_figure_legends_give_median_and_share_won_by_the_ground_truth():
 
 
 def test_margin_figure_rejects_bad_bins():
-    from stereovar.figures import margin_distribution_figure
+    from stereovar.figures.paper import margin_distribution_figure
 
     with pytest.raises(ValueError, match="bins"):
         margin_distribution_figure([], bins=0)
 
 
 def test_margin_figure_draws_a_single_repeated_value():
-    from stereovar.figures import margin_distribution_figure
+    from stereovar.figures.paper import margin_distribution_figure
 
     rows = [
         {"cost": "variance_cost", "region": "glass", "condition": c, "margin": 2.0}

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from stereovar.ground_truth import MATERIAL_CLASSES, compute_ground_truth, summarize_ground_truth
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
-from stereovar.scenespec import load_scene_spec
+from stereovar.scenes.spec import load_scene_spec
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -3,15 +3,15 @@
 import numpy as np
 import pytest
 
-from stereovar.costvolume import (
+from stereovar.intervention.scan import (
     gt_margin,
     peak_hit_rate,
     pixel_similarity_volume,
     sad_cost_volume,
     wta_accuracy,
 )
-from stereovar.intervention import intervention_metrics
-from stereovar.shuffle import apply_block_permutation, block_permutation
+from stereovar.intervention.metrics import intervention_metrics
+from stereovar.intervention.shuffle import apply_block_permutation, block_permutation
 
 N, H, W, D0 = 6, 40, 72, 3
 

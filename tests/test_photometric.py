@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from stereovar.ground_truth import compute_ground_truth
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
-from stereovar.warp import warp_right_to_left
+from stereovar.statistics.warp import warp_right_to_left
 
 WIDTH, HEIGHT, SPP, BASELINE = 128, 72, 2048, 0.08
 

@@ -6,11 +6,11 @@ from scipy.stats import spearmanr
 
 from stereovar.experiment import VIEWS, render_stores, seed_batches
 from stereovar.jobs import render_job
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
-from stereovar.scenespec import load_scene_spec
-from stereovar.store import open_dataset
+from stereovar.scenes.spec import load_scene_spec
+from stereovar.io.store import open_dataset
 
 from .test_ground_truth import REPO
 

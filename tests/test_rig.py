@@ -5,7 +5,7 @@ import pytest
 
 from stereovar.geometry import camera_frame, focal_length_px, transform_matrix
 from stereovar.ground_truth import compute_ground_truth
-from stereovar.mitsuba_scene import camera_from_spec, load_scene
+from stereovar.renderers.mitsuba.scene import camera_from_spec, load_scene
 from stereovar.rig import make_rig, sensor_dict
 
 

@@ -8,11 +8,11 @@ import numpy as np
 SCRIPT = r"""
 import json, sys
 import numpy as np
-from stereovar.backend import load_mitsuba
-from stereovar.mitsuba_scene import load_scene
+from stereovar.renderers.mitsuba.backend import load_mitsuba
+from stereovar.renderers.mitsuba.scene import load_scene
 from stereovar.render import integrator_dict, render_view
 from stereovar.rig import make_rig
-from stereovar.scenespec import load_scene_spec
+from stereovar.scenes.spec import load_scene_spec
 
 mi = load_mitsuba(sys.argv[1])
 scene, cam = load_scene(mi, load_scene_spec("scenes/scene_000.yaml"))

@@ -1,4 +1,4 @@
-"""Tests of the procedural scene generator (stereovar.scenegen); no rendering."""
+"""Tests of the procedural scene generator (stereovar.scenes.generate); no rendering."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from stereovar.geometry import camera_frame, transform_matrix
-from stereovar.scenegen import (
+from stereovar.scenes.generate import (
     GENERATOR_VERSION,
     estimate_glass_fraction,
     generate_scene,
@@ -18,7 +18,7 @@ from stereovar.scenegen import (
     raycast_labels,
     write_scenes,
 )
-from stereovar.scenespec import load_scene_spec, write_scene_spec
+from stereovar.scenes.spec import load_scene_spec, write_scene_spec
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "scenes"

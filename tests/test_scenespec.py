@@ -1,4 +1,4 @@
-"""Tests of scene spec loading, validation, digests and writing (stereovar.scenespec)."""
+"""Tests of scene spec loading, validation, digests and writing (stereovar.scenes.spec)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from stereovar.errors import SceneError
-from stereovar.scenespec import load_scene_spec, scene_spec_digest, write_scene_spec
+from stereovar.scenes.spec import load_scene_spec, scene_spec_digest, write_scene_spec
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 

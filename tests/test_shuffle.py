@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from stereovar.shuffle import (
+from stereovar.intervention.shuffle import (
     apply_block_permutation,
     block_permutation,
     decorrelate_right,

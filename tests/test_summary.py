@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from stereovar.summary import (
+from stereovar.statistics.summary import (
     cross_scene_table,
     mean_variance_by_region,
     spp_sweep_table,

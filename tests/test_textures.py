@@ -1,4 +1,4 @@
-"""Tests of the procedural texture baker (stereovar.textures)."""
+"""Tests of the procedural texture baker (stereovar.scenes.textures)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from stereovar.textures import PATTERNS, bake_texture
+from stereovar.scenes.textures import PATTERNS, bake_texture
 
 COLORS = {
     "planks": [[0.45, 0.28, 0.14], [0.25, 0.13, 0.06], [0.6, 0.4, 0.2]],
@@ -174,7 +174,7 @@ def test_fast_enough():
 
 
 def test_cached_bake_equals_bake_and_survives_a_corrupt_cache(tmp_path):
-    from stereovar.textures import bake_texture, bake_texture_cached
+    from stereovar.scenes.textures import bake_texture, bake_texture_cached
 
     spec = {
         "pattern": "planks",

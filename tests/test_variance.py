@@ -5,8 +5,8 @@ import pytest
 import xarray as xr
 
 from stereovar.errors import StoreError
-from stereovar.store import write_dataset
-from stereovar.variance import (
+from stereovar.io.store import write_dataset
+from stereovar.estimators.seeds import (
     StreamingVariance,
     variance_dataset,
     variance_field,

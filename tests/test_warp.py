@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from stereovar.warp import warp_right_to_left
+from stereovar.statistics.warp import warp_right_to_left
 
 
 @pytest.mark.parametrize("sign", [1, -1])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
-from stereovar.store import open_dataset
+from stereovar.io.store import open_dataset
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = ["scene_000", "scene_001"]

@@ -10,8 +10,8 @@ from stereovar.errors import SceneError
 from stereovar.geometry import focal_length_px
 from stereovar.ground_truth import MATERIAL_CLASSES
 from stereovar.jobs import ground_truth_job, prepare_scene
-from stereovar.scenespec import load_scene_spec
-from stereovar.store import open_dataset
+from stereovar.scenes.spec import load_scene_spec
+from stereovar.io.store import open_dataset
 
 XML = """<scene version="3.0.0">
     <sensor type="perspective">

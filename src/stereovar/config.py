@@ -257,7 +257,24 @@ def validate_config(config: Mapping, schema_path, *, command_line: Mapping | Non
     fill_defaults(filled, schema)
     _check_schema(filled, schema)
     _check_cross_fields(filled)
+    _check_registered(filled)
     return filled
+
+
+def _check_registered(config: dict) -> None:
+    """The renderer, estimator and seed policy the config names are implemented."""
+    from .estimators import ESTIMATORS
+    from .renderers import RENDERERS
+    from .seeding import SEED_POLICIES
+
+    render = config.get("render", {})
+    for key, registry in (
+        ("renderer", RENDERERS),
+        ("estimator", ESTIMATORS),
+        ("seed_policy", SEED_POLICIES),
+    ):
+        if key in render and render[key] not in registry:
+            registry.get(render[key])  # raises the one-line error listing what exists
 
 
 def validate_config_or_exit(

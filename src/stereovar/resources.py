@@ -54,11 +54,13 @@ def render_runtime(
     return _minutes(STARTUP_S + samples / samples_per_second, attempt)
 
 
-def render_mem_mb(width: int, height: int, *, attempt=1) -> int:
+def render_mem_mb(width: int, height: int, *, batch: int = 1, attempt=1) -> int:
     """Memory request (MB) of a render job: the base process plus 64 bytes per pixel (film,
-    the float32 RGB image, its float64 statistics and the store being written), times the
-    attempt."""
-    return int(attempt) * (RENDER_BASE_MB + math.ceil(64 * width * height / MIB))
+    the float32 RGB image, its float64 statistics and the store being written) plus, for a
+    batch of ``batch`` seeds of one view held until its store is written, 24 bytes per pixel
+    and seed (the float32 RGB renders and their stacked copy), times the attempt."""
+    per_pixel = 64 + 24 * max(int(batch) - 1, 0)
+    return int(attempt) * (RENDER_BASE_MB + math.ceil(per_pixel * width * height / MIB))
 
 
 def analysis_mem_mb(width: int, height: int, images: int, *, attempt=1) -> int:

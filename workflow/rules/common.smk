@@ -7,7 +7,17 @@ import yaml
 from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
-from stereovar.experiment import render_store, render_stores, scene_spp_pairs, seed_batches
+from stereovar.estimators import ESTIMATORS
+from stereovar.experiment import (
+    batch_label,
+    batch_seeds,
+    render_store,
+    run_prefix,
+    scene_spp_pairs,
+    seed_batches,
+)
+from stereovar.renderers import RENDERERS
+from stereovar.rig import VIEWS
 from stereovar import resources as sizing
 
 CONFIG_SCHEMA = "../schemas/config.schema.yaml"
@@ -31,8 +41,11 @@ GENERATED_SCENE = r"scene_\d{3}"
 
 wildcard_constraints:
     scene=r"[A-Za-z0-9_-]+",
-    view="left|right",
+    view="|".join(VIEWS),
     spp=r"\d+",
+    batch=r"\d+-\d+",
+    renderer="|".join(RENDERERS),
+    estimator="|".join(ESTIMATORS),
 
 
 WIDTH = config["resolution"]["width"]
@@ -40,23 +53,86 @@ HEIGHT = config["resolution"]["height"]
 CLUSTER = config["cluster"]
 RENDER_THREADS = CLUSTER["render_threads"]
 N_SEEDS = config["render"]["n_seeds"]
+SEED_BATCHES = seed_batches(N_SEEDS, config["render"]["seeds_per_job"])
 MAIN_SPP = config["render"]["spp"]
 SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
 SWEEP_SPP = sorted(config["render"]["spp_sweep"]["spp"])
+INTERVENTION_ESTIMATOR = "seeds"  # the intervention splits seeds into mean and residuals
 
 
-def scene_renders(wildcards, spp=None):
-    """All N seeds of both views of one scene at one SPP (the wildcard's by default)."""
-    spp = wildcards.spp if spp is None else spp
+def get_renderer():
+    """The renderer of this run (``render.renderer``)."""
+    return config["render"]["renderer"]
+
+
+def get_estimator():
+    """The variance estimator of this run (``render.estimator``)."""
+    return config["render"]["estimator"]
+
+
+# Result paths: renders under results/{renderer}/, everything computed from them under
+# results/{renderer}/{estimator}/ (stereovar.experiment).
+RENDERS = "results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"
+RUN = "results/{renderer}/{estimator}"
+INTERVENTION_RUN = f"results/{{renderer}}/{INTERVENTION_ESTIMATOR}"
+PREVIEW = "results/{renderer}/previews/{scene}.png"
+
+
+def view_renders(renderer, scene, spp):
+    """The render stores of each view of one scene at one SPP: every seed batch."""
     return {
-        view: [render_store(wildcards.scene, view, spp, n) for n in range(N_SEEDS)]
-        for view in ("left", "right")
+        view: [
+            render_store(renderer, scene, view, spp, batch_label(batch))
+            for batch in SEED_BATCHES
+        ]
+        for view in VIEWS
     }
 
 
+def estimator_inputs(wildcards):
+    """The renders the estimator reads for one scene at one SPP (``seeds``: all N seeds)."""
+    return view_renders(wildcards.renderer, wildcards.scene, wildcards.spp)
+
+
+def intervention_inputs(wildcards):
+    """The N seeds of both views of one scene at the main SPP, and its ground truth."""
+    return {
+        **view_renders(wildcards.renderer, wildcards.scene, MAIN_SPP),
+        "ground_truth": f"results/ground_truth/{wildcards.scene}.zarr",
+    }
+
+
+def scene_files(pattern, estimator=None):
+    """Input function: ``pattern`` (with ``{run}``, ``{scene}`` and ``{spp}``) for every scene
+    at the main SPP, in the wildcards' run (or the wildcards' renderer and ``estimator``)."""
+
+    def inputs(wildcards):
+        prefix = run_prefix(wildcards.renderer, estimator or wildcards.estimator)
+        return [pattern.format(run=prefix, scene=s, spp=MAIN_SPP) for s in SCENES]
+
+    return inputs
+
+
 def sweep_inputs(pattern):
-    """``pattern`` for the sweep scene at each sweep SPP, ascending."""
-    return [pattern.format(scene=SWEEP_SCENE, spp=spp) for spp in SWEEP_SPP]
+    """Input function: ``pattern`` (with ``{run}``) for the sweep scene at each sweep SPP,
+    ascending, in the wildcards' run."""
+
+    def inputs(wildcards):
+        prefix = run_prefix(wildcards.renderer, wildcards.estimator)
+        return [pattern.format(run=prefix, scene=SWEEP_SCENE, spp=spp) for spp in SWEEP_SPP]
+
+    return inputs
+
+
+def main_scene_file(pattern, scene=None):
+    """Input function: ``pattern`` (with ``{run}``) for the sweep scene (or ``scene``) at the
+    main SPP, in the wildcards' run."""
+
+    def inputs(wildcards):
+        prefix = run_prefix(wildcards.renderer, wildcards.estimator)
+        return pattern.format(run=prefix, scene=scene or SWEEP_SCENE, spp=MAIN_SPP)
+
+    return inputs
 
 
 def scene_spec_path(scene):
@@ -76,8 +152,9 @@ def scene_inputs(wildcards):
 
 
 def rig_params():
-    """Resolution and rig settings shared by every job that builds the stereo rig."""
+    """Renderer, resolution and rig settings shared by every job that builds the stereo rig."""
     return {
+        "renderer": get_renderer(),
         "width": config["resolution"]["width"],
         "height": config["resolution"]["height"],
         "baseline_m": config["rig"]["baseline_m"],
@@ -87,7 +164,7 @@ def rig_params():
 
 
 def render_params():
-    """Integrator, filter and sampler settings of every render."""
+    """Integrator, filter, sampler and seed-policy settings of every render."""
     r = config["render"]
     return {
         "variant": r["variant"],
@@ -95,6 +172,7 @@ def render_params():
         "max_depth": r["max_depth"],
         "rfilter": r["rfilter"],
         "sampler": r["sampler"],
+        "seed_policy": r["seed_policy"],
     }
 
 
@@ -121,20 +199,27 @@ GENERATE_PATTERN = "|".join(re.escape(s) for s in TO_GENERATE) or r"(?!x)x"
 
 
 def all_targets():
-    """Everything `snakemake all` builds."""
+    """Everything `snakemake all` builds, for the configured renderer and estimator."""
+    renderer = get_renderer()
+    run = run_prefix(renderer, get_estimator())
+    intervention = run_prefix(renderer, INTERVENTION_ESTIMATOR)
     return [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
-        *expand("results/figures/previews/{scene}.png", scene=SCENES),
+        *expand("results/{renderer}/previews/{scene}.png", renderer=renderer, scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex"]),
-        *[f"results/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
-        *expand("results/tables/{name}.{ext}", name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
-                ext=["csv", "md", "tex"]),
-        *expand("results/intervention/{scene}.csv", scene=SCENES),
-        *expand("results/tables/intervention.{ext}", ext=["csv", "md", "tex"]),
-        "results/figures/fig1_teaser.png",
-        "results/figures/fig2_rho_vs_spp.png",
-        "results/figures/fig3_material_scatter.png",
-        "results/figures/fig4_intervention_margins.png",
+        *[f"{run}/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
+        *expand(
+            "{run}/tables/{name}.{ext}",
+            run=run,
+            name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
+            ext=["csv", "md", "tex"],
+        ),
+        *expand("{run}/intervention/{scene}.csv", run=intervention, scene=SCENES),
+        *expand("{run}/tables/intervention.{ext}", run=intervention, ext=["csv", "md", "tex"]),
+        f"{run}/figures/fig1_teaser.png",
+        f"{run}/figures/fig2_rho_vs_spp.png",
+        f"{run}/figures/fig3_material_scatter.png",
+        f"{intervention}/figures/fig4_intervention_margins.png",
     ]
 
 
@@ -142,22 +227,31 @@ def all_targets():
 # GPU model stay out of the rules: they come from the profile (profiles/slurm*).
 
 
-def render_resources(n_renders, spp=None, gpu=True, cpus=None):
-    """Memory, runtime and (with ``gpu``) GPU requests of a Mitsuba job rendering
-    ``n_renders`` images at ``spp`` (the job's ``spp`` wildcard when None)."""
+def batch_size(wildcards):
+    """Seeds per view in the job's ``{batch}`` (1 for jobs without one)."""
+    batch = getattr(wildcards, "batch", None)
+    return len(batch_seeds(batch)) if batch else 1
+
+
+def render_resources(n_views=2, spp=None, gpu=True, cpus=None):
+    """Memory, runtime and (with ``gpu``) GPU requests of a job rendering ``n_views`` views
+    of each seed of its ``{batch}`` (one seed without one) at ``spp`` (the job's ``spp``
+    wildcard when None)."""
 
     def runtime(wildcards, attempt):
         return sizing.render_runtime(
             WIDTH,
             HEIGHT,
             int(wildcards.spp if spp is None else spp),
-            n_renders,
+            n_views * batch_size(wildcards),
             samples_per_second=CLUSTER["render_samples_per_second"],
             attempt=attempt,
         )
 
     requests = {
-        "mem_mb": lambda wildcards, attempt: sizing.render_mem_mb(WIDTH, HEIGHT, attempt=attempt),
+        "mem_mb": lambda wildcards, attempt: sizing.render_mem_mb(
+            WIDTH, HEIGHT, batch=batch_size(wildcards), attempt=attempt
+        ),
         "runtime": runtime,
         "cpus_per_task": RENDER_THREADS if cpus is None else cpus,
     }

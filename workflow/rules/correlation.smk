@@ -1,14 +1,17 @@
-# Eq. 2 (warp by the ground-truth disparity) and Eq. 3 (Pearson over the valid set).
+# Eq. 2 (warp by the ground-truth disparity) and Eq. 3 (every registered statistic over the
+# valid set and its regions).
 
 
 rule warp:
     input:
-        variance="results/variance/{scene}/spp{spp}.zarr",
+        variance=RUN + "/variance/{scene}/spp{spp}.zarr",
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        directory("results/warped/{scene}/spp{spp}.zarr"),
+        directory(RUN + "/warped/{scene}/spp{spp}.zarr"),
     log:
-        "logs/warped/{scene}/spp{spp}.log",
+        "logs/{renderer}/{estimator}/warped/{scene}/spp{spp}.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/warped/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=8, n_reads=0),
@@ -22,15 +25,17 @@ rule warp:
 
 rule correlation:
     input:
-        variance="results/variance/{scene}/spp{spp}.zarr",
-        warped="results/warped/{scene}/spp{spp}.zarr",
+        variance=RUN + "/variance/{scene}/spp{spp}.zarr",
+        warped=RUN + "/warped/{scene}/spp{spp}.zarr",
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        "results/correlation/{scene}/spp{spp}.csv",
+        RUN + "/correlation/{scene}/spp{spp}.csv",
     params:
         min_pixels=config["analysis"]["min_pixels"],
     log:
-        "logs/correlation/{scene}/spp{spp}.log",
+        "logs/{renderer}/{estimator}/correlation/{scene}/spp{spp}.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/correlation/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=8, n_reads=0),

@@ -1,19 +1,25 @@
-# Figures 1-3 of the paper on the representative (sweep) scene.
+# Figures 1-3 of the paper on the representative (sweep) scene, per renderer and estimator.
 
 
 rule teaser_figure:
     input:
-        variance=f"results/variance/{SWEEP_SCENE}/spp{MAIN_SPP}.zarr",
-        warped=f"results/warped/{SWEEP_SCENE}/spp{MAIN_SPP}.zarr",
+        variance=main_scene_file("{run}/variance/{scene}/spp{spp}.zarr"),
+        warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
     output:
         report(
-            "results/figures/fig1_teaser.png",
+            RUN + "/figures/fig1_teaser.png",
             caption="../report/fig1_teaser.rst",
             category="Figures",
-            labels={"figure": "Fig. 1: variance fields and joint histogram"},
+            labels={
+                "figure": "Fig. 1: variance fields and joint histogram",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
     log:
-        "logs/figures/fig1_teaser.log",
+        "logs/{renderer}/{estimator}/figures/fig1_teaser.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/figures/fig1_teaser.tsv"
     localrule: True
     conda:
         ENV
@@ -23,16 +29,22 @@ rule teaser_figure:
 
 rule rho_vs_spp_figure:
     input:
-        sweep_inputs("results/correlation/{scene}/spp{spp}.csv"),
+        sweep_inputs("{run}/correlation/{scene}/spp{spp}.csv"),
     output:
         report(
-            "results/figures/fig2_rho_vs_spp.png",
+            RUN + "/figures/fig2_rho_vs_spp.png",
             caption="../report/fig2_rho_vs_spp.rst",
             category="Figures",
-            labels={"figure": "Fig. 2: rho against SPP"},
+            labels={
+                "figure": "Fig. 2: rho against SPP",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
     log:
-        "logs/figures/fig2_rho_vs_spp.log",
+        "logs/{renderer}/{estimator}/figures/fig2_rho_vs_spp.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/figures/fig2_rho_vs_spp.tsv"
     localrule: True
     conda:
         ENV
@@ -42,18 +54,24 @@ rule rho_vs_spp_figure:
 
 rule material_scatter_figure:
     input:
-        variance=f"results/variance/{SWEEP_SCENE}/spp{MAIN_SPP}.zarr",
-        warped=f"results/warped/{SWEEP_SCENE}/spp{MAIN_SPP}.zarr",
+        variance=main_scene_file("{run}/variance/{scene}/spp{spp}.zarr"),
+        warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
         ground_truth=f"results/ground_truth/{SWEEP_SCENE}.zarr",
     output:
         report(
-            "results/figures/fig3_material_scatter.png",
+            RUN + "/figures/fig3_material_scatter.png",
             caption="../report/fig3_material_scatter.rst",
             category="Figures",
-            labels={"figure": "Fig. 3: material-separated scatter"},
+            labels={
+                "figure": "Fig. 3: material-separated scatter",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
     log:
-        "logs/figures/fig3_material_scatter.log",
+        "logs/{renderer}/{estimator}/figures/fig3_material_scatter.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/figures/fig3_material_scatter.tsv"
     localrule: True
     conda:
         ENV

@@ -14,7 +14,7 @@ rule ground_truth:
         "benchmarks/ground_truth/{scene}.tsv"
     threads: 1
     resources:
-        **render_resources(2, spp=1, gpu=False, cpus=1),
+        **render_resources(spp=1, gpu=False, cpus=1),
     group:
         "scene_setup"
     conda:
@@ -37,6 +37,8 @@ rule scene_summary:
         tex="results/tables/scenes.tex",
     log:
         "logs/tables/scenes.log",
+    benchmark:
+        "benchmarks/tables/scenes.tsv"
     localrule: True
     conda:
         ENV

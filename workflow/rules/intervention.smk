@@ -1,19 +1,19 @@
-# The residual-shuffle intervention of paper Sec. 3.4: per-scene metrics and Table 3.
+# The residual-shuffle intervention of paper Sec. 3.4: per-scene metrics and Table 3. It
+# splits the N seeds into mean and residuals, so its results sit with the seeds estimator's.
 
 
 rule intervention:
     input:
-        unpack(lambda wc: scene_renders(wc, spp=MAIN_SPP)),
-        ground_truth="results/ground_truth/{scene}.zarr",
+        unpack(intervention_inputs),
     output:
-        metrics="results/intervention/{scene}.csv",
-        margins="results/intervention/margins/{scene}.csv",
+        metrics=INTERVENTION_RUN + "/intervention/{scene}.csv",
+        margins=INTERVENTION_RUN + "/intervention/margins/{scene}.csv",
     params:
         **config["intervention"],
     log:
-        "logs/intervention/{scene}.log",
+        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/intervention/{{scene}}.log",
     benchmark:
-        "benchmarks/intervention/{scene}.tsv"
+        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/intervention/{{scene}}.tsv"
     threads: 2
     resources:
         **intervention_resources(),
@@ -25,18 +25,24 @@ rule intervention:
 
 rule intervention_table:
     input:
-        expand("results/intervention/{scene}.csv", scene=SCENES),
+        scene_files("{run}/intervention/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
     output:
         csv=report(
-            "results/tables/intervention.csv",
+            INTERVENTION_RUN + "/tables/intervention.csv",
             caption="../report/intervention.rst",
             category="Tables",
-            labels={"table": "Table 3: intervention"},
+            labels={
+                "table": "Table 3: intervention",
+                "renderer": "{renderer}",
+                "estimator": INTERVENTION_ESTIMATOR,
+            },
         ),
-        md="results/tables/intervention.md",
-        tex="results/tables/intervention.tex",
+        md=INTERVENTION_RUN + "/tables/intervention.md",
+        tex=INTERVENTION_RUN + "/tables/intervention.tex",
     log:
-        "logs/tables/intervention.log",
+        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/tables/intervention.log",
+    benchmark:
+        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/tables/intervention.tsv"
     localrule: True
     conda:
         ENV
@@ -46,16 +52,22 @@ rule intervention_table:
 
 rule margin_figure:
     input:
-        expand("results/intervention/margins/{scene}.csv", scene=SCENES),
+        scene_files("{run}/intervention/margins/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
     output:
         report(
-            "results/figures/fig4_intervention_margins.png",
+            INTERVENTION_RUN + "/figures/fig4_intervention_margins.png",
             caption="../report/fig4_intervention_margins.rst",
             category="Figures",
-            labels={"figure": "Table 3: GT-margin distributions"},
+            labels={
+                "figure": "Table 3: GT-margin distributions",
+                "renderer": "{renderer}",
+                "estimator": INTERVENTION_ESTIMATOR,
+            },
         ),
     log:
-        "logs/figures/fig4_intervention_margins.log",
+        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/figures/fig4_intervention_margins.log",
+    benchmark:
+        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/figures/fig4_intervention_margins.tsv"
     localrule: True
     conda:
         ENV

@@ -7,22 +7,23 @@ rule preview:
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
         report(
-            "results/figures/previews/{scene}.png",
+            PREVIEW,
             caption="../report/preview.rst",
             category="Scenes",
             subcategory="Previews",
-            labels={"scene": "{scene}", "figure": "preview"},
+            labels={"scene": "{scene}", "renderer": "{renderer}", "figure": "preview"},
         ),
     params:
         spp=config["preview"]["spp"],
+        renderer=lambda wc: wc.renderer,
         **render_params(),
     log:
-        "logs/previews/{scene}.log",
+        "logs/{renderer}/previews/{scene}.log",
     benchmark:
-        "benchmarks/previews/{scene}.tsv"
+        "benchmarks/{renderer}/previews/{scene}.tsv"
     threads: RENDER_THREADS
     resources:
-        **render_resources(2, spp=config["preview"]["spp"]),
+        **render_resources(spp=config["preview"]["spp"]),
     group:
         "scene_setup"
     conda:

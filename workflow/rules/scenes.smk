@@ -12,6 +12,8 @@ rule generate_scene:
         seed=config["generator"]["seed"],
     log:
         "logs/scenes/{scene}.log",
+    benchmark:
+        "benchmarks/scenes/{scene}.tsv"
     localrule: True
     conda:
         ENV

@@ -1,22 +1,29 @@
-# Table 1 (cross-scene correlation) and Table 2 (SPP sweep), paper Sec. 3.2-3.3.
+# Table 1 (cross-scene correlation) and Table 2 (SPP sweep), paper Sec. 3.2-3.3, per renderer
+# and estimator.
 
 
 rule cross_scene_table:
     input:
-        expand("results/correlation/{scene}/spp{spp}.csv", scene=SCENES, spp=MAIN_SPP),
+        scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
     output:
         csv=report(
-            "results/tables/cross_scene.csv",
+            RUN + "/tables/cross_scene.csv",
             caption="../report/cross_scene.rst",
             category="Tables",
-            labels={"table": "Table 1: cross-scene correlation"},
+            labels={
+                "table": "Table 1: cross-scene correlation",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
-        md="results/tables/cross_scene.md",
-        tex="results/tables/cross_scene.tex",
+        md=RUN + "/tables/cross_scene.md",
+        tex=RUN + "/tables/cross_scene.tex",
     params:
         spp=MAIN_SPP,
     log:
-        "logs/tables/cross_scene.log",
+        "logs/{renderer}/{estimator}/tables/cross_scene.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/tables/cross_scene.tsv"
     localrule: True
     conda:
         ENV
@@ -26,28 +33,38 @@ rule cross_scene_table:
 
 rule spp_sweep_table:
     input:
-        correlations=sweep_inputs("results/correlation/{scene}/spp{spp}.csv"),
-        variances=sweep_inputs("results/variance/{scene}/spp{spp}.zarr"),
-        warped=sweep_inputs("results/warped/{scene}/spp{spp}.zarr"),
+        correlations=sweep_inputs("{run}/correlation/{scene}/spp{spp}.csv"),
+        variances=sweep_inputs("{run}/variance/{scene}/spp{spp}.zarr"),
+        warped=sweep_inputs("{run}/warped/{scene}/spp{spp}.zarr"),
     output:
         csv=report(
-            "results/tables/spp_sweep.csv",
+            RUN + "/tables/spp_sweep.csv",
             caption="../report/spp_sweep.rst",
             category="Tables",
-            labels={"table": "Table 2: SPP sweep"},
+            labels={
+                "table": "Table 2: SPP sweep",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
-        md="results/tables/spp_sweep.md",
-        tex="results/tables/spp_sweep.tex",
+        md=RUN + "/tables/spp_sweep.md",
+        tex=RUN + "/tables/spp_sweep.tex",
         fit_csv=report(
-            "results/tables/spp_sweep_fit.csv",
+            RUN + "/tables/spp_sweep_fit.csv",
             caption="../report/spp_sweep_fit.rst",
             category="Tables",
-            labels={"table": "Table 2: log-log slope"},
+            labels={
+                "table": "Table 2: log-log slope",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
         ),
-        fit_md="results/tables/spp_sweep_fit.md",
-        fit_tex="results/tables/spp_sweep_fit.tex",
+        fit_md=RUN + "/tables/spp_sweep_fit.md",
+        fit_tex=RUN + "/tables/spp_sweep_fit.tex",
     log:
-        "logs/tables/spp_sweep.log",
+        "logs/{renderer}/{estimator}/tables/spp_sweep.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/tables/spp_sweep.tsv"
     localrule: True
     conda:
         ENV

@@ -1,15 +1,17 @@
-# Eq. 1 (paper Sec. 2.1): per-pixel population variance over the N seeds, streamed.
+# Eq. 1 (paper Sec. 2.1): the configured estimator's per-pixel variance of both views.
 
 
 rule variance:
     input:
-        unpack(scene_renders),
+        unpack(estimator_inputs),
     output:
-        directory("results/variance/{scene}/spp{spp}.zarr"),
+        directory(RUN + "/variance/{scene}/spp{spp}.zarr"),
+    params:
+        estimator=lambda wc: wc.estimator,
     log:
-        "logs/variance/{scene}/spp{spp}.log",
+        "logs/{renderer}/{estimator}/variance/{scene}/spp{spp}.log",
     benchmark:
-        "benchmarks/variance/{scene}/spp{spp}.tsv"
+        "benchmarks/{renderer}/{estimator}/variance/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=12, n_reads=2 * N_SEEDS),

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.correlation_job."""
+"""Snakemake adapter: stereovar.jobs.correlation.correlation_job."""
 
-from stereovar.jobs import correlation_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.correlation import correlation_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.cross_scene_job."""
+"""Snakemake adapter: stereovar.jobs.tables.cross_scene_job."""
 
-from stereovar.jobs import cross_scene_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.tables import cross_scene_job
 
 run_job(
     snakemake.log[0],

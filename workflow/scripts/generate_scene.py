@@ -1,6 +1,7 @@
 """Snakemake adapter: generate one procedural scene spec."""
 
-from stereovar.jobs import generate_scene_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.scenes import generate_scene_job
 
 run_job(
     snakemake.log[0],

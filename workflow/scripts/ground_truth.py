@@ -1,6 +1,7 @@
 """Snakemake adapter: trace one scene's ground truth."""
 
-from stereovar.jobs import ground_truth_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.ground_truth import ground_truth_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.intervention_job."""
+"""Snakemake adapter: stereovar.jobs.intervention.intervention_job."""
 
-from stereovar.jobs import intervention_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.intervention import intervention_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.material_scatter_figure_job."""
+"""Snakemake adapter: stereovar.jobs.figures.material_scatter_figure_job."""
 
-from stereovar.jobs import material_scatter_figure_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.figures import material_scatter_figure_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
 """Snakemake adapter: render and plot one scene's preview."""
 
-from stereovar.jobs import preview_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.preview import preview_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.rho_vs_spp_figure_job."""
+"""Snakemake adapter: stereovar.jobs.figures.rho_vs_spp_figure_job."""
 
-from stereovar.jobs import rho_vs_spp_figure_job, run_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.figures import rho_vs_spp_figure_job
 
 run_job(
     snakemake.log[0],

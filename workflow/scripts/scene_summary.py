@@ -1,6 +1,7 @@
 """Snakemake adapter: tabulate glass fraction and disparity range per scene."""
 
-from stereovar.jobs import run_job, scene_summary_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.scenes import scene_summary_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.spp_sweep_job."""
+"""Snakemake adapter: stereovar.jobs.tables.spp_sweep_job."""
 
-from stereovar.jobs import run_job, spp_sweep_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.tables import spp_sweep_job
 
 run_job(
     snakemake.log[0],

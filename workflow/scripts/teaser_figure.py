@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.teaser_figure_job."""
+"""Snakemake adapter: stereovar.jobs.figures.teaser_figure_job."""
 
-from stereovar.jobs import run_job, teaser_figure_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.figures import teaser_figure_job
 
 run_job(
     snakemake.log[0],

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.variance_job."""
+"""Snakemake adapter: stereovar.jobs.variance.variance_job."""
 
-from stereovar.jobs import run_job, variance_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.variance import variance_job
 
 run_job(
     snakemake.log[0],
@@ -8,4 +9,5 @@ run_job(
     left=snakemake.input.left,
     right=snakemake.input.right,
     out=snakemake.output[0],
+    **snakemake.params,
 )

@@ -1,6 +1,7 @@
-"""Snakemake adapter: stereovar.jobs.warp_job."""
+"""Snakemake adapter: stereovar.jobs.correlation.warp_job."""
 
-from stereovar.jobs import run_job, warp_job
+from stereovar.jobs.common import run_job
+from stereovar.jobs.correlation import warp_job
 
 run_job(
     snakemake.log[0],

@@ -22,7 +22,7 @@ from pathlib import Path
 from ..errors import SceneError
 from ..schema import fill_defaults, plain, resolve
 
-SCHEMA_PATH = Path(__file__).resolve().parent / "schemas" / "scene.schema.yaml"
+SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "scene.schema.yaml"
 
 #: Keys of a procedural scene that must be absent when ``mitsuba_xml`` is set.
 PROCEDURAL_KEYS = ("camera", "textures", "materials", "objects", "lights")

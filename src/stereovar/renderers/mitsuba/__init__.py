@@ -122,3 +122,7 @@ class MitsubaRenderer(Renderer):
             convention,
         )
         return MitsubaScene(rig, spec=spec, provenance=provenance, mi=mi, scene=scene)
+
+
+RENDERER = MitsubaRenderer
+"""The class :data:`stereovar.renderers.RENDERERS` builds for ``render.renderer: mitsuba``."""
