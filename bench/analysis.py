@@ -44,7 +44,8 @@ print(json.dumps({"seconds": seconds, "rss_mb": rss}))
 ANALYSE = r"""
 import json, resource, sys, time
 import stereovar.io.store  # xarray and zarr, imported before the clock as in the baseline
-from stereovar.jobs import correlation_job, variance_job, warp_job
+from stereovar.jobs.correlation import correlation_job, warp_job
+from stereovar.jobs.variance import variance_job
 args = json.loads(sys.argv[1])
 start = time.perf_counter()
 variance_job(args["left"], args["right"], args["work"] + "/var.zarr")

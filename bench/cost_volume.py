@@ -15,10 +15,14 @@ import argparse
 import sys
 import time
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 
-from stereovar.intervention.scan import sad_cost_volume, scan_cost_volume, wta_disparity
+from stereovar.intervention.scan import scan_cost_volume, wta_disparity
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' references
+from tests.reference.costvolume import sad_cost_volume  # noqa: E402
 
 
 def textured_pair(height: int, width: int, shift: int, seed: int = 0):

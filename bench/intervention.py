@@ -5,8 +5,8 @@ generated seed by seed (a smooth clean image plus noise; the right view is the l
 by a known disparity field), so the renders are never all in memory, exactly as the workflow
 reads its stores. It times :func:`stereovar.intervention.intervention_metrics` (streamed
 scans, 2 threads) and, as the named baseline in the same run, the full-volume reference for
-one seed: :func:`~stereovar.intervention.scan.sad_cost_volume` + :func:`~stereovar.intervention.scan.gt_margin`
-+ :func:`~stereovar.intervention.scan.wta_accuracy` of C_ε, which the streamed path replaces. Peak
+one seed: the dense ``sad_cost_volume`` + ``gt_margin`` + ``wta_accuracy`` of C_ε
+(``tests/reference/costvolume.py``), which the streamed path replaces. Peak
 memory is measured with :mod:`tracemalloc` (numpy reports its buffers there).
 """
 
@@ -16,11 +16,15 @@ import argparse
 import sys
 import time
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 
-from stereovar.intervention.scan import gt_margin, sad_cost_volume, scan_cost_volume, wta_accuracy
 from stereovar.intervention.metrics import intervention_metrics
+from stereovar.intervention.scan import scan_cost_volume
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' references
+from tests.reference.costvolume import gt_margin, sad_cost_volume, wta_accuracy  # noqa: E402
 
 
 class SyntheticRenders:

@@ -30,7 +30,9 @@ import json, resource, sys, time
 args = json.loads(sys.argv[1])
 from stereovar.renderers.mitsuba.backend import load_mitsuba
 from stereovar.renderers.mitsuba.scene import load_scene
-from stereovar.render import derive_seed, integrator_dict, render_view
+from stereovar.renderers.mitsuba.render import render_view
+from stereovar.renderers.mitsuba.sensor import integrator_dict
+from stereovar.seeding import derive_seed
 from stereovar.rig import make_rig
 from stereovar.scenes.spec import load_scene_spec
 import drjit as dr

@@ -9,15 +9,11 @@ import xarray as xr
 from scipy.stats import pearsonr
 
 from stereovar.errors import StoreError
-from stereovar.jobs import (
-    correlation_job,
-    cross_scene_job,
-    spp_sweep_job,
-    variance_job,
-    warp_job,
-)
 from stereovar.io.store import open_dataset, write_dataset
 from stereovar.io.tables import read_rows, write_tables
+from stereovar.jobs.correlation import correlation_job, warp_job
+from stereovar.jobs.tables import cross_scene_job, spp_sweep_job
+from stereovar.jobs.variance import variance_job
 
 H, W, D, N = 24, 48, 3, 6
 
@@ -146,7 +142,8 @@ def test_damaged_store_is_a_one_line_error_naming_it(tmp_path):
     assert "\n" not in str(err.value)
     assert not (tmp_path / "var.zarr").exists()
     code = (
-        "from stereovar.jobs import run_job, variance_job\n"
+        "from stereovar.jobs.common import run_job\n"
+        "from stereovar.jobs.variance import variance_job\n"
         f"run_job(None, variance_job, left={[str(p) for p in paths['left']]!r}, "
         f"right={[str(p) for p in paths['right']]!r}, out={str(tmp_path / 'v.zarr')!r})\n"
     )
@@ -179,8 +176,8 @@ def test_tables_from_several_scenes_and_spps(tmp_path):
         for r in read_rows(path):
             rows.append({**r, "scene": f"s{k}", "spp": 16})
     relabelled = tmp_path / "all.csv"
-    from stereovar.jobs import CORRELATION_COLUMNS
     from stereovar.io.tables import write_tables
+    from stereovar.statistics.rows import CORRELATION_COLUMNS
 
     write_tables(rows, CORRELATION_COLUMNS, {"csv": relabelled})
     table = cross_scene_job([relabelled], {"csv": tmp_path / "t1.csv"}, spp=16)
@@ -192,7 +189,8 @@ def test_tables_from_several_scenes_and_spps(tmp_path):
 
 
 def test_intervention_job_and_table(tmp_path, caplog):
-    from stereovar.jobs import intervention_job, intervention_table_job, margin_figure_job
+    from stereovar.jobs.figures import margin_figure_job
+    from stereovar.jobs.intervention import intervention_job, intervention_table_job
 
     ground_truth(tmp_path / "gt.zarr")
     paths = renders(tmp_path, 16)

@@ -15,13 +15,13 @@ from pathlib import Path
 
 import pytest
 
+from stereovar.errors import BackendError
 from stereovar.renderers.mitsuba.backend import (
     MIN_LLVM_MAJOR,
     NO_LIBLLVM_SENTINEL,
     find_libllvm,
     libllvm_version,
 )
-from stereovar.errors import BackendError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -167,16 +167,17 @@ def test_importing_the_package_loads_no_heavy_module():
     import stereovar.renderers.mitsuba.backend
     light = "numpy" not in sys.modules
     import stereovar
-    for info in pkgutil.iter_modules(stereovar.__path__):
-        if info.name != "__main__":
-            importlib.import_module(f"stereovar.{info.name}")
+    for info in pkgutil.walk_packages(stereovar.__path__, "stereovar."):
+        if not info.name.endswith("__main__"):
+            importlib.import_module(info.name)
     heavy = sorted(m for m in ("drjit", "mitsuba") if m in sys.modules)
     print(json.dumps({"backend_without_numpy": light, "heavy": heavy}))
     """
     result = run_python(code)
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout) == {"backend_without_numpy": True, "heavy": []}, (
-        "stereovar modules must import mitsuba/drjit only through stereovar.renderers.mitsuba.backend.load_mitsuba"
+        "stereovar modules must import mitsuba/drjit only through "
+        "stereovar.renderers.mitsuba.backend.load_mitsuba"
     )
 
 

@@ -21,10 +21,13 @@ PAPER = REPO_ROOT / "workflow" / "presets" / "paper.yaml"
 
 DEFAULTS = {
     "scenes": ["scene_000", "scene_001", "scene_002", "scene_003"],
-    "generator": {"count": 20, "seed": 0},
+    "generator": {"seed": 0},
     "resolution": {"width": 320, "height": 180},
     "rig": {"baseline_m": 0.026, "convention": "paper"},
     "render": {
+        "renderer": "mitsuba",
+        "estimator": "seeds",
+        "seed_policy": "independent",
         "variant": "auto",
         "integrator": "path",
         "max_depth": 8,

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from stereovar.intervention.scan import (
-    NO_PIXELS,
-    disparity_slices,
+from stereovar.intervention.scan import NO_PIXELS, disparity_slices
+
+from .reference.costvolume import (
     gt_margin,
     peak_hit_rate,
     pixel_similarity_volume,
@@ -290,7 +290,7 @@ def test_chance_is_one_over_scored_count_for_integer_gt(pair):
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("sign", [1, -1])
 def test_streamed_wta_equals_argmin_of_the_full_volume(workers, dtype, sign):
-    from stereovar.intervention.scan import sad_cost_volume, wta_disparity
+    from stereovar.intervention.scan import wta_disparity
 
     rng = np.random.default_rng(7)
     # Small integers make many exact ties, which must go to the smallest d as in argmin.

@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 
 from stereovar.ground_truth import MATERIAL_CLASSES, compute_ground_truth, summarize_ground_truth
+from stereovar.renderers.mitsuba import MitsubaScene
+from stereovar.renderers.mitsuba.render import render_view
 from stereovar.renderers.mitsuba.scene import load_scene
-from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
 from stereovar.scenes.spec import load_scene_spec
+from stereovar.seeding import derive_seed
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -61,7 +63,7 @@ def spheres_gt(mi):
     rig = make_rig(
         cam.to_world, cam.fov_deg, width=96, height=54, baseline_m=0.05, convention="paper"
     )
-    return rig, compute_ground_truth(mi, scene, rig)
+    return rig, compute_ground_truth(MitsubaScene(rig, mi=mi, scene=scene))
 
 
 def test_material_class_of_each_sphere_centre(spheres_gt):
@@ -120,7 +122,7 @@ def test_occlusion_flags_wall_pixels_hidden_by_a_box(mi):
     }
     scene, cam = load_scene(mi, spec)
     rig = make_rig(cam.to_world, 50, width=80, height=40, baseline_m=0.2, convention="paper")
-    ds = compute_ground_truth(mi, scene, rig)
+    ds = compute_ground_truth(MitsubaScene(rig, mi=mi, scene=scene))
     g = ds.sel(view="left")
     occ = g.occluded.values
     depth = g.depth.values
@@ -187,7 +189,7 @@ def test_committed_scene_has_glass_and_full_room(mi, path):
     rig = make_rig(
         cam.to_world, cam.fov_deg, width=320, height=180, baseline_m=0.026, convention="paper"
     )
-    ds = compute_ground_truth(mi, scene, rig)
+    ds = compute_ground_truth(MitsubaScene(rig, mi=mi, scene=scene))
     s = summarize_ground_truth(ds)
     assert s["glass_fraction"] >= 0.03
     assert s["background_fraction"] == 0.0

@@ -3,15 +3,16 @@
 import numpy as np
 import pytest
 
-from stereovar.intervention.scan import (
+from stereovar.intervention.metrics import intervention_metrics
+from stereovar.intervention.shuffle import apply_block_permutation, block_permutation
+
+from .reference.costvolume import (
     gt_margin,
     peak_hit_rate,
     pixel_similarity_volume,
     sad_cost_volume,
     wta_accuracy,
 )
-from stereovar.intervention.metrics import intervention_metrics
-from stereovar.intervention.shuffle import apply_block_permutation, block_permutation
 
 N, H, W, D0 = 6, 40, 72, 3
 
@@ -77,7 +78,10 @@ def reference_metrics(left, right, gt, *, sign, max_disparity, window, block, se
         for c in range(channels):
             shuffled[k, ..., c] = apply_block_permutation(res_r[k, ..., c], perm, block=block)
     d_gt, valid, glass = gt["disparity"], gt["valid"], gt["glass"]
-    masks = {"non_glass": valid & ~glass, "glass": valid & glass}
+    # Omega of Eq. 2: ground-truth valid, d > 0 and the correspondence inside the right image.
+    x_right = np.arange(width)[None, :] + sign * d_gt
+    omega = valid & (d_gt > 0) & (x_right >= 0) & (x_right <= width - 1)
+    masks = {"non_glass": omega & ~glass, "glass": omega & glass}
     kw = {"max_disparity": max_disparity, "sign": sign}
     out, margins = {}, {}
     for condition, rr in (("normal", res_r), ("decorrelated", shuffled)):
@@ -146,8 +150,10 @@ def test_streamed_metrics_and_margin_sample_equal_the_full_volume_reference(sign
     # A sample as large as the population is every finite margin of the region.
     full = intervention_metrics(left, right, gt, margin_samples=10**6, **kw).margins
     for (cost, condition), fields in margins.items():
-        for region, mask in (("glass", gt["valid"] & gt["glass"]),
-                             ("non_glass", gt["valid"] & ~gt["glass"])):  # fmt: skip
+        x_right = np.arange(width)[None, :] + sign * gt["disparity"]
+        omega = gt["valid"] & (x_right >= 0) & (x_right <= width - 1)
+        for region, mask in (("glass", omega & gt["glass"]),
+                             ("non_glass", omega & ~gt["glass"])):  # fmt: skip
             want = {
                 (k if cost == "residual_sad" else -1, int(y), int(x))
                 for k, field in enumerate(fields)

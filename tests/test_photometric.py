@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 from stereovar.ground_truth import compute_ground_truth
+from stereovar.renderers.mitsuba import MitsubaScene
+from stereovar.renderers.mitsuba.render import render_view
 from stereovar.renderers.mitsuba.scene import load_scene
-from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
+from stereovar.seeding import derive_seed
 from stereovar.statistics.warp import warp_right_to_left
 
 WIDTH, HEIGHT, SPP, BASELINE = 128, 72, 2048, 0.08
@@ -109,7 +111,7 @@ def test_clean_right_view_warps_onto_left(mi, lambertian, convention):
         baseline_m=BASELINE,
         convention=convention,
     )
-    gt = compute_ground_truth(mi, scene, rig).sel(view="left")
+    gt = compute_ground_truth(MitsubaScene(rig, mi=mi, scene=scene)).sel(view="left")
     images = {
         view: render_view(
             mi, scene, rig, view, spp=SPP, seed=derive_seed("photometric", convention, view)

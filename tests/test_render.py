@@ -5,12 +5,13 @@ import pytest
 from scipy.stats import spearmanr
 
 from stereovar.experiment import VIEWS, render_stores, seed_batches
-from stereovar.jobs import render_job
+from stereovar.io.store import open_dataset
+from stereovar.jobs.render import render_job
+from stereovar.renderers.mitsuba.render import render_view
 from stereovar.renderers.mitsuba.scene import load_scene
-from stereovar.render import derive_seed, render_view
 from stereovar.rig import make_rig
 from stereovar.scenes.spec import load_scene_spec
-from stereovar.io.store import open_dataset
+from stereovar.seeding import derive_seed, render_seed
 
 from .test_ground_truth import REPO
 
@@ -41,40 +42,79 @@ def test_seed_batches_are_aligned_and_cover_every_seed():
 def test_render_store_list_matches_config():
     config = {
         "scenes": ["a", "b"],
-        "render": {"spp": 4, "n_seeds": 2, "spp_sweep": {"scene": "a", "spp": [2, 4]}},
+        "render": {
+            "renderer": "mitsuba",
+            "spp": 4,
+            "n_seeds": 3,
+            "seeds_per_job": 2,
+            "spp_sweep": {"scene": "a", "spp": [2, 4]},
+        },
     }
     stores = render_stores(config)
-    assert len(stores) == 3 * 2 * 2
-    assert "results/renders/a/right/spp2/seed1.zarr" in stores
+    assert len(stores) == 3 * 2 * 2  # (scene, spp) pairs x views x seed batches
+    assert "results/mitsuba/renders/a/right/spp2/seeds0-1.zarr" in stores
+    assert "results/mitsuba/renders/a/right/spp2/seeds2-2.zarr" in stores
     assert not any("/b/" in s and "spp2" in s for s in stores)
+
+
+def test_batch_labels_round_trip():
+    from stereovar.experiment import batch_label, batch_seeds
+
+    for batch in seed_batches(11, 4):
+        assert batch_seeds(batch_label(batch)) == batch
+    with pytest.raises(ValueError):
+        batch_label([0, 2])
+    with pytest.raises(ValueError):
+        batch_seeds("3-1")
+
+
+def test_independent_policy_is_the_labelled_seed():
+    for view in VIEWS:
+        assert render_seed("s", view, 8, 3) == derive_seed("s", view, 8, 3)
+    from stereovar.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="render.seed_policy.*use one of: independent"):
+        render_seed("s", "left", 8, 3, policy="shared")
 
 
 def test_render_job_is_bit_identical_and_records_provenance(mi, tmp_path):
     spec = REPO / "scenes/scene_001.yaml"
     runs = []
     for k in range(2):
-        outs = [tmp_path / f"run{k}_{v}_{n}.zarr" for v in VIEWS for n in (0, 1)]
+        outs = {v: tmp_path / f"run{k}_{v}.zarr" for v in VIEWS}
         render_job(spec, outs, seeds=[0, 1], spp=2, **RIG)
-        runs.append([open_dataset(p)["radiance"] for p in outs])
+        runs.append([open_dataset(outs[v]) for v in VIEWS])
     for a, b in zip(*runs, strict=True):
-        np.testing.assert_array_equal(a.values, b.values)
-    attrs = [r.attrs for r in runs[0]]
-    assert [a["view"] for a in attrs] == ["left", "left", "right", "right"]
-    assert [a["seed"] for a in attrs] == [
-        derive_seed("scene_001", v, 2, n) for v in VIEWS for n in (0, 1)
-    ]
-    assert attrs[0]["rfilter"] == "box" and attrs[0]["sampler"] == "independent"
-    assert attrs[0]["renderer"] == "mitsuba" and len(attrs[0]["scene_digest"]) == 64
-    assert runs[0][0].dims == ("y", "x", "channel")
-    assert not np.array_equal(runs[0][0].values, runs[0][2].values)
+        np.testing.assert_array_equal(a["radiance"].values, b["radiance"].values)
+    left, right = runs[0]
+    assert [str(ds["view"].values) for ds in runs[0]] == list(VIEWS)
+    for view, ds in zip(VIEWS, runs[0], strict=True):
+        assert ds["seed"].values.tolist() == [0, 1]
+        assert ds["sampler_seed"].values.tolist() == [
+            derive_seed("scene_001", view, 2, n) for n in (0, 1)
+        ]
+        assert ds["n_nonfinite_pixels"].values.tolist() == [0, 0]
+    attrs = left.attrs
+    assert attrs["rfilter"] == "box" and attrs["sampler"] == "independent"
+    assert attrs["renderer"] == "mitsuba" and len(attrs["scene_digest"]) == 64
+    assert attrs["seed_policy"] == "independent" and len(attrs["config_digest"]) == 64
+    assert left["radiance"].dims == ("seed", "y", "x", "channel")
+    assert left["radiance"].attrs["units"] == "W m-2 sr-1"
+    assert left["x"].attrs["units"] == "px" and left["y"].values.tolist() == list(range(27))
+    assert not np.array_equal(left["radiance"].values[0], right["radiance"].values[0])
+    assert not np.array_equal(left["radiance"].values[0], left["radiance"].values[1])
 
 
 def test_render_job_rejects_mismatched_outputs(tmp_path):
     from stereovar.errors import StereovarError
 
-    with pytest.raises(StereovarError, match="outputs"):
+    with pytest.raises(StereovarError, match="output per view"):
         render_job(
-            REPO / "scenes/scene_001.yaml", [tmp_path / "a.zarr"], seeds=[0, 1], spp=1, **RIG
+            REPO / "scenes/scene_001.yaml",
+            {"left": tmp_path / "a.zarr"},
+            seeds=[0, 1],
+            spp=1,
+            **RIG,
         )
 
 

@@ -5,8 +5,10 @@ import pytest
 
 from stereovar.geometry import camera_frame, focal_length_px, transform_matrix
 from stereovar.ground_truth import compute_ground_truth
+from stereovar.renderers.mitsuba import MitsubaScene
 from stereovar.renderers.mitsuba.scene import camera_from_spec, load_scene
-from stereovar.rig import make_rig, sensor_dict
+from stereovar.renderers.mitsuba.sensor import sensor_dict
+from stereovar.rig import make_rig
 
 
 def plane_spec(depth=3.0, fov=60.0):
@@ -94,7 +96,7 @@ def test_disparity_is_f_b_over_z_on_fronto_parallel_plane(mi, convention):
         baseline_m=baseline,
         convention=convention,
     )
-    ds = compute_ground_truth(mi, scene, rig)
+    ds = compute_ground_truth(MitsubaScene(rig, mi=mi, scene=scene))
     expected = focal_length_px(60.0, width) * baseline / depth
     for view in ("left", "right"):
         g = ds.sel(view=view)

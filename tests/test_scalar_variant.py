@@ -10,7 +10,8 @@ import json, sys
 import numpy as np
 from stereovar.renderers.mitsuba.backend import load_mitsuba
 from stereovar.renderers.mitsuba.scene import load_scene
-from stereovar.render import integrator_dict, render_view
+from stereovar.renderers.mitsuba.render import render_view
+from stereovar.renderers.mitsuba.sensor import integrator_dict
 from stereovar.rig import make_rig
 from stereovar.scenes.spec import load_scene_spec
 

@@ -5,13 +5,13 @@ import pytest
 import xarray as xr
 
 from stereovar.errors import StoreError
-from stereovar.io.store import write_dataset
 from stereovar.estimators.seeds import (
     StreamingVariance,
     variance_dataset,
     variance_field,
     variance_from_stores,
 )
+from stereovar.io.store import write_dataset
 
 
 def brute_force(stack):

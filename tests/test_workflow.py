@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 from stereovar.io.store import open_dataset
+from stereovar.io.tables import read_rows
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = ["scene_000", "scene_001"]
@@ -28,7 +29,9 @@ TINY = {
     "preview": {"spp": 4},
 }
 #: Jobs that depend on one non-sweep scene at the main SPP.
-SCENE_CHAIN = {"render_seeds_0_1": 1, "variance": 1, "warp": 1, "correlation": 1}
+SCENE_CHAIN = {"render": 1, "variance": 1, "warp": 1, "correlation": 1}
+RUN = "results/mitsuba/seeds"
+FIXTURE = REPO / "tests" / "fixtures" / "before_tiny"
 
 pytestmark = pytest.mark.workflow
 
@@ -96,38 +99,46 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         assert ds.attrs["convention"] == "paper" and ds.attrs["disparity_sign"] == 1
         assert ds.attrs["scene"] == scene and len(ds.attrs["scene_digest"]) == 64
         assert np.isfinite(ds.disparity.values).all()
-        png = workdir / f"results/figures/previews/{scene}.png"
+        png = workdir / f"results/mitsuba/previews/{scene}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert (workdir / f"logs/ground_truth/{scene}.log").is_file()
     for scene, spp in (("scene_000", 1), ("scene_000", 2), ("scene_001", 2)):
-        rows = (workdir / f"results/correlation/{scene}/spp{spp}.csv").read_text().splitlines()
+        rows = (workdir / f"{RUN}/correlation/{scene}/spp{spp}.csv").read_text().splitlines()
         assert rows[0].startswith("scene,spp,n_seeds,region,method,rho,n_pixels,ci_low")
+        assert rows[0].endswith(",renderer,estimator") and rows[1].endswith(",mitsuba,seeds")
         assert len(rows) == 7
         renders = [
-            open_dataset(workdir / f"results/renders/{scene}/{v}/spp{spp}/seed{n}.zarr")
+            open_dataset(workdir / f"results/mitsuba/renders/{scene}/{v}/spp{spp}/seeds0-1.zarr")
             for v in ("left", "right")
-            for n in range(2)
         ]
-        assert len({r["radiance"].attrs["seed"] for r in renders}) == 4
-        var = open_dataset(workdir / f"results/variance/{scene}/spp{spp}.zarr")
+        assert len({s for r in renders for s in r["sampler_seed"].values.tolist()}) == 4
+        assert all(r["seed"].values.tolist() == [0, 1] for r in renders)
+        var = open_dataset(workdir / f"{RUN}/variance/{scene}/spp{spp}.zarr")
         assert dict(var["variance"].sizes) == {"view": 2, "y": 27, "x": 48}
         assert var.attrs["n_seeds"] == 2
+        assert var.attrs["estimator"] == "seeds" and var.attrs["renderer"] == "mitsuba"
+        assert var["variance"].attrs["units"] == "W2 m-4 sr-2"
+        warped = open_dataset(workdir / f"{RUN}/warped/{scene}/spp{spp}.zarr")
+        assert warped["warped_variance"].attrs["units"] == "W2 m-4 sr-2"
+        assert warped["x"].attrs["units"] == "px"
     for scene in SCENES:
-        rows = (workdir / f"results/intervention/{scene}.csv").read_text().splitlines()
+        rows = (workdir / f"{RUN}/intervention/{scene}.csv").read_text().splitlines()
         assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,cost,metric")
         assert len(rows) == 1 + 5 * 2 * 2
-        margins = (workdir / f"results/intervention/margins/{scene}.csv").read_text()
+        margins = (workdir / f"{RUN}/intervention/margins/{scene}.csv").read_text()
         assert margins.startswith("scene,cost,region,condition,seed,y,x,margin")
     for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention"):
         for ext in ("csv", "md", "tex"):
-            assert (workdir / f"results/tables/{name}.{ext}").stat().st_size > 0
+            assert (workdir / f"{RUN}/tables/{name}.{ext}").stat().st_size > 0
+        md = (workdir / f"{RUN}/tables/{name}.md").read_text()
+        assert "renderer mitsuba, estimator seeds" in md.splitlines()[0]
     for fig in (
         "fig1_teaser",
         "fig2_rho_vs_spp",
         "fig3_material_scatter",
         "fig4_intervention_margins",
     ):
-        assert (workdir / f"results/figures/{fig}.png").read_bytes()[:4] == b"\x89PNG"
+        assert (workdir / f"{RUN}/figures/{fig}.png").read_bytes()[:4] == b"\x89PNG"
     csv = (workdir / "results/tables/scenes.csv").read_text().splitlines()
     assert csv[0].startswith("scene,") and len(csv) == 1 + len(SCENES)
     assert (workdir / "results/tables/scenes.tex").read_text().count(r"\\") >= 1 + len(SCENES)
@@ -182,7 +193,7 @@ def test_single_target_builds_only_what_it_needs(workdir):
         workdir, "results/ground_truth/scene_000.zarr", "--forcerun", "ground_truth"
     )
     assert jobs == {"ground_truth": 1}
-    target = "results/correlation/scene_001/spp2.csv"
+    target = f"{RUN}/correlation/scene_001/spp2.csv"
     assert planned_jobs(workdir, target, "--forceall") == {"ground_truth": 1, **SCENE_CHAIN}
     assert "scene_000" not in snakemake(workdir, "-n", target, "--forceall").stdout
 
@@ -199,10 +210,11 @@ def test_analysis_parameter_change_renders_nothing(workdir):
 
 
 def test_adding_seeds_renders_only_the_new_seeds(workdir):
-    jobs = planned_jobs(workdir, "all", config={"render": {"n_seeds": 4}})
-    renders = {k: v for k, v in jobs.items() if k.startswith("render_")}
-    assert renders == {"render_seeds_2_3": 3}
-    assert jobs["variance"] == 3 and "ground_truth" not in jobs
+    config = {"render": {"n_seeds": 4}}
+    jobs = planned_jobs(workdir, "all", config=config)
+    assert jobs["render"] == 3 and jobs["variance"] == 3 and "ground_truth" not in jobs
+    out = snakemake(workdir, "-n", "all", config=config).stdout
+    assert "batch=2-3" in out and "batch=0-1" not in out
 
 
 def test_bad_config_stops_before_any_job_with_one_line(workdir):
@@ -251,13 +263,79 @@ def test_cluster_profiles_size_jobs_and_request_gpus_for_renders_only(workdir):
     for profile, gpus in (("profiles/slurm", None), ("profiles/slurm-gpu", "1")):
         proc = snakemake(workdir, "--profile", profile, "--executor", "dryrun", "all", "--forceall")
         jobs = job_resources(proc.stdout + proc.stderr)
-        renders = [r for name, rs in jobs.items() if name.startswith("render_seeds") for r in rs]
+        renders = jobs["render"]
         assert len(renders) == 3
         assert all(r.get("gpu") == gpus for r in renders)
         assert all(r.get("gpu") == gpus for r in jobs["preview"])
         for name in ("ground_truth", "variance", "warp", "correlation", "intervention"):
             assert all("gpu" not in r for r in jobs[name]), name
-        # Sized from the job: 48x27 renders ask for the base memory plus 64 B per pixel.
-        assert {r["mem_mb"] for r in renders} == {str(1536 + math.ceil(64 * 48 * 27 / 2**20))}
+        # Sized from the job: 48x27 renders ask for the base memory plus 64 B per pixel and
+        # 24 B per pixel for each further seed of the batch held until its store is written.
+        per_pixel = 64 + 24 * (TINY["render"]["seeds_per_job"] - 1)
+        assert {r["mem_mb"] for r in renders} == {
+            str(1536 + math.ceil(per_pixel * 48 * 27 / 2**20))
+        }
         threads = "4" if gpus else "2"
         assert {r["cpus_per_task"] for r in renders} == {threads}
+
+
+# Where each table of the "before" fixture (tests/fixtures/before_tiny, written by the flat
+# layout on this same tiny config) lives now.
+FIXTURE_PATHS = {
+    "tables/scenes.csv": "results/tables/scenes.csv",
+    **{
+        f"tables/{n}.csv": f"{RUN}/tables/{n}.csv"
+        for n in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention")
+    },  # fmt: skip
+    **{
+        f"correlation/{s}/spp{p}.csv": f"{RUN}/correlation/{s}/spp{p}.csv"
+        for s, p in (("scene_000", 1), ("scene_000", 2), ("scene_001", 2))
+    },  # fmt: skip
+    **{f"intervention/{s}.csv": f"{RUN}/intervention/{s}.csv" for s in SCENES},
+    **{f"intervention/margins/{s}.csv": f"{RUN}/intervention/margins/{s}.csv" for s in SCENES},
+}
+
+
+@pytest.mark.parametrize("before", sorted(FIXTURE_PATHS))
+def test_tables_equal_the_flat_layouts(workdir, before):
+    """Every table the workflow wrote before the library was split into subpackages comes
+    out the same: the same rows and columns, every number bit for bit; the only additions
+    are the renderer and estimator columns."""
+    old = read_rows(FIXTURE / before)
+    new = read_rows(workdir / FIXTURE_PATHS[before])
+    assert len(new) == len(old) and old
+    added = set(new[0]) - set(old[0])
+    assert added <= {"renderer", "estimator"}
+    for row_old, row_new in zip(old, new, strict=True):
+        for key, value in row_old.items():
+            got = row_new[key]
+            if isinstance(value, float) and math.isnan(value):
+                assert isinstance(got, float) and math.isnan(got), (key, got)
+            else:
+                assert got == value, (before, key, got, value)
+        assert all(row_new[k] == {"renderer": "mitsuba", "estimator": "seeds"}[k] for k in added)
+
+
+def test_markdown_and_latex_tables_equal_the_flat_layouts(workdir):
+    """The Markdown and LaTeX tables hold the same cells; only the caption names the run."""
+    for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention", "scenes"):
+        where = "results/tables" if name == "scenes" else f"{RUN}/tables"
+        old_md = (FIXTURE / f"tables/{name}.md").read_text().splitlines()
+        new_md = (workdir / f"{where}/{name}.md").read_text().splitlines()
+        assert [ln for ln in new_md if ln.startswith("|")] == old_md
+        old_tex = (FIXTURE / f"tables/{name}.tex").read_text().splitlines()
+        new_tex = (workdir / f"{where}/{name}.tex").read_text().splitlines()
+        body = [ln for ln in new_tex if not ln.startswith(r"\caption")]
+        assert body == [ln for ln in old_tex if not ln.startswith(r"\caption")]
+
+
+def test_one_views_renders_stack_with_open_mfdataset(workdir):
+    import xarray as xr
+
+    paths = sorted((workdir / "results/mitsuba/renders/scene_000/left/spp2").glob("seeds*.zarr"))
+    stacked = xr.open_mfdataset(
+        [str(p) for p in paths], combine="nested", concat_dim="seed", engine="zarr"
+    )
+    assert stacked["radiance"].dims == ("seed", "y", "x", "channel")
+    assert stacked["seed"].values.tolist() == [0, 1]
+    assert stacked["radiance"].attrs["units"] == "W m-2 sr-1"

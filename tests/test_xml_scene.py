@@ -9,9 +9,10 @@ import pytest
 from stereovar.errors import SceneError
 from stereovar.geometry import focal_length_px
 from stereovar.ground_truth import MATERIAL_CLASSES
-from stereovar.jobs import ground_truth_job, prepare_scene
-from stereovar.scenes.spec import load_scene_spec
 from stereovar.io.store import open_dataset
+from stereovar.jobs.common import prepare_scene
+from stereovar.jobs.ground_truth import ground_truth_job
+from stereovar.scenes.spec import load_scene_spec
 
 XML = """<scene version="3.0.0">
     <sensor type="perspective">
@@ -65,14 +66,14 @@ def test_rig_is_added_to_first_sensor_and_ground_truth_is_exact(mi, xml_scene, t
     np.testing.assert_allclose(g.disparity.values[wall & g.valid.values], expected, rtol=1e-4)
     # The dielectric sphere sits on the optical axis.
     assert MATERIAL_CLASSES[int(g.material.values[height // 2, width // 2])] == "glass"
-    _, _, _, rig, _ = prepare_scene(
+    rig = prepare_scene(
         xml_scene / "mine.yaml",
         variant="auto",
         width=width,
         height=height,
         baseline_m=baseline,
         convention="paper",
-    )
+    ).rig
     np.testing.assert_allclose(rig.origin("left"), [0.3, 1.0, -1.0], atol=1e-6)
     assert rig.fov_deg == pytest.approx(50.0)
 
@@ -103,7 +104,8 @@ def test_unparsable_xml_is_one_line_error_naming_the_file(mi, xml_scene):
 def test_job_reports_bad_scene_as_one_line_without_traceback(xml_scene, tmp_path):
     (xml_scene / "room.xml").write_text("not xml at all")
     code = (
-        "from stereovar.jobs import run_job, ground_truth_job\n"
+        "from stereovar.jobs.common import run_job\n"
+        "from stereovar.jobs.ground_truth import ground_truth_job\n"
         f"run_job(None, ground_truth_job, spec={str(xml_scene / 'mine.yaml')!r}, "
         f"out={str(tmp_path / 'o.zarr')!r}, width=8, height=8, baseline_m=0.02, "
         "convention='paper')\n"

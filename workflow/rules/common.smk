@@ -70,12 +70,9 @@ def get_estimator():
     return config["render"]["estimator"]
 
 
-# Result paths: renders under results/{renderer}/, everything computed from them under
-# results/{renderer}/{estimator}/ (stereovar.experiment).
-RENDERS = "results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"
-RUN = "results/{renderer}/{estimator}"
-INTERVENTION_RUN = f"results/{{renderer}}/{INTERVENTION_ESTIMATOR}"
-PREVIEW = "results/{renderer}/previews/{scene}.png"
+# Result paths (stereovar.experiment): renders under results/{renderer}/renders/, everything
+# computed from them under results/{renderer}/{estimator}/; the intervention always uses the
+# seeds estimator, so its results sit under results/{renderer}/seeds/.
 
 
 def view_renders(renderer, scene, spp):

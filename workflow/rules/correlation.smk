@@ -4,10 +4,10 @@
 
 rule warp:
     input:
-        variance=RUN + "/variance/{scene}/spp{spp}.zarr",
+        variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        directory(RUN + "/warped/{scene}/spp{spp}.zarr"),
+        directory("results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr"),
     log:
         "logs/{renderer}/{estimator}/warped/{scene}/spp{spp}.log",
     benchmark:
@@ -25,11 +25,11 @@ rule warp:
 
 rule correlation:
     input:
-        variance=RUN + "/variance/{scene}/spp{spp}.zarr",
-        warped=RUN + "/warped/{scene}/spp{spp}.zarr",
+        variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
+        warped="results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr",
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        RUN + "/correlation/{scene}/spp{spp}.csv",
+        "results/{renderer}/{estimator}/correlation/{scene}/spp{spp}.csv",
     params:
         min_pixels=config["analysis"]["min_pixels"],
     log:

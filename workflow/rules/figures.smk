@@ -7,7 +7,7 @@ rule teaser_figure:
         warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
     output:
         report(
-            RUN + "/figures/fig1_teaser.png",
+            "results/{renderer}/{estimator}/figures/fig1_teaser.png",
             caption="../report/fig1_teaser.rst",
             category="Figures",
             labels={
@@ -32,7 +32,7 @@ rule rho_vs_spp_figure:
         sweep_inputs("{run}/correlation/{scene}/spp{spp}.csv"),
     output:
         report(
-            RUN + "/figures/fig2_rho_vs_spp.png",
+            "results/{renderer}/{estimator}/figures/fig2_rho_vs_spp.png",
             caption="../report/fig2_rho_vs_spp.rst",
             category="Figures",
             labels={
@@ -59,7 +59,7 @@ rule material_scatter_figure:
         ground_truth=f"results/ground_truth/{SWEEP_SCENE}.zarr",
     output:
         report(
-            RUN + "/figures/fig3_material_scatter.png",
+            "results/{renderer}/{estimator}/figures/fig3_material_scatter.png",
             caption="../report/fig3_material_scatter.rst",
             category="Figures",
             labels={

@@ -6,14 +6,14 @@ rule intervention:
     input:
         unpack(intervention_inputs),
     output:
-        metrics=INTERVENTION_RUN + "/intervention/{scene}.csv",
-        margins=INTERVENTION_RUN + "/intervention/margins/{scene}.csv",
+        metrics="results/{renderer}/seeds/intervention/{scene}.csv",
+        margins="results/{renderer}/seeds/intervention/margins/{scene}.csv",
     params:
         **config["intervention"],
     log:
-        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/intervention/{{scene}}.log",
+        "logs/{renderer}/seeds/intervention/{scene}.log",
     benchmark:
-        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/intervention/{{scene}}.tsv"
+        "benchmarks/{renderer}/seeds/intervention/{scene}.tsv"
     threads: 2
     resources:
         **intervention_resources(),
@@ -28,7 +28,7 @@ rule intervention_table:
         scene_files("{run}/intervention/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
     output:
         csv=report(
-            INTERVENTION_RUN + "/tables/intervention.csv",
+            "results/{renderer}/seeds/tables/intervention.csv",
             caption="../report/intervention.rst",
             category="Tables",
             labels={
@@ -37,12 +37,12 @@ rule intervention_table:
                 "estimator": INTERVENTION_ESTIMATOR,
             },
         ),
-        md=INTERVENTION_RUN + "/tables/intervention.md",
-        tex=INTERVENTION_RUN + "/tables/intervention.tex",
+        md="results/{renderer}/seeds/tables/intervention.md",
+        tex="results/{renderer}/seeds/tables/intervention.tex",
     log:
-        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/tables/intervention.log",
+        "logs/{renderer}/seeds/tables/intervention.log",
     benchmark:
-        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/tables/intervention.tsv"
+        "benchmarks/{renderer}/seeds/tables/intervention.tsv"
     localrule: True
     conda:
         ENV
@@ -55,7 +55,7 @@ rule margin_figure:
         scene_files("{run}/intervention/margins/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
     output:
         report(
-            INTERVENTION_RUN + "/figures/fig4_intervention_margins.png",
+            "results/{renderer}/seeds/figures/fig4_intervention_margins.png",
             caption="../report/fig4_intervention_margins.rst",
             category="Figures",
             labels={
@@ -65,9 +65,9 @@ rule margin_figure:
             },
         ),
     log:
-        f"logs/{{renderer}}/{INTERVENTION_ESTIMATOR}/figures/fig4_intervention_margins.log",
+        "logs/{renderer}/seeds/figures/fig4_intervention_margins.log",
     benchmark:
-        f"benchmarks/{{renderer}}/{INTERVENTION_ESTIMATOR}/figures/fig4_intervention_margins.tsv"
+        "benchmarks/{renderer}/seeds/figures/fig4_intervention_margins.tsv"
     localrule: True
     conda:
         ENV

@@ -7,7 +7,7 @@ rule preview:
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
         report(
-            PREVIEW,
+            "results/{renderer}/previews/{scene}.png",
             caption="../report/preview.rst",
             category="Scenes",
             subcategory="Previews",

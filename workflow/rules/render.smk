@@ -7,8 +7,8 @@ rule render:
     input:
         unpack(scene_inputs),
     output:
-        left=directory(RENDERS.replace("{view}", "left")),
-        right=directory(RENDERS.replace("{view}", "right")),
+        left=directory("results/{renderer}/renders/{scene}/left/spp{spp}/seeds{batch}.zarr"),
+        right=directory("results/{renderer}/renders/{scene}/right/spp{spp}/seeds{batch}.zarr"),
     params:
         seeds=lambda wc: batch_seeds(wc.batch),
         spp=lambda wc: int(wc.spp),

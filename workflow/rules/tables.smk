@@ -7,7 +7,7 @@ rule cross_scene_table:
         scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
     output:
         csv=report(
-            RUN + "/tables/cross_scene.csv",
+            "results/{renderer}/{estimator}/tables/cross_scene.csv",
             caption="../report/cross_scene.rst",
             category="Tables",
             labels={
@@ -16,8 +16,8 @@ rule cross_scene_table:
                 "estimator": "{estimator}",
             },
         ),
-        md=RUN + "/tables/cross_scene.md",
-        tex=RUN + "/tables/cross_scene.tex",
+        md="results/{renderer}/{estimator}/tables/cross_scene.md",
+        tex="results/{renderer}/{estimator}/tables/cross_scene.tex",
     params:
         spp=MAIN_SPP,
     log:
@@ -38,7 +38,7 @@ rule spp_sweep_table:
         warped=sweep_inputs("{run}/warped/{scene}/spp{spp}.zarr"),
     output:
         csv=report(
-            RUN + "/tables/spp_sweep.csv",
+            "results/{renderer}/{estimator}/tables/spp_sweep.csv",
             caption="../report/spp_sweep.rst",
             category="Tables",
             labels={
@@ -47,10 +47,10 @@ rule spp_sweep_table:
                 "estimator": "{estimator}",
             },
         ),
-        md=RUN + "/tables/spp_sweep.md",
-        tex=RUN + "/tables/spp_sweep.tex",
+        md="results/{renderer}/{estimator}/tables/spp_sweep.md",
+        tex="results/{renderer}/{estimator}/tables/spp_sweep.tex",
         fit_csv=report(
-            RUN + "/tables/spp_sweep_fit.csv",
+            "results/{renderer}/{estimator}/tables/spp_sweep_fit.csv",
             caption="../report/spp_sweep_fit.rst",
             category="Tables",
             labels={
@@ -59,8 +59,8 @@ rule spp_sweep_table:
                 "estimator": "{estimator}",
             },
         ),
-        fit_md=RUN + "/tables/spp_sweep_fit.md",
-        fit_tex=RUN + "/tables/spp_sweep_fit.tex",
+        fit_md="results/{renderer}/{estimator}/tables/spp_sweep_fit.md",
+        fit_tex="results/{renderer}/{estimator}/tables/spp_sweep_fit.tex",
     log:
         "logs/{renderer}/{estimator}/tables/spp_sweep.log",
     benchmark:

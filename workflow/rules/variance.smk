@@ -5,7 +5,7 @@ rule variance:
     input:
         unpack(estimator_inputs),
     output:
-        directory(RUN + "/variance/{scene}/spp{spp}.zarr"),
+        directory("results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr"),
     params:
         estimator=lambda wc: wc.estimator,
     log:

@@ -2,7 +2,7 @@
 
 An estimator turns the render stores of one scene at one SPP (both views) into the dataset
 stored at ``results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr``
-(:func:`stereovar.io.contracts.check_variance_dataset`): ``mean`` (view, y, x, channel),
+(:func:`stereovar.io.contracts.variance_store`): ``mean`` (view, y, x, channel),
 ``variance`` (view, y, x), ``finite`` and ``n_nonfinite`` (view, y, x), with the attrs
 ``n_seeds`` and ``estimator``. Everything downstream (Eq. 2, Eq. 3, the tables, the figures)
 reads only that contract.

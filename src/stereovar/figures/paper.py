@@ -127,7 +127,8 @@ def teaser_figure(sigma_left, sigma_right, warped, omega, *, title: str = "", bi
     sigma_left, sigma_right : numpy.ndarray or xarray.DataArray, shape (H, W)
         Per-pixel variance fields of the left and right view (DataArrays on ``y``, ``x``).
     warped : numpy.ndarray or xarray.DataArray, shape (H, W)
-        The right field warped into left coordinates (:func:`stereovar.warp.warp_right_to_left`).
+        The right field warped into left coordinates
+        (:func:`stereovar.statistics.warp.warp_right_to_left`).
     omega : array_like of bool, shape (H, W)
         The valid set :math:`\\Omega` of the warp.
     title : str, keyword-only

@@ -5,7 +5,7 @@ permutation :math:`\\Pi`), three costs are scored against the ground-truth dispa
 per-seed residual SAD :math:`C_\\epsilon` on the grey (RGB-mean) residuals, the variance cost
 :math:`C_\\sigma` on the Eq. 1 variance fields and the pixel-level variance similarity. The
 seeds are streamed twice (mean, then residuals) and every cost volume is scanned disparity by
-disparity (:func:`stereovar.costvolume.scan_cost_volume`), so memory is a few images whatever
+disparity (:func:`stereovar.intervention.scan.scan_cost_volume`), so memory is a few images whatever
 :math:`N` and :math:`D`.
 """
 

@@ -96,7 +96,7 @@ def warped_store(aligned: dict, masks: dict, *, attrs: dict) -> xr.Dataset:
     Parameters
     ----------
     aligned : dict
-        :func:`stereovar.statistics.correlation.align_variance` output.
+        :func:`stereovar.statistics.warp.align_variance` output.
     masks : dict
         :func:`stereovar.statistics.regions.region_masks` of ``aligned["omega"]``.
     attrs : dict
@@ -137,7 +137,7 @@ def warped_store(aligned: dict, masks: dict, *, attrs: dict) -> xr.Dataset:
 
 
 def read_alignment(warped: xr.Dataset) -> dict:
-    """The :func:`~stereovar.statistics.correlation.align_variance` dict from a warped store."""
+    """The :func:`~stereovar.statistics.warp.align_variance` dict from a warped store."""
     return {
         "warped": warped["warped_variance"].values,
         **{k: warped[k].values for k in ("omega", "omega_geometry", "usable")},

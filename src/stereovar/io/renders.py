@@ -158,7 +158,10 @@ class RenderStore:
             # a missing chunk file reads back as the fill value, so count the stored chunks
             stored, total = array.nchunks_initialized, array.nchunks
             self.coords = {k: group[k][:] for k in IMAGE_DIMS if k in group}
-            self.attrs = dict(group.attrs)
+            # provenance on the dataset; a store written from a bare DataArray has it on the
+            # variable instead
+            own = {k: v for k, v in array.attrs.items() if not k.startswith("_")}
+            self.attrs = {**own, **dict(group.attrs)}
         except read_errors() as exc:
             raise store_error(path, f"{type(exc).__name__}: {exc}") from exc
         if stored < total:

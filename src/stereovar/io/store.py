@@ -91,8 +91,9 @@ def write_dataset(ds: xr.Dataset | xr.DataArray, path, *, chunk_dims: dict | Non
 
 
 def open_dataset(path) -> xr.Dataset:
-    """Open a stored Zarr dataset lazily (``xarray.open_zarr``)."""
-    return xr.open_zarr(path, consolidated=True, zarr_format=ZARR_FORMAT)
+    """Open a stored Zarr dataset lazily (``xarray.open_zarr``, numpy-backed: no dask graph;
+    use ``xr.open_mfdataset`` or ``.chunk()`` for dask)."""
+    return xr.open_zarr(path, consolidated=True, zarr_format=ZARR_FORMAT, chunks=None)
 
 
 def write_file(path, writer: Callable[[Path], None]) -> Path:

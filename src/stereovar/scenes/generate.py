@@ -1474,7 +1474,7 @@ def write_scenes(out_dir, count: int, seed: int) -> list[Path]:
     -------
     list of pathlib.Path
         The written files, in index order. Files are written atomically and
-        deterministically (:func:`stereovar.scenespec.write_scene_spec`), so the same
+        deterministically (:func:`stereovar.scenes.spec.write_scene_spec`), so the same
         ``(count, seed)`` always gives the same bytes.
     """
     from .spec import write_scene_spec

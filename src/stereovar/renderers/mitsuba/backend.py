@@ -313,7 +313,7 @@ def _warn_scalar_fallback() -> None:
     _state["warned"] = True
     message = f"using the slow scalar_rgb Mitsuba variant because {_why_unavailable('llvm_ad_rgb')}"
     # An explicit location with no source line keeps the printed warning on one line.
-    warnings.warn_explicit(message, BackendWarning, filename="stereovar.backend", lineno=0)
+    warnings.warn_explicit(message, BackendWarning, filename=__name__, lineno=0)
 
 
 def select_variant(requested: str = "auto") -> str:

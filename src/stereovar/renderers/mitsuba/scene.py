@@ -1,6 +1,6 @@
 """Compile renderer-neutral scene specs into Mitsuba 3 scenes.
 
-A spec (see ``schemas/scene.schema.yaml`` and :mod:`stereovar.scenespec`) is either procedural
+A spec (see ``schemas/scene.schema.yaml`` and :mod:`stereovar.scenes.spec`) is either procedural
 (camera, textures, materials, objects, lights) or points at a user's Mitsuba XML file. Both
 compile to a :class:`mitsuba.Scene` without sensors; the stereo rig's sensors are built
 separately by :mod:`stereovar.rig` and passed to ``mi.render`` explicitly, so the same scene
@@ -252,9 +252,10 @@ def load_scene(mi, spec: dict):
     Parameters
     ----------
     mi : module
-        The ``mitsuba`` module with a variant set (see :func:`stereovar.backend.load_mitsuba`).
+        The ``mitsuba`` module with a variant set (see
+        :func:`stereovar.renderers.mitsuba.backend.load_mitsuba`).
     spec : dict
-        A validated scene spec (:func:`stereovar.scenespec.load_scene_spec`).
+        A validated scene spec (:func:`stereovar.scenes.spec.load_scene_spec`).
 
     Returns
     -------
