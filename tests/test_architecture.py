@@ -68,15 +68,7 @@ class PlaneScene(PreparedScene):
 class PlaneRenderer(Renderer):
     name = "stub_plane"
 
-    def prepare(self, spec, *, width, height, baseline_m, convention, variant="auto", threads=None):
-        rig = make_rig(
-            np.eye(4),
-            FOV,
-            width=width,
-            height=height,
-            baseline_m=baseline_m,
-            convention=convention,
-        )
+    def prepare(self, spec, *, rig, variant="auto", threads=None):
         provenance = {
             "scene": spec["name"],
             "scene_digest": "0" * 64,
@@ -84,7 +76,7 @@ class PlaneRenderer(Renderer):
             "renderer_version": "1",
             "variant": "numpy",
         }
-        return PlaneScene(rig, spec=spec, provenance=provenance)
+        return PlaneScene(make_rig(np.eye(4), FOV, **rig), spec=spec, provenance=provenance)
 
 
 class TrueVariance(VarianceEstimator):
@@ -96,9 +88,7 @@ class TrueVariance(VarianceEstimator):
     def estimate(self, left, right):
         store = RenderStore(left[0])
         spp = int(store.attrs["spp"])
-        prepared = PlaneRenderer().prepare(
-            {"name": "x"}, width=W, height=H, baseline_m=BASELINE, convention="paper"
-        )
+        prepared = PlaneRenderer().prepare({"name": "x"}, rig=RIG)
         fields = {v: amplitude(prepared.hits(v)) ** 2 / spp for v in VIEWS}
         variance = np.stack([fields[v] for v in VIEWS])
         return xr.Dataset(

@@ -43,17 +43,21 @@ def run_job(log_path, job, **kwargs) -> None:
 
 
 def prepare_scene(
-    spec_path,
-    *,
-    renderer: str = "mitsuba",
-    variant: str = "auto",
-    width: int,
-    height: int,
-    baseline_m: float,
-    convention: str,
-    threads: int | None = None,
+    spec_path, *, renderer: str = "mitsuba", variant: str = "auto", threads=None, **rig
 ):
     """Load a spec and compile it with ``renderer`` for the rig.
+
+    Parameters
+    ----------
+    spec_path : path-like
+        The scene spec.
+    renderer, variant : str, keyword-only
+        ``render.renderer`` and ``render.variant``.
+    threads : int, keyword-only, optional
+        Render threads.
+    **rig
+        ``width``, ``height``, ``baseline_m``, ``convention``
+        (:func:`stereovar.rig.make_rig`).
 
     Returns
     -------
@@ -64,15 +68,27 @@ def prepare_scene(
     from ..scenes.spec import load_scene_spec
 
     spec = load_scene_spec(spec_path)
-    return get_renderer(renderer).prepare(
-        spec,
-        width=width,
-        height=height,
-        baseline_m=baseline_m,
-        convention=convention,
-        variant=variant,
-        threads=threads,
-    )
+    return get_renderer(renderer).prepare(spec, rig=rig, variant=variant, threads=threads)
+
+
+RIG_KEYS = ("width", "height", "baseline_m", "convention")
+"""Job options that build the stereo rig (:func:`stereovar.rig.make_rig`)."""
+
+
+def render_options(options: dict):
+    """Split a render job's options into the rig and the render settings.
+
+    Returns
+    -------
+    rig : dict
+        The :data:`RIG_KEYS` entries.
+    settings : stereovar.renderers.base.RenderSettings
+        From the rest (``integrator``, ``max_depth``, ``rfilter``, ``sampler``).
+    """
+    from ..renderers.base import RenderSettings
+
+    rig = {k: options[k] for k in RIG_KEYS if k in options}
+    return rig, RenderSettings(**{k: v for k, v in options.items() if k not in RIG_KEYS})
 
 
 def save_figure(fig, out, *, dpi: int = 120) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from .common import log, prepare_scene, save_figure
+from .common import RIG_KEYS, log, prepare_scene, render_options, save_figure
 
 
 def preview_job(
@@ -12,24 +12,25 @@ def preview_job(
     ground_truth,
     out,
     *,
+    spp,
     renderer="mitsuba",
     variant="auto",
-    spp,
-    integrator="path",
-    max_depth=8,
-    rfilter="box",
-    sampler="independent",
     seed_policy="independent",
     threads=None,
+    **settings,
 ) -> None:
-    """Render both views at ``spp`` and save the preview figure as PNG."""
+    """Render both views at ``spp`` and save the preview figure as PNG.
+
+    ``settings`` are the render settings (``integrator``, ``max_depth``, ``rfilter``,
+    ``sampler``; :class:`~stereovar.renderers.base.RenderSettings`); the rig comes from the
+    ground truth's attrs.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
 
     from ..figures.preview import preview_figure
     from ..io.store import open_dataset
-    from ..renderers.base import RenderSettings
     from ..rig import VIEWS
     from ..seeding import render_seed
 
@@ -38,13 +39,10 @@ def preview_job(
         spec,
         renderer=renderer,
         variant=variant,
-        width=int(gt.attrs["width"]),
-        height=int(gt.attrs["height"]),
-        baseline_m=float(gt.attrs["baseline_m"]),
-        convention=str(gt.attrs["convention"]),
         threads=threads,
+        **{k: gt.attrs[k] for k in RIG_KEYS},
     )
-    settings = RenderSettings(integrator, max_depth, rfilter, sampler)
+    _, settings = render_options(settings)
     name = prepared.spec["name"]
     images = {}
     for view in VIEWS:

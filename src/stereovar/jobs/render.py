@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 from ..errors import StereovarError
-from .common import log, prepare_scene
+from .common import log, prepare_scene, render_options
 
 
 def render_job(
@@ -16,55 +16,41 @@ def render_job(
     spp,
     renderer="mitsuba",
     variant="auto",
-    width,
-    height,
-    baseline_m,
-    convention,
-    integrator="path",
-    max_depth=8,
-    rfilter="box",
-    sampler="independent",
     seed_policy="independent",
     threads=None,
+    **options,
 ) -> None:
     """Render both views of a scene once per seed index; one render store per view.
 
     ``outputs`` maps ``left`` and ``right`` to the batch's render stores
     (:mod:`stereovar.io.renders`), each written atomically once its renders are done. The
     sampler seed of each render comes from (scene, view, spp, seed index) under
-    ``seed_policy`` (:func:`stereovar.seeding.render_seed`) and is stored with it. The scene
-    is compiled once per job, so the per-render cost is the render itself.
+    ``seed_policy`` (:func:`stereovar.seeding.render_seed`) and is stored with it. ``options``
+    hold the rig (``width``, ``height``, ``baseline_m``, ``convention``) and the render
+    settings (``integrator``, ``max_depth``, ``rfilter``, ``sampler``). The scene is compiled once
+    per job, so the per-render cost is the render itself.
     """
     import numpy as np
 
     from ..io.contracts import config_digest
     from ..io.renders import render_dataset
     from ..io.store import write_dataset
-    from ..renderers.base import RenderSettings
     from ..rig import VIEWS
     from ..seeding import render_seed
 
     seeds = [int(s) for s in seeds]
     if sorted(outputs) != sorted(VIEWS):
         raise StereovarError(f"render job needs one output per view {VIEWS}, got {sorted(outputs)}")
-    prepared = prepare_scene(
-        spec,
-        renderer=renderer,
-        variant=variant,
-        width=width,
-        height=height,
-        baseline_m=baseline_m,
-        convention=convention,
-        threads=threads,
-    )
-    settings = RenderSettings(integrator, max_depth, rfilter, sampler)
+    rig, settings = render_options(options)
+    prepared = prepare_scene(spec, renderer=renderer, variant=variant, threads=threads, **rig)
     name = prepared.spec["name"]
+    stereo = prepared.rig
     determining = {
         "renderer": renderer,
-        "width": int(width),
-        "height": int(height),
-        "baseline_m": float(baseline_m),
-        "convention": convention,
+        "width": stereo.width,
+        "height": stereo.height,
+        "baseline_m": stereo.baseline_m,
+        "convention": stereo.convention,
         "spp": int(spp),
         "seed_policy": seed_policy,
         **settings.as_attrs(),
@@ -89,7 +75,7 @@ def render_job(
             values.append(seed)
             done += 1
             n_bad = int((~np.isfinite(image)).any(axis=-1).sum())
-            rate = width * height * spp / max(elapsed, 1e-9) / 1e6
+            rate = stereo.width * stereo.height * spp / max(elapsed, 1e-9) / 1e6
             log.info(
                 "%s spp %d: %s seed %d (%d/%d) rendered in %.2f s, %.2f Msamples/s%s",
                 name,

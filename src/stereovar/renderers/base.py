@@ -121,15 +121,7 @@ class Renderer(ABC):
 
     @abstractmethod
     def prepare(
-        self,
-        spec: dict,
-        *,
-        width: int,
-        height: int,
-        baseline_m: float,
-        convention: str,
-        variant: str = "auto",
-        threads: int | None = None,
+        self, spec: dict, *, rig: dict, variant: str = "auto", threads: int | None = None
     ) -> PreparedScene:
         """Compile a validated spec and build the rig around its camera.
 
@@ -137,12 +129,9 @@ class Renderer(ABC):
         ----------
         spec : dict
             A validated scene spec (:func:`stereovar.scenes.spec.load_scene_spec`).
-        width, height : int
-            Image size in pixels.
-        baseline_m : float
-            Stereo baseline in metres.
-        convention : {"paper", "conventional"}
-            Which side the second camera goes (:func:`stereovar.rig.make_rig`).
+        rig : dict
+            ``width``, ``height`` (pixels), ``baseline_m`` and ``convention`` (``paper`` or
+            ``conventional``), passed to :func:`stereovar.rig.make_rig` with the scene camera.
         variant : str
             Renderer back end (``auto`` picks the best available).
         threads : int, optional

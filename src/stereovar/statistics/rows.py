@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .correlation import NO_GLASS, undefined_result
+from .correlation import NO_GLASS, RESULT_KEYS, undefined_result
 from .regions import REGIONS, as_field, region_masks
 from .registry import METHODS, AlignedFields
 
@@ -18,14 +18,7 @@ CORRELATION_COLUMNS = [
     "n_seeds",
     "region",
     "method",
-    "rho",
-    "n_pixels",
-    "ci_low",
-    "ci_high",
-    "p_value",
-    "log10_p_value",
-    "n_nonfinite",
-    "reason",
+    *RESULT_KEYS,
     "renderer",
     "estimator",
 ]

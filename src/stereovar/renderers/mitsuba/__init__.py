@@ -69,15 +69,7 @@ class MitsubaRenderer(Renderer):
     name = "mitsuba"
 
     def prepare(
-        self,
-        spec: dict,
-        *,
-        width: int,
-        height: int,
-        baseline_m: float,
-        convention: str,
-        variant: str = "auto",
-        threads: int | None = None,
+        self, spec: dict, *, rig: dict, variant: str = "auto", threads: int | None = None
     ) -> MitsubaScene:
         """Load the back end, compile ``spec`` and build the rig (see
         :meth:`stereovar.renderers.base.Renderer.prepare`)."""
@@ -93,14 +85,7 @@ class MitsubaRenderer(Renderer):
 
             dr.set_thread_count(int(threads))
         scene, camera = load_scene(mi, spec)
-        rig = make_rig(
-            camera.to_world,
-            camera.fov_deg,
-            width=width,
-            height=height,
-            baseline_m=baseline_m,
-            convention=convention,
-        )
+        stereo = make_rig(camera.to_world, camera.fov_deg, **rig)
         backend = describe_backend()
         provenance = {
             "scene": spec["name"],
@@ -116,12 +101,12 @@ class MitsubaRenderer(Renderer):
             spec["name"],
             self.name,
             backend["variant"],
-            width,
-            height,
-            baseline_m,
-            convention,
+            stereo.width,
+            stereo.height,
+            stereo.baseline_m,
+            stereo.convention,
         )
-        return MitsubaScene(rig, spec=spec, provenance=provenance, mi=mi, scene=scene)
+        return MitsubaScene(stereo, spec=spec, provenance=provenance, mi=mi, scene=scene)
 
 
 RENDERER = MitsubaRenderer
