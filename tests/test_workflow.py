@@ -292,7 +292,7 @@ FIXTURE_PATHS = {
         for s, p in (("scene_000", 1), ("scene_000", 2), ("scene_001", 2))
     },  # fmt: skip
     **{f"intervention/{s}.csv": f"{RUN}/intervention/{s}.csv" for s in SCENES},
-    **{f"intervention/margins/{s}.csv": f"{RUN}/intervention/margins/{s}.csv" for s in SCENES},
+    **{f"intervention/margins/{s}.csv.gz": f"{RUN}/intervention/margins/{s}.csv" for s in SCENES},
 }
 
 

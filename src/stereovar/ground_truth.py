@@ -205,6 +205,7 @@ def compute_ground_truth(prepared, *, attrs: dict | None = None) -> xr.Dataset:
                 dims,
                 material,
                 {
+                    "long_name": "material class of the first hit",
                     "flag_values": list(range(len(MATERIAL_CLASSES))),
                     "flag_meanings": " ".join(MATERIAL_CLASSES),
                 },

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import gzip
 import io
 import math
 from pathlib import Path
@@ -31,7 +32,8 @@ def to_csv(rows: list[dict], columns: list[str]) -> str:
 
 
 def read_rows(path) -> list[dict]:
-    """Rows of a CSV written by :func:`write_tables`, with numbers parsed (``NaN`` too)."""
+    """Rows of a CSV written by :func:`write_tables`, with numbers parsed (``NaN`` too); a
+    ``.gz`` path is read through gzip."""
 
     def parse(value: str):
         for kind in (int, float):
@@ -41,7 +43,8 @@ def read_rows(path) -> list[dict]:
                 continue
         return value
 
-    with open(path, newline="") as fh:
+    opener = gzip.open if str(path).endswith(".gz") else open
+    with opener(path, "rt", newline="") as fh:
         return [{k: parse(v) for k, v in row.items()} for row in csv.DictReader(fh)]
 
 
