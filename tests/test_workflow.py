@@ -339,3 +339,22 @@ def test_one_views_renders_stack_with_open_mfdataset(workdir):
     assert stacked["radiance"].dims == ("seed", "y", "x", "channel")
     assert stacked["seed"].values.tolist() == [0, 1]
     assert stacked["radiance"].attrs["units"] == "W m-2 sr-1"
+
+
+def test_every_store_describes_itself(workdir):
+    """y/x pixel coordinates with units, a long_name on every variable, units on every
+    physical quantity, and the provenance that says what made the store."""
+    stores = sorted((workdir / "results").rglob("*.zarr"))
+    kinds = {p.relative_to(workdir / "results").parts[1] for p in stores}
+    assert {"renders", "seeds"} <= kinds and len(stores) >= 2 + 6 + 3 + 3
+    for path in stores:
+        ds = open_dataset(path)
+        assert ds["y"].attrs["units"] == "px" and ds["x"].attrs["units"] == "px", path
+        for name, var in ds.data_vars.items():
+            assert var.attrs.get("long_name"), (path, name)
+            if var.dtype.kind == "f":
+                assert var.attrs.get("units"), (path, name)
+        assert ds.attrs["renderer"] == "mitsuba" and len(ds.attrs["scene_digest"]) == 64, path
+        if "/variance/" in str(path) or "/warped/" in str(path):
+            assert ds.attrs["estimator"] == "seeds" and ds.attrs["seed_policy"] == "independent"
+            assert len(ds.attrs["config_digest"]) == 64
