@@ -204,7 +204,7 @@ class LazyRenders:
     """
 
     def __init__(self, paths):
-        self._index = [(Path(p), k) for store, k in iter_renders(paths) for p in [store.path]]
+        self._index = [(Path(store.path), k) for store, k in iter_renders(paths)]
 
     def __len__(self):
         return len(self._index)

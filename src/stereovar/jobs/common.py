@@ -110,3 +110,21 @@ def run_label(renderer: str, estimator: str | None = None) -> str:
     """``renderer mitsuba, estimator seeds``: which renders a table or figure shows."""
     text = f"renderer {renderer}"
     return f"{text}, estimator {estimator}" if estimator else text
+
+
+def run_of(rows: list[dict]) -> dict:
+    """The ``renderer`` and ``estimator`` that every row names (one of each, when named).
+
+    Raises
+    ------
+    ValueError
+        The rows mix several renderers or estimators.
+    """
+    out = {}
+    for key in ("renderer", "estimator"):
+        values = sorted({str(r[key]) for r in rows if r.get(key) not in (None, "")})
+        if len(values) > 1:
+            raise ValueError(f"rows mix several {key}s: {values}")
+        if values:
+            out[key] = values[0]
+    return out

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .common import log
+from .common import log, run_of
 
 INTERVENTION_COLUMNS = [
     "scene",
@@ -116,7 +116,6 @@ def intervention_table_job(inputs, outputs: dict) -> list[dict]:
     relative change (normal - decorrelated) / |decorrelated|."""
     from ..io.tables import read_rows, write_tables
     from ..statistics.summary import intervention_table
-    from .tables import _run
 
     rows = [r for path in inputs for r in read_rows(path)]
     table = intervention_table(rows)
@@ -126,6 +125,6 @@ def intervention_table_job(inputs, outputs: dict) -> list[dict]:
         columns,
         outputs,
         caption="Residual-shuffle intervention (Table 3)",
-        constants=_run(rows),
+        constants=run_of(rows),
     )
     return table

@@ -2,19 +2,7 @@
 
 from __future__ import annotations
 
-from .common import log
-
-
-def _run(rows: list[dict]) -> dict:
-    """The renderer and estimator that every correlation row names (one of each)."""
-    out = {}
-    for key in ("renderer", "estimator"):
-        values = sorted({str(r[key]) for r in rows if r.get(key) not in (None, "")})
-        if len(values) > 1:
-            raise ValueError(f"correlation rows mix several {key}s: {values}")
-        if values:
-            out[key] = values[0]
-    return out
+from .common import log, run_of
 
 
 def cross_scene_job(correlations, outputs: dict, *, spp) -> list[dict]:
@@ -30,7 +18,7 @@ def cross_scene_job(correlations, outputs: dict, *, spp) -> list[dict]:
         cross_scene_columns(),
         outputs,
         caption=f"Cross-scene correlation at SPP={spp} (Table 1)",
-        constants=_run(rows),
+        constants=run_of(rows),
     )
     return table
 
@@ -58,7 +46,7 @@ def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: d
         every += rows
         entries.append(sweep_entry(int(v.attrs["spp"]), rows, means))
     rows, fit = spp_sweep_table(entries)
-    run = _run(every)
+    run = run_of(every)
     write_tables(rows, SPP_SWEEP_COLUMNS, outputs, caption="SPP sweep (Table 2)", constants=run)
     fit_rows = [{"region": k, **f} for k, f in fit.items()]
     write_tables(

@@ -102,11 +102,6 @@ def unaligned_pearson(fields: AlignedFields, mask, *, min_pixels: int = 30) -> d
     return pearson_over_mask(fields.left, fields.right, mask, min_pixels=min_pixels)
 
 
-def methods() -> tuple[str, ...]:
-    """Registered statistic names, in row order."""
-    return METHODS.names()
-
-
 def secondary_methods() -> tuple[str, ...]:
     """Every registered statistic but :data:`PRIMARY_METHOD`."""
     return tuple(m for m in METHODS.names() if m != PRIMARY_METHOD)
