@@ -51,10 +51,15 @@ class InterventionResult(NamedTuple):
     margins: list
 
 
+def _with_channels(render) -> np.ndarray:
+    """One render, (H, W) or (H, W, C), as an (H, W, C) array of its own dtype."""
+    a = np.asarray(render)
+    return a[..., None] if a.ndim == 2 else a
+
+
 def _as_float(render) -> np.ndarray:
     """One render, (H, W) or (H, W, C), as float64 (H, W, C)."""
-    a = np.asarray(render, dtype=np.float64)
-    return a[..., None] if a.ndim == 2 else a
+    return _with_channels(render).astype(np.float64, copy=False)
 
 
 def _seed_moments(renders: Sequence) -> StreamingVariance:
@@ -63,7 +68,7 @@ def _seed_moments(renders: Sequence) -> StreamingVariance:
     with its NaN/Inf handling)."""
     acc = StreamingVariance()
     for render in renders:
-        acc.update(_as_float(render))
+        acc.update(_with_channels(render))  # accumulated in float64 there
     return acc
 
 

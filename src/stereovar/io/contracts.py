@@ -76,7 +76,7 @@ def variance_store(ds: xr.Dataset, *, estimator: str, provenance: dict) -> xr.Da
     missing = {"mean", "variance", "finite", "n_nonfinite"} - set(ds.data_vars)
     if missing:
         raise ValueError(f"estimator output lacks {sorted(missing)}")
-    out = ds.assign_coords({k: v for k, v in pixel_coords(ds.sizes["y"], ds.sizes["x"]).items()})
+    out = ds.assign_coords(pixel_coords(ds.sizes["y"], ds.sizes["x"]))
     out["mean"].attrs["units"] = RADIANCE_UNITS
     out["variance"].attrs["units"] = VARIANCE_UNITS
     out["view"].attrs["long_name"] = "stereo view"

@@ -204,14 +204,14 @@ class LazyRenders:
     """
 
     def __init__(self, paths):
-        self._index = [(Path(store.path), k) for store, k in iter_renders(paths)]
+        self._index = list(iter_renders(paths))  # each store opened (and checked) once
 
     def __len__(self):
         return len(self._index)
 
     def __getitem__(self, k):
-        path, seed = self._index[k]
-        return RenderStore(path).rows(slice(None), seed)
+        store, seed = self._index[k]
+        return store.rows(slice(None), seed)
 
     def __iter__(self):
         for k in range(len(self)):
