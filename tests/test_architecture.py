@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 import xarray as xr
-from scipy.stats import pearsonr, spearmanr
+from scipy.stats import pearsonr, rankdata, spearmanr
 
 from stereovar.errors import ConfigError
 from stereovar.estimators import ESTIMATORS, get_estimator
@@ -204,14 +204,14 @@ def test_a_registered_statistic_reaches_the_rows_and_table_1(plane_run, tmp_path
     from stereovar.jobs.correlation import correlation_job, warp_job
     from stereovar.jobs.tables import cross_scene_job
     from stereovar.jobs.variance import variance_job
-    from stereovar.statistics.correlation import undefined_result
-
-    @register_method("stub_spearman", "Spearman of sigma_L^2 and the warped sigma_R^2")
-    def stub_spearman(fields, mask, *, min_pixels=30):
-        a, b = fields.left[mask], fields.warped[mask]
-        if a.size < min_pixels:
-            return undefined_result(a.size, 0, "too few")
-        return {**undefined_result(a.size, 0, ""), "rho": float(spearmanr(a, b)[0])}
+    
+    @register_method(
+        "stub_spearman",
+        "Spearman of sigma_L^2 and the warped sigma_R^2",
+        transform=lambda values, settings: (rankdata(values[0]), rankdata(values[1])),
+    )
+    def stub_spearman(fields):
+        return fields.left, fields.warped
 
     try:
         gt_path, stores = plane_run
@@ -220,7 +220,8 @@ def test_a_registered_statistic_reaches_the_rows_and_table_1(plane_run, tmp_path
         rows = correlation_job(
             tmp_path / "v.zarr", tmp_path / "w.zarr", gt_path, tmp_path / "c.csv"
         )
-        assert [r["method"] for r in rows[:3]] == ["warp", "no_warp", "stub_spearman"]
+        names = [r["method"] for r in rows[: len(METHODS)]]
+        assert names == list(METHODS.names()) and names[-1] == "stub_spearman"
         assert "mean_rho_stub_spearman" in cross_scene_columns()
         table = cross_scene_job([tmp_path / "c.csv"], {"csv": tmp_path / "t1.csv"}, spp=4)
         sigma_l = open_dataset(tmp_path / "v.zarr")["variance"].sel(view="left").values

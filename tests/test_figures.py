@@ -193,12 +193,12 @@ def _spp_rows():
                     "spp": spp,
                     "region": region,
                     "rho": rho,
-                    "ci_low": rho - rng.uniform(0.001, 0.02),
-                    "ci_high": rho + rng.uniform(0.001, 0.02),
+                    "fisher_low": rho - rng.uniform(0.001, 0.02),
+                    "fisher_high": rho + rng.uniform(0.001, 0.02),
                 }
             )
     rows[7]["rho"] = math.nan  # non_glass at 512: omitted
-    rows[13]["ci_low"] = math.nan  # glass at 1024: no lower bar
+    rows[13]["fisher_low"] = math.nan  # glass at 1024: no lower bar
     rng.shuffle(rows)
     return rows
 
@@ -227,9 +227,9 @@ def test_rho_vs_spp_plots_each_regions_rho_and_ci():
         segments = bars.get_segments()
         assert len(segments) == len(expected)
         for seg, r in zip(segments, expected, strict=True):
-            low = r["ci_low"] if math.isfinite(r["ci_low"]) else r["rho"]
+            low = r["fisher_low"] if math.isfinite(r["fisher_low"]) else r["rho"]
             np.testing.assert_allclose(seg[:, 0], r["spp"])
-            np.testing.assert_allclose(sorted(seg[:, 1]), [low, r["ci_high"]])
+            np.testing.assert_allclose(sorted(seg[:, 1]), [low, r["fisher_high"]])
     non_glass = next(c for k, c in containers.items() if k.startswith("non-glass"))
     assert 512 not in non_glass.lines[0].get_xdata()
 
@@ -261,8 +261,8 @@ def test_rho_vs_spp_axis_is_log2_with_ticks_at_the_given_spps():
 def test_rho_vs_spp_degenerate_rows():
     fig = rho_vs_spp_figure([])
     assert [t.get_text() for t in fig.axes[0].texts] == ["no data"]
-    rows = [{"spp": 64, "region": "glass", "rho": math.nan, "ci_low": 0.1, "ci_high": 0.2}]
-    rows.append({"spp": 64, "region": "all", "rho": 0.5, "ci_low": math.nan, "ci_high": 0.6})
+    rows = [{"spp": 64, "region": "glass", "rho": math.nan, "fisher_low": 0.1, "fisher_high": 0.2}]
+    rows.append({"spp": 64, "region": "all", "rho": 0.5, "fisher_low": math.nan, "fisher_high": 0.6})
     fig = rho_vs_spp_figure(rows)
     containers = _containers(fig)
     assert len(containers) == 1

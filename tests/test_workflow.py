@@ -104,7 +104,7 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         assert (workdir / f"logs/ground_truth/{scene}.log").is_file()
     for scene, spp in (("scene_000", 1), ("scene_000", 2), ("scene_001", 2)):
         rows = (workdir / f"{RUN}/correlation/{scene}/spp{spp}.csv").read_text().splitlines()
-        assert rows[0].startswith("scene,spp,n_seeds,region,method,rho,n_pixels,ci_low")
+        assert rows[0].startswith("scene,spp,n_seeds,region,method,rho,n_pixels,fisher_low")
         assert rows[0].endswith(",renderer,estimator") and rows[1].endswith(",mitsuba,seeds")
         assert len(rows) == 7
         renders = [

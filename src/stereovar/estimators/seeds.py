@@ -18,6 +18,7 @@ import xarray as xr
 from ..io.renders import IMAGE_DIMS, iter_renders, store_error
 from ..rig import VIEWS
 from .base import VarianceEstimator
+from .subsets import SeedSubsets, subset_dataset
 
 ESTIMATOR = "population variance (1/N) over seeds, averaged over RGB channels (Eq. 1)"
 
@@ -312,6 +313,7 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows}")
     acc = None
     coords = {}
+    subsets, render = SeedSubsets(), None
     for radiance, rows, block in _blocks(paths, chunk_rows):
         if acc is None:
             acc = StreamingVariance(shape=radiance.shape)
@@ -321,6 +323,14 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
                 radiance.path, f"shape {radiance.shape} differs from {acc.shape} of {paths[0]}"
             )
         acc.update(block, rows=rows)
+        if rows.start == 0 and rows.stop == acc.shape[0]:
+            subsets.update(block)
+        else:
+            if render is None:
+                render = np.empty(acc.shape, dtype=block.dtype)
+            render[rows] = block
+            if rows.stop == acc.shape[0]:
+                subsets.update(render)
     yx = ("y", "x")
     return xr.Dataset(
         {
@@ -335,7 +345,7 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         },
         coords=coords,
         attrs={"n_seeds": acc.n, "estimator": ESTIMATOR},
-    )
+    ).merge(subset_dataset(subsets))
 
 
 def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) -> xr.Dataset:

@@ -315,7 +315,7 @@ def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
             secondary.setdefault((method, region), []).append((spp, rho))
             continue
         by_region[region].append(
-            (spp, rho, _finite(row.get("ci_low")), _finite(row.get("ci_high")))
+            (spp, rho, _finite(row.get("fisher_low")), _finite(row.get("fisher_high")))
         )
 
     fig, ax = plt.subplots(figsize=(5.5, 4.0), constrained_layout=True)

@@ -78,7 +78,9 @@ def variance_store(ds: xr.Dataset, *, estimator: str, provenance: dict) -> xr.Da
         raise ValueError(f"estimator output lacks {sorted(missing)}")
     out = ds.assign_coords(pixel_coords(ds.sizes["y"], ds.sizes["x"]))
     out["mean"].attrs["units"] = RADIANCE_UNITS
-    out["variance"].attrs["units"] = VARIANCE_UNITS
+    for name in ("variance", "half_variance", "subset_variance"):
+        if name in out:
+            out[name].attrs["units"] = VARIANCE_UNITS
     out["view"].attrs["long_name"] = "stereo view"
     description = ds.attrs.get("estimator", "")
     out.attrs = {

@@ -42,41 +42,127 @@ def warp_job(variance, ground_truth, out) -> None:
     )
 
 
-def correlation_job(variance, warped, ground_truth, out, *, min_pixels=30) -> list[dict]:
-    """Every registered statistic over every region (Eq. 3), to one CSV per scene and SPP."""
+def analysis_settings(analysis: dict | None = None, controls: dict | None = None):
+    """:class:`~stereovar.statistics.fields.AnalysisSettings` and the sensor model from the
+    ``analysis`` and ``controls`` config sections (defaults for missing keys)."""
+    from ..controls.sensor import SensorModel
+    from ..statistics.bootstrap import BootstrapSettings
+    from ..statistics.fields import AnalysisSettings
+
+    analysis, controls = dict(analysis or {}), dict(controls or {})
+    boot = dict(analysis.get("bootstrap") or {})
+    settings = AnalysisSettings(
+        min_pixels=int(analysis.get("min_pixels", 30)),
+        bootstrap=BootstrapSettings(
+            tile=int(boot.get("tile", 16)),
+            reps=int(boot.get("reps", 1000)),
+            seed=int(boot.get("seed", 0)),
+        ),
+        trim_fraction=float(analysis.get("trim_fraction", 0.001)),
+        firefly_factor=float(analysis.get("firefly_factor", 100.0)),
+        null_shift=float(controls.get("null_shift", 8)),
+    )
+    sensor = dict(controls.get("sensor") or {})
+    model = SensorModel(
+        gain=float(sensor.get("gain", 1000.0)),
+        read_noise=float(sensor.get("read_noise", 2.0)),
+        seed=int(sensor.get("seed", 0)),
+    )
+    return settings, model
+
+
+def correlation_job(
+    variance,
+    warped,
+    ground_truth,
+    out,
+    *,
+    curve=None,
+    min_pixels=30,
+    analysis=None,
+    controls=None,
+) -> list[dict]:
+    """Every registered statistic and control over every region (Eq. 3), to one CSV per scene
+    and SPP, and :math:`\\rho` against the number of seeds to ``curve``."""
     from ..io.contracts import read_alignment
     from ..io.store import open_dataset
     from ..io.tables import write_tables
-    from ..statistics.rows import CORRELATION_COLUMNS, correlation_rows
+    from ..statistics.rows import (
+        CORRELATION_COLUMNS,
+        CURVE_COLUMNS,
+        SceneInputs,
+        correlation_rows,
+        seed_curve_rows,
+    )
 
-    v = open_dataset(variance)[["variance", "finite"]].load()
+    analysis = {"min_pixels": min_pixels, **dict(analysis or {})}
+    settings, sensor = analysis_settings(analysis, controls)
+    v = open_dataset(variance).load()
     gt = open_dataset(ground_truth)
+    gl = gt[["disparity", "valid", "glass"]].sel(view="left").load()
     sigma_l, sigma_r = left_right(v, "variance")
+    n_seeds = int(v.attrs["n_seeds"])
+    scene, spp = v.attrs["scene"], int(v.attrs["spp"])
+    views = ("left", "right")
+    inputs = SceneInputs(
+        ground_truth_left={k: gl[k].values for k in ("disparity", "valid")},
+        sign=int(gt.attrs["disparity_sign"]),
+        mean={k: v["mean"].sel(view=k).transpose("y", "x", "channel").values for k in views}
+        if "mean" in v
+        else None,
+        halves={k: v["half_variance"].sel(view=k).transpose("half", "y", "x").values for k in views}
+        if "half_variance" in v
+        else None,
+        n_seeds=n_seeds,
+        sensor=sensor,
+        label=f"{scene}|spp{spp}",
+    )
+    aligned = read_alignment(open_dataset(warped))
+    glass = gl["glass"].values
     rows = correlation_rows(
         sigma_l,
         sigma_r,
-        read_alignment(open_dataset(warped)),
-        gt["glass"].sel(view="left").values,
+        aligned,
+        glass,
         finite_right=v["finite"].sel(view="right"),
-        min_pixels=min_pixels,
+        settings=settings,
+        inputs=inputs,
     )
+    run = {
+        "renderer": v.attrs.get("renderer", ""),
+        "estimator": v.attrs.get("estimator", ""),
+    }
     for row in rows:
-        row.update(
-            scene=v.attrs["scene"],
-            spp=int(v.attrs["spp"]),
-            n_seeds=int(v.attrs["n_seeds"]),
-            renderer=v.attrs.get("renderer", ""),
-            estimator=v.attrs.get("estimator", ""),
-        )
+        row.update(scene=scene, spp=spp, n_seeds=n_seeds, **run)
         log.info(
-            "%s spp %s %-9s %-7s rho %.4f (n=%d)%s",
+            "%s spp %s %-9s %-10s rho %.4f [boot %.3f, %.3f] (n=%d)%s",
             row["scene"],
             row["spp"],
             row["region"],
             row["method"],
             row["rho"],
+            row["boot_low"],
+            row["boot_high"],
             row["n_pixels"],
             f" [{row['reason']}]" if row["reason"] else "",
         )
     write_tables(rows, CORRELATION_COLUMNS, {"csv": out})
+    if curve is not None:
+        subsets = None
+        if "subset_variance" in v:
+            sv = v["subset_variance"]
+            subsets = {
+                k: (
+                    sv["subset_size"].values,
+                    sv["subset_index"].values,
+                    sv.sel(view=k).transpose("subset", "y", "x").values,
+                )
+                for k in views
+            }
+        curve_rows = seed_curve_rows(
+            subsets, aligned, glass, rows, n_seeds=n_seeds, settings=settings, inputs=inputs
+        )
+        for row in curve_rows:
+            row.update(scene=scene, spp=spp, **run)
+        write_tables(curve_rows, CURVE_COLUMNS, {"csv": curve})
     return rows

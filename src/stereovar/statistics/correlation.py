@@ -10,10 +10,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.special import log_ndtr, ndtri
 
 from .regions import as_field
 
-Z_95 = 1.959963984540054
+Z_95 = float(ndtri(0.975))
 """Two-sided 95% quantile of the standard normal, :math:`\\Phi^{-1}(0.975)`."""
 
 NO_GLASS = "no glass pixels in the scene"
@@ -23,14 +24,21 @@ CONSTANT = "constant field in region"
 RESULT_KEYS = (
     "rho",
     "n_pixels",
-    "ci_low",
-    "ci_high",
+    "fisher_low",
+    "fisher_high",
     "p_value",
     "log10_p_value",
+    "boot_low",
+    "boot_high",
+    "n_tiles",
+    "top_share",
+    "n_fireflies",
     "n_nonfinite",
     "reason",
 )
-"""What every registered statistic returns (:mod:`stereovar.statistics.registry`)."""
+"""What every registered statistic returns (:mod:`stereovar.statistics.registry`):
+``fisher_low``/``fisher_high`` assume independent pixels; ``boot_low``/``boot_high`` are the
+spatial block bootstrap's (:mod:`stereovar.statistics.bootstrap`)."""
 
 
 def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
@@ -39,10 +47,15 @@ def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
     return {
         "rho": nan,
         "n_pixels": int(n_pixels),
-        "ci_low": nan,
-        "ci_high": nan,
+        "fisher_low": nan,
+        "fisher_high": nan,
         "p_value": nan,
         "log10_p_value": nan,
+        "boot_low": nan,
+        "boot_high": nan,
+        "n_tiles": 0,
+        "top_share": nan,
+        "n_fireflies": 0,
         "n_nonfinite": int(n_nonfinite),
         "reason": reason,
     }
@@ -51,24 +64,43 @@ def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
 def log10_two_sided_normal_p(stat: float) -> float:
     """Base-10 log of the two-sided normal p-value :math:`2\\,\\Phi(-|z|)`, without underflow.
 
+    .. math:: \\log_{10} p = \\frac{\\ln 2 + \\ln \\Phi(-|z|)}{\\ln 10}
+
+    with :math:`\\ln\\Phi` from ``scipy.special.log_ndtr``, finite far below 1e-300.
+    """
+    stat = abs(float(stat))
+    if math.isnan(stat):
+        return math.nan
+    return float((math.log(2.0) + log_ndtr(-stat)) / math.log(10.0))
+
+
+def fisher_interval(rho: float, n: int) -> dict:
+    """Fisher-z interval and two-sided test of :math:`\\rho` over :math:`n` independent pixels.
+
     .. math::
 
-        p = \\operatorname{erfc}\\bigl(|z| / \\sqrt{2}\\bigr), \\qquad
-        \\ln \\operatorname{erfc}(u) \\approx -u^2 - \\ln\\bigl(u \\sqrt{\\pi}\\bigr)
-            + \\ln\\Bigl(1 - \\frac{1}{2u^2} + \\frac{3}{4u^4} - \\frac{15}{8u^6}\\Bigr)
+        z = \\operatorname{artanh} \\rho, \\quad s = \\frac{1}{\\sqrt{n - 3}}, \\qquad
+        \\mathrm{CI}_{95} = \\bigl[\\tanh(z - 1.959964\\,s),\\ \\tanh(z + 1.959964\\,s)\\bigr],
+        \\qquad p = 2\\,\\Phi\\bigl(-|z|\\sqrt{n - 3}\\bigr)
 
-    The asymptotic series is used where ``erfc`` would underflow (:math:`u > 20`, where it
-    is accurate to better than 1e-9 relative), so p-values far below 1e-300 (the paper's
-    ~9e5-pixel regions) keep a finite logarithm.
+    (paper Sec. 3.1). Neighbouring pixels are not independent, so this interval is far too
+    narrow for variance fields; the block bootstrap's is the honest one.
+
+    Returns
+    -------
+    dict
+        ``fisher_low``, ``fisher_high``, ``p_value``, ``log10_p_value``.
     """
-    u = abs(float(stat)) / math.sqrt(2.0)
-    if not math.isfinite(u):
-        return -math.inf if math.isinf(u) else math.nan
-    if u <= 20.0:
-        return math.log10(math.erfc(u))
-    inv = 1.0 / (u * u)
-    series = 1.0 - 0.5 * inv + 0.75 * inv * inv - 1.875 * inv**3
-    return (-u * u - math.log(u * math.sqrt(math.pi)) + math.log(series)) / math.log(10.0)
+    with np.errstate(divide="ignore"):
+        z = float(np.arctanh(rho))
+    se = 1.0 / math.sqrt(n - 3)
+    log10_p = log10_two_sided_normal_p(z / se)
+    return {
+        "fisher_low": float(np.tanh(z - Z_95 * se)),
+        "fisher_high": float(np.tanh(z + Z_95 * se)),
+        "p_value": float(10.0**log10_p),
+        "log10_p_value": log10_p,
+    }
 
 
 def pearson_over_mask(a, b, mask, *, min_pixels: int = 30) -> dict:
@@ -102,7 +134,8 @@ def pearson_over_mask(a, b, mask, *, min_pixels: int = 30) -> dict:
     Returns
     -------
     dict
-        ``rho``, ``n_pixels`` (pixels used), ``ci_low``, ``ci_high``, ``p_value``,
+        The :data:`RESULT_KEYS`: ``rho``, ``n_pixels`` (pixels used), the Fisher-z
+        ``fisher_low``, ``fisher_high``, ``p_value``,
         ``log10_p_value``, ``n_nonfinite`` (pixels of ``mask`` dropped because ``a`` or ``b``
         is NaN or Inf) and ``reason``: ``""``, or why the correlation is undefined (fewer than
         ``min_pixels`` pixels, or a constant field), in which case the numbers are NaN.
@@ -132,17 +165,8 @@ def pearson_over_mask(a, b, mask, *, min_pixels: int = 30) -> dict:
     if not (sxx > 0 and syy > 0):
         return undefined_result(n, n_nonfinite, CONSTANT)
     rho = float(np.clip(sxy / math.sqrt(sxx * syy), -1.0, 1.0))
-    with np.errstate(divide="ignore"):
-        z = float(np.arctanh(rho))
-    se = 1.0 / math.sqrt(n - 3)
-    stat = abs(z) / se
     return {
+        **undefined_result(n, n_nonfinite, ""),
         "rho": rho,
-        "n_pixels": n,
-        "ci_low": float(np.tanh(z - Z_95 * se)),
-        "ci_high": float(np.tanh(z + Z_95 * se)),
-        "p_value": math.erfc(stat / math.sqrt(2.0)),
-        "log10_p_value": log10_two_sided_normal_p(stat),
-        "n_nonfinite": n_nonfinite,
-        "reason": "",
+        **fisher_interval(rho, n),
     }

@@ -1,0 +1,12 @@
+"""Controls: what could explain a cross-view variance correlation away.
+
+``sensor``
+    A Poisson-Gaussian camera on the clean seed mean (the level a real sensor reaches).
+``intensity``
+    The variance-intensity relation removed (partial correlation, relative variance).
+``null_warps``
+    Deliberately wrong alignments (the level an unrelated alignment reaches).
+
+Each enters the correlation rows as a registered statistic
+(:mod:`stereovar.statistics.registry`).
+"""

@@ -1,0 +1,150 @@
+"""Spatial block bootstrap of a correlation over a pixel set.
+
+Fisher-z intervals (:func:`stereovar.statistics.correlation.fisher_interval`) treat the
+:math:`n` pixels of a region as independent. Neighbouring pixels of a variance field are not:
+they share geometry, texture and light paths, so the effective sample size is far below
+:math:`n`. The block bootstrap resamples whole square tiles of the image instead
+(Künsch 1989; Lahiri 2003), which keeps the dependence inside a tile.
+
+A replicate draws :math:`K` of the region's :math:`K` non-empty tiles with replacement.
+Pearson's :math:`\\rho` of a replicate needs only the per-tile sums
+:math:`(n_t, \\sum a, \\sum b, \\sum a^2, \\sum b^2, \\sum ab)`, so with the draw counts
+:math:`c_{rt}` of replicate :math:`r`,
+
+.. math::
+
+    S_r = \\sum_t c_{rt}\\, s_t, \\qquad
+    \\rho_r = \\frac{S_{ab} - S_a S_b / S_n}
+        {\\sqrt{(S_{aa} - S_a^2/S_n)(S_{bb} - S_b^2/S_n)}},
+
+and 1000 replicates of a 1280x720 region cost one matrix product.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+LEVEL = 0.95
+"""Coverage of the percentile intervals."""
+
+FEWER_THAN_2_TILES = "fewer than 2 bootstrap tiles in the region"
+
+
+@dataclass(frozen=True)
+class BootstrapSettings:
+    """``analysis.bootstrap``: tile side in pixels, replicates and the recorded seed."""
+
+    tile: int = 16
+    reps: int = 1000
+    seed: int = 0
+
+
+def tile_labels(shape: tuple[int, int], tile: int) -> np.ndarray:
+    """Index of the ``tile`` x ``tile`` block that holds each pixel, row-major.
+
+    Parameters
+    ----------
+    shape : tuple of int (H, W)
+    tile : int
+        Tile side; the last row and column of tiles may be smaller.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (H, W)
+    """
+    height, width = shape
+    tile = int(tile)
+    if tile < 1 or tile > min(height, width):
+        raise ValueError(
+            f"bootstrap tile {tile} does not fit a {width}x{height} image; set "
+            f"analysis.bootstrap.tile between 1 and {min(height, width)}"
+        )
+    n_x = -(-width // tile)
+    ys = np.arange(height) // tile
+    xs = np.arange(width) // tile
+    return ys[:, None] * n_x + xs[None, :]
+
+
+def tile_sums(a, b, labels) -> np.ndarray:
+    """Per-tile sufficient statistics of Pearson's :math:`\\rho`, over the non-empty tiles.
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray, shape (n,)
+        The paired values (finite).
+    labels : numpy.ndarray of int, shape (n,)
+        Tile index of each pair (:func:`tile_labels` at the pixels).
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 6)
+        Columns :math:`n_t, \\sum a, \\sum b, \\sum a^2, \\sum b^2, \\sum ab` of the
+        :math:`K` tiles holding at least one pair, in tile order. The values are centred on
+        their overall means and scaled by their largest deviation first (Pearson's
+        :math:`\\rho` is invariant to both), so the sums neither overflow nor cancel.
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    labels = np.asarray(labels)
+    da = a - a.mean()
+    db = b - b.mean()
+    da /= max(float(np.abs(da).max(initial=0.0)), np.finfo(float).tiny)
+    db /= max(float(np.abs(db).max(initial=0.0)), np.finfo(float).tiny)
+    used, inverse = np.unique(labels, return_inverse=True)
+    k = used.size
+    columns = [np.ones_like(da), da, db, da * da, db * db, da * db]
+    return np.stack([np.bincount(inverse, weights=c, minlength=k) for c in columns], axis=1)
+
+
+def draw_counts(n_tiles: int, reps: int, seed) -> np.ndarray:
+    """How often each of ``n_tiles`` tiles is drawn in each of ``reps`` replicates.
+
+    Each replicate draws ``n_tiles`` tiles uniformly with replacement.
+
+    Returns
+    -------
+    numpy.ndarray of float64, shape (reps, n_tiles); every row sums to ``n_tiles``.
+    """
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, n_tiles, size=(reps, n_tiles))
+    flat = draws + (np.arange(reps) * n_tiles)[:, None]
+    return (
+        np.bincount(flat.ravel(), minlength=reps * n_tiles)
+        .reshape(reps, n_tiles)
+        .astype(np.float64)
+    )
+
+
+def pearson_from_sums(sums) -> np.ndarray:
+    """Pearson's :math:`\\rho` from summed sufficient statistics (rows of :func:`tile_sums`).
+
+    NaN where a resampled field is constant.
+    """
+    s = np.asarray(sums, dtype=np.float64)
+    n, sa, sb, saa, sbb, sab = np.moveaxis(s, -1, 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        vaa = saa - sa * sa / n
+        vbb = sbb - sb * sb / n
+        cov = sab - sa * sb / n
+        rho = cov / np.sqrt(vaa * vbb)
+    rho = np.where((vaa > 0) & (vbb > 0), rho, np.nan)
+    return np.clip(rho, -1.0, 1.0)
+
+
+def bootstrap_replicates(sums, counts) -> np.ndarray:
+    """Replicates of :math:`\\rho`: :math:`\\rho(\\sum_t c_{rt} s_t)` for each row of counts."""
+    return pearson_from_sums(np.asarray(counts) @ np.asarray(sums))
+
+
+def percentile_interval(replicates, level: float = LEVEL) -> tuple[float, float]:
+    """The percentile interval :math:`[q_{\\alpha/2}, q_{1-\\alpha/2}]` of the finite
+    replicates (NaN, NaN when fewer than 2 are finite)."""
+    r = np.asarray(replicates, dtype=np.float64)
+    r = r[np.isfinite(r)]
+    if r.size < 2:
+        return float("nan"), float("nan")
+    alpha = 1.0 - level
+    low, high = np.quantile(r, [alpha / 2, 1 - alpha / 2])
+    return float(low), float(high)

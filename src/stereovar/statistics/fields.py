@@ -1,0 +1,171 @@
+"""The fields every registered statistic sees, in left-view coordinates (paper Sec. 2.2).
+
+:class:`AlignedFields` holds :math:`\\sigma_L^2`, the warped :math:`\\hat\\sigma_{R\\to L}^2`
+and the unaligned :math:`\\sigma_R^2`, plus named control fields computed on first use
+(:func:`aligned_fields`): the seed-mean intensities, the null warps and the sensor baselines.
+The same builder runs on the split halves and the seed subsets, so every statistic is
+defined on them as on the full estimate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .bootstrap import BootstrapSettings
+from .warp import warp_right_to_left
+
+
+class MissingField(KeyError):
+    """A statistic asked for a field this run does not have (the reason says which)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else "missing field"
+
+
+class AlignedFields:
+    """:math:`\\sigma_L^2`, :math:`\\hat\\sigma_{R\\to L}^2`, :math:`\\sigma_R^2` and lazy
+    control fields, all (H, W) float64 in left-view coordinates.
+
+    Parameters
+    ----------
+    left : numpy.ndarray
+        :math:`\\sigma_L^2` (Eq. 1).
+    warped : numpy.ndarray
+        :math:`\\hat\\sigma_{R\\to L}^2` (Eq. 2); 0 outside the warp's valid set.
+    right : numpy.ndarray
+        :math:`\\sigma_R^2` at the same pixel positions, unaligned; NaN where a render was
+        non-finite.
+    extra : dict, optional
+        Name to an array or to a zero-argument function computing it (called once). Read
+        with ``fields["name"]``; a missing name raises :class:`MissingField`.
+    missing : dict, optional
+        Name to the reason a field is absent (e.g. no seed mean in the variance store).
+    """
+
+    def __init__(self, left, warped, right, *, extra: dict | None = None, missing=None):
+        self.left = left
+        self.warped = warped
+        self.right = right
+        self._extra = dict(extra or {})
+        self._missing = dict(missing or {})
+        self._cache: dict[str, Any] = {}
+
+    def __getitem__(self, name: str):
+        if name in self._cache:
+            return self._cache[name]
+        if name not in self._extra:
+            raise MissingField(self._missing.get(name, f"no {name} field in this run"))
+        value = self._extra[name]
+        value = value() if callable(value) else value
+        self._cache[name] = value
+        return value
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._extra
+
+
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """``analysis`` and ``controls`` settings of the correlation rows."""
+
+    min_pixels: int = 30
+    bootstrap: BootstrapSettings = field(default_factory=BootstrapSettings)
+    trim_fraction: float = 0.001
+    firefly_factor: float = 100.0
+    null_shift: float = 8.0
+
+
+def channel_mean(mean) -> np.ndarray:
+    """The RGB mean :math:`\\mu = \\frac13\\sum_c \\bar I_c` of a seed mean (H, W, C)."""
+    return np.asarray(mean, dtype=np.float64).mean(axis=-1)
+
+
+def aligned_fields(
+    left,
+    right,
+    warped,
+    *,
+    ground_truth_left=None,
+    sign: int = 1,
+    settings: AnalysisSettings | None = None,
+    intensity: tuple | None = None,
+    sensor: dict[str, Callable] | None = None,
+) -> AlignedFields:
+    """Build :class:`AlignedFields` with the control fields this run can compute.
+
+    Parameters
+    ----------
+    left, right, warped : numpy.ndarray, shape (H, W)
+        :math:`\\sigma_L^2`, :math:`\\sigma_R^2` (NaN where not finite) and
+        :math:`\\hat\\sigma_{R\\to L}^2`.
+    ground_truth_left : mapping, optional
+        ``disparity`` and ``valid`` of the left view; needed by the null warps.
+    sign : int
+        The ground truth's ``disparity_sign``.
+    settings : AnalysisSettings, optional
+    intensity : tuple of numpy.ndarray (mu_left, mu_warped), optional
+        :func:`channel_mean` of the left seed mean and the warped right one
+        (:func:`warped_intensity`).
+    sensor : dict, optional
+        ``sensor_left``, ``sensor_warped``, ``sensor_sim_left``, ``sensor_sim_warped``: arrays
+        or functions computing them (:mod:`stereovar.controls.sensor`).
+    """
+    from ..controls.null_warps import flipped_warp, shifted_warp
+
+    settings = settings or AnalysisSettings()
+    extra: dict[str, Any] = {}
+    missing = {}
+    if ground_truth_left is not None:
+        d = np.asarray(ground_truth_left["disparity"])
+        valid = np.asarray(ground_truth_left["valid"])
+        clean_right = np.where(np.isfinite(right), right, np.nan)
+        extra["null_shift"] = lambda: shifted_warp(
+            clean_right, d, settings.null_shift, sign=sign, valid=valid
+        )
+        extra["null_flip"] = lambda: flipped_warp(clean_right, d, sign=sign, valid=valid)
+    else:
+        for name in ("null_shift", "null_flip"):
+            missing[name] = "no ground truth given for the null warps"
+    if intensity is not None:
+        extra["mean_left"], extra["mean_warped"] = intensity
+    else:
+        for name in ("mean_left", "mean_warped"):
+            missing[name] = "the variance store has no seed mean"
+    for name in ("sensor_left", "sensor_warped", "sensor_sim_left", "sensor_sim_warped"):
+        missing[name] = (
+            "fewer than 2 seeds to simulate sensor frames"
+            if sensor
+            else "the variance store has no seed mean for the sensor model"
+        )
+    extra.update(sensor or {})
+    return AlignedFields(left, warped, right, extra=extra, missing=missing)
+
+
+def warped_intensity(mean_right, ground_truth_left, *, sign: int) -> np.ndarray:
+    """The right view's RGB-mean seed mean warped into the left view (Eq. 2); NaN outside
+    the warp's valid set."""
+    w, omega = warp_right_to_left(
+        channel_mean(mean_right),
+        np.asarray(ground_truth_left["disparity"]),
+        sign=sign,
+        valid=np.asarray(ground_truth_left["valid"]),
+    )
+    return np.where(omega, w, np.nan)
+
+
+def warp_field(right, ground_truth_left, *, sign: int) -> np.ndarray:
+    """Any right-view (H, W) field warped into the left view (Eq. 2), NaN outside the valid
+    set and where a non-finite right pixel has non-zero weight."""
+    right = np.asarray(right, dtype=np.float64)
+    finite = np.isfinite(right)
+    d = np.asarray(ground_truth_left["disparity"])
+    valid = np.asarray(ground_truth_left["valid"])
+    w, omega = warp_right_to_left(np.where(finite, right, 0.0), d, sign=sign, valid=valid)
+    if not finite.all():
+        spoiled, _ = warp_right_to_left((~finite).astype(np.float64), d, sign=sign)
+        omega = omega & (spoiled == 0)
+    return np.where(omega, w, np.nan)
