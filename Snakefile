@@ -31,3 +31,8 @@ include: "workflow/rules/correlation.smk"
 include: "workflow/rules/tables.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/intervention.smk"
+include: "workflow/rules/claims.smk"
+
+
+onsuccess:
+    print_claims("results/tables/claims.md")

@@ -200,6 +200,19 @@ def _check_cross_fields(config: dict) -> None:
             f"{', '.join(scenes)} (or add it to scenes)"
         )
     _check_intervention(config)
+    _check_bootstrap(config)
+
+
+def _check_bootstrap(config: dict) -> None:
+    tile = config.get("analysis", {}).get("bootstrap", {}).get("tile")
+    res = config.get("resolution", {})
+    width, height = res.get("width"), res.get("height")
+    if tile is not None and width is not None and height is not None:
+        if tile > min(width, height):
+            raise ConfigError(
+                f"config key 'analysis.bootstrap.tile': {tile} is larger than the "
+                f"{width}x{height} image; use at most {min(width, height)} (16 is typical)"
+            )
 
 
 def _check_intervention(config: dict) -> None:

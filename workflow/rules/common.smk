@@ -8,6 +8,7 @@ from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
 from stereovar.estimators import ESTIMATORS
+from stereovar.io.contracts import config_digest
 from stereovar.experiment import (
     batch_label,
     batch_seeds,
@@ -68,6 +69,11 @@ def get_renderer():
 def get_estimator():
     """The variance estimator of this run (``render.estimator``)."""
     return config["render"]["estimator"]
+
+
+RUN = run_prefix(get_renderer(), get_estimator())
+INTERVENTION_RUN = run_prefix(get_renderer(), INTERVENTION_ESTIMATOR)
+CONFIG_DIGEST = config_digest(config)
 
 
 # Result paths (stereovar.experiment): renders under results/{renderer}/renders/, everything
@@ -217,6 +223,14 @@ def all_targets():
         f"{run}/figures/fig2_rho_vs_spp.png",
         f"{run}/figures/fig3_material_scatter.png",
         f"{intervention}/figures/fig4_intervention_margins.png",
+        *expand(
+            "{run}/tables/{name}.{ext}",
+            run=run,
+            name=["statistics", "seed_curve"],
+            ext=["csv", "md", "tex", "html"],
+        ),
+        *expand("results/tables/claims.{ext}", ext=["csv", "md", "tex", "html"]),
+        "results/summary.json",
     ]
 
 
@@ -286,3 +300,10 @@ def intervention_resources():
         ),
         "cpus_per_task": 2,
     }
+
+
+def print_claims(path):
+    """Print the claims table (Markdown) at the end of a successful run, when it exists."""
+    table = Path(path)
+    if table.exists():
+        print(f"\n{table}:\n\n{table.read_text()}")

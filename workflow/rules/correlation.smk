@@ -1,5 +1,5 @@
-# Eq. 2 (warp by the ground-truth disparity) and Eq. 3 (every registered statistic over the
-# valid set and its regions).
+# Eq. 2 (warp by the ground-truth disparity) and Eq. 3 (every registered statistic and control
+# over the valid set and its regions, with bootstrap intervals and split-half reliability).
 
 
 rule warp:
@@ -29,9 +29,11 @@ rule correlation:
         warped="results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr",
         ground_truth="results/ground_truth/{scene}.zarr",
     output:
-        "results/{renderer}/{estimator}/correlation/{scene}/spp{spp}.csv",
+        rows="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}.csv",
+        curve="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}_curve.csv",
     params:
-        min_pixels=config["analysis"]["min_pixels"],
+        analysis=config["analysis"],
+        controls=config["controls"],
     log:
         "logs/{renderer}/{estimator}/correlation/{scene}/spp{spp}.log",
     benchmark:

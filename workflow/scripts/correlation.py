@@ -9,6 +9,7 @@ run_job(
     variance=snakemake.input.variance,
     warped=snakemake.input.warped,
     ground_truth=snakemake.input.ground_truth,
-    out=snakemake.output[0],
+    out=snakemake.output.rows,
+    curve=snakemake.output.curve,
     **snakemake.params,
 )

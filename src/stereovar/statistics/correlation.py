@@ -31,6 +31,7 @@ RESULT_KEYS = (
     "boot_low",
     "boot_high",
     "n_tiles",
+    "mean_a",
     "top_share",
     "n_fireflies",
     "n_nonfinite",
@@ -38,7 +39,9 @@ RESULT_KEYS = (
 )
 """What every registered statistic returns (:mod:`stereovar.statistics.registry`):
 ``fisher_low``/``fisher_high`` assume independent pixels; ``boot_low``/``boot_high`` are the
-spatial block bootstrap's (:mod:`stereovar.statistics.bootstrap`)."""
+spatial block bootstrap's (:mod:`stereovar.statistics.bootstrap`); ``mean_a`` is the mean of
+the statistic's left field over the pixels used (for ``warp``, Table 2's mean
+:math:`\\sigma_L^2`)."""
 
 
 def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
@@ -54,6 +57,7 @@ def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
         "boot_low": nan,
         "boot_high": nan,
         "n_tiles": 0,
+        "mean_a": nan,
         "top_share": nan,
         "n_fireflies": 0,
         "n_nonfinite": int(n_nonfinite),

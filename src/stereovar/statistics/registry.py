@@ -239,6 +239,7 @@ def evaluate(
         **undefined_result(n, n_nonfinite, ""),
         "rho": rho,
         **fisher_interval(rho, n),
+        "mean_a": float(raw[0].mean()),
         "top_share": top_share(a, b),
         "n_fireflies": firefly_count(raw[0], raw[1], settings.firefly_factor),
     }

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from .across import combined_interval
 from .regions import REGIONS, as_field
 from .registry import PRIMARY_METHOD, secondary_methods
 
@@ -21,6 +22,8 @@ def cross_scene_columns() -> list[str]:
     return [
         "region",
         "mean_rho",
+        "boot_low",
+        "boot_high",
         "std_rho",
         "min_rho",
         "max_rho",
@@ -59,7 +62,9 @@ def cross_scene_table(rows: list[dict], *, spp: int | None = None) -> list[dict]
         \\mathrm{std} = \\sqrt{\\frac{1}{S - 1} \\sum_{s=1}^{S} (\\rho_s - \\bar\\rho)^2},
 
     the sample standard deviation (``ddof=1``; NaN when :math:`S = 1`), with the range
-    :math:`[\\min_s \\rho_s, \\max_s \\rho_s]`. ``mean_rho_no_warp`` averages the no-warp rows
+    :math:`[\\min_s \\rho_s, \\max_s \\rho_s]` and the 95% interval of the mean from the
+    scenes' block-bootstrap intervals (``boot_low``, ``boot_high``;
+    :func:`~stereovar.statistics.across.combined_interval`). ``mean_rho_no_warp`` averages the no-warp rows
     (Eq. 3 without Eq. 2) over the scenes where that value is finite.
 
     Parameters
@@ -92,9 +97,25 @@ def cross_scene_table(rows: list[dict], *, spp: int | None = None) -> list[dict]
     for region in REGIONS:
         primary = [r for r in rows if r["region"] == region and r["method"] == PRIMARY_METHOD]
         rho = np.array([float(r["rho"]) for r in primary if _finite(r["rho"])], dtype=np.float64)
+        _, low, high = (
+            combined_interval(
+                *zip(
+                    *[
+                        (r["rho"], r.get("boot_low", nan), r.get("boot_high", nan))
+                        for r in primary
+                        if _finite(r["rho"])
+                    ],
+                    strict=True,
+                )
+            )
+            if rho.size
+            else (nan, nan, nan)
+        )
         row = {
             "region": region,
             "mean_rho": float(rho.mean()) if rho.size else nan,
+            "boot_low": low,
+            "boot_high": high,
             "std_rho": float(rho.std(ddof=1)) if rho.size > 1 else nan,
             "min_rho": float(rho.min()) if rho.size else nan,
             "max_rho": float(rho.max()) if rho.size else nan,

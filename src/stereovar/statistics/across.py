@@ -1,0 +1,194 @@
+"""Every statistic and control across scenes, with intervals (Table 1's companions).
+
+:func:`statistics_table` summarises the per-scene correlation rows of every registered
+statistic; :func:`curve_table` the per-scene seed-subset curves. The interval of a
+cross-scene mean combines the scenes' bootstrap intervals (:func:`combined_interval`), so it
+is conditional on the scenes that were run; the spread between scenes is the ``std_rho``
+column beside it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.special import ndtri
+
+from .regions import REGIONS
+from .registry import METHODS
+
+Z = float(ndtri(0.975))
+
+STATISTICS_COLUMNS = [
+    "region",
+    "method",
+    "mean_rho",
+    "boot_low",
+    "boot_high",
+    "std_rho",
+    "n_scenes",
+    "mean_fisher_width",
+    "mean_boot_width",
+    "mean_top_share",
+    "mean_fireflies",
+    "mean_reliability_left",
+    "mean_reliability_right",
+    "mean_rho_corrected",
+    "n_corrected_above_1",
+    "reason",
+]
+"""Columns of ``results/{renderer}/{estimator}/tables/statistics.*``."""
+
+CURVE_TABLE_COLUMNS = [
+    "region",
+    "method",
+    "n_prime",
+    "mean_rho",
+    "std_rho",
+    "n_scenes",
+    "mean_rho_corrected",
+]
+"""Columns of ``results/{renderer}/{estimator}/tables/seed_curve.*``."""
+
+
+def _finite(values) -> np.ndarray:
+    v = np.asarray([float(x) for x in values], dtype=np.float64)
+    return v[np.isfinite(v)]
+
+
+def _mean(values) -> float:
+    v = _finite(values)
+    return float(v.mean()) if v.size else math.nan
+
+
+def combined_interval(rhos, lows, highs) -> tuple[float, float, float]:
+    """The mean of :math:`S` scenes' :math:`\\rho` and its 95% interval from their
+    bootstrap intervals, treating scenes as independent.
+
+    .. math::
+
+        \\bar\\rho = \\frac1S \\sum_s \\rho_s, \\qquad
+        \\mathrm{se}_s = \\frac{h_s - \\ell_s}{2 z_{0.975}}, \\qquad
+        \\bar\\rho \\pm z_{0.975} \\frac{\\sqrt{\\sum_s \\mathrm{se}_s^2}}{S}
+
+    Only scenes with a finite :math:`\\rho` and interval count; NaN when there are none.
+    """
+    triples = [
+        (float(r), float(lo), float(hi))
+        for r, lo, hi in zip(rhos, lows, highs, strict=True)
+        if all(math.isfinite(float(v)) for v in (r, lo, hi))
+    ]
+    if not triples:
+        return math.nan, math.nan, math.nan
+    r, lo, hi = (np.array(c) for c in zip(*triples, strict=True))
+    se = (hi - lo) / (2 * Z)
+    half = Z * math.sqrt(float((se * se).sum())) / r.size
+    mean = float(r.mean())
+    return mean, mean - half, mean + half
+
+
+def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
+    """One row per region and statistic: cross-scene mean :math:`\\rho` with its interval,
+    the spread over scenes and the diagnostics' means.
+
+    .. math::
+
+        \\bar\\rho = \\frac1S \\sum_s \\rho_s, \\quad
+        \\mathrm{std} = \\sqrt{\\tfrac{1}{S-1} \\sum_s (\\rho_s - \\bar\\rho)^2}
+
+    with the interval of :func:`combined_interval`, the mean widths of the Fisher-z and
+    bootstrap intervals, the mean top-0.1% share, firefly count, reliabilities and
+    attenuation-corrected :math:`\\rho` (and how many scenes' corrected :math:`\\rho` exceed 1).
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`stereovar.statistics.rows.correlation_rows` of every scene (``scene``, ``spp``).
+    spp : int, keyword-only, optional
+        Use only rows of this sample count.
+    """
+    rows = [r for r in rows if spp is None or r.get("spp") == spp]
+    methods = list(dict.fromkeys([*METHODS.names(), *(r["method"] for r in rows)]))
+    out = []
+    for region in REGIONS:
+        for method in methods:
+            group = [r for r in rows if r["region"] == region and r["method"] == method]
+            if not group:
+                continue
+            ok = [r for r in group if math.isfinite(float(r["rho"]))]
+            rho = _finite(r["rho"] for r in ok)
+            mean, low, high = combined_interval(
+                [r["rho"] for r in ok],
+                [r.get("boot_low", math.nan) for r in ok],
+                [r.get("boot_high", math.nan) for r in ok],
+            )
+            reasons = sorted({str(r.get("reason", "")) for r in group} - {""})
+            corrected = _finite(r.get("rho_corrected", math.nan) for r in ok)
+            out.append(
+                {
+                    "region": region,
+                    "method": method,
+                    "mean_rho": float(rho.mean()) if rho.size else math.nan,
+                    "boot_low": low,
+                    "boot_high": high,
+                    "std_rho": float(rho.std(ddof=1)) if rho.size > 1 else math.nan,
+                    "n_scenes": int(rho.size),
+                    "mean_fisher_width": _mean(
+                        float(r["fisher_high"]) - float(r["fisher_low"]) for r in ok
+                    ),
+                    "mean_boot_width": _mean(
+                        float(r.get("boot_high", math.nan)) - float(r.get("boot_low", math.nan))
+                        for r in ok
+                    ),
+                    "mean_top_share": _mean(r.get("top_share", math.nan) for r in ok),
+                    "mean_fireflies": _mean(r.get("n_fireflies", math.nan) for r in ok),
+                    "mean_reliability_left": _mean(r.get("reliability_left", math.nan) for r in ok),
+                    "mean_reliability_right": _mean(
+                        r.get("reliability_right", math.nan) for r in ok
+                    ),
+                    "mean_rho_corrected": float(corrected.mean()) if corrected.size else math.nan,
+                    "n_corrected_above_1": int((np.abs(corrected) > 1).sum()),
+                    "reason": "" if rho.size else "; ".join(reasons) or "no finite rho",
+                }
+            )
+    return out
+
+
+def curve_table(curve_rows: list[dict], rows: list[dict] | None = None) -> list[dict]:
+    """:math:`\\rho` against :math:`N'` across scenes: the mean over scenes of each scene's
+    subset mean, its spread, and the mean attenuation-corrected :math:`\\rho` of the full
+    estimate (the curve's asymptote) from ``rows``."""
+    rows = rows or []
+    out = []
+    keys = list(dict.fromkeys((r["region"], r["method"]) for r in curve_rows))
+    for region, method in keys:
+        corrected = _mean(
+            r.get("rho_corrected", math.nan)
+            for r in rows
+            if r["region"] == region and r["method"] == method
+        )
+        sizes = sorted(
+            {
+                int(r["n_prime"])
+                for r in curve_rows
+                if (r["region"], r["method"]) == (region, method)
+            }
+        )
+        for size in sizes:
+            v = _finite(
+                r["mean_rho"]
+                for r in curve_rows
+                if (r["region"], r["method"], int(r["n_prime"])) == (region, method, size)
+            )
+            out.append(
+                {
+                    "region": region,
+                    "method": method,
+                    "n_prime": size,
+                    "mean_rho": float(v.mean()) if v.size else math.nan,
+                    "std_rho": float(v.std(ddof=1)) if v.size > 1 else math.nan,
+                    "n_scenes": int(v.size),
+                    "mean_rho_corrected": corrected,
+                }
+            )
+    return out

@@ -1,0 +1,17 @@
+"""Snakemake adapter: stereovar.jobs.claims.claims_job."""
+
+from stereovar.jobs.claims import claims_job
+from stereovar.jobs.common import run_job
+
+outputs = dict(snakemake.output.items())
+run_job(
+    snakemake.log[0],
+    claims_job,
+    correlations=list(snakemake.input.correlations),
+    curves=list(snakemake.input.curves),
+    sweep=snakemake.input.sweep,
+    interventions=list(snakemake.input.interventions),
+    outputs={k: v for k, v in outputs.items() if k != "summary"},
+    summary=outputs["summary"],
+    **snakemake.params,
+)
