@@ -204,7 +204,7 @@ def test_a_registered_statistic_reaches_the_rows_and_table_1(plane_run, tmp_path
     from stereovar.jobs.correlation import correlation_job, warp_job
     from stereovar.jobs.tables import cross_scene_job
     from stereovar.jobs.variance import variance_job
-    
+
     @register_method(
         "stub_spearman",
         "Spearman of sigma_L^2 and the warped sigma_R^2",

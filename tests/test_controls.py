@@ -44,9 +44,31 @@ def test_analytic_sensor_variance_matches_many_simulated_frames():
     # the formula by hand: mean over channels of mu/g + (r/g)^2, mu floored at 0
     clean = np.maximum(mu, 0)
     np.testing.assert_allclose(want, (clean / 200.0 + (3.0 / 200.0) ** 2).mean(-1))
-    # the Eq. 1 path (StreamingVariance) on the same frames
-    eq1 = simulated_sensor_variance(mu, 50, model, seed=1)
-    np.testing.assert_allclose(eq1, frames[:50].var(axis=0).mean(-1), rtol=1e-5)
+
+
+def test_one_step_eq1_draw_has_the_law_of_eq1_over_simulated_frames():
+    """Eq. 1 of N = 8 Poisson-Gaussian frames, repeated 3000 times by brute force, against
+    the gamma draw's mean and variance, per pixel and channel (dim, mid and bright)."""
+    from stereovar.controls.sensor import eq1_moments
+    from stereovar.estimators.seeds import variance_field
+
+    mu = np.array([0.002, 0.02, 0.5, 2.0]).reshape(1, 4, 1) * np.ones((1, 1, 3))
+    model = SensorModel(gain=1000.0, read_noise=2.0)
+    n, reps = 8, 3000
+    frames = np.stack(list(SensorFrames(mu, n * reps, model, seed=3)))
+    per_rep = frames.reshape(reps, n, *mu.shape)
+    s2 = per_rep.var(axis=1)  # Eq. 1 per channel, population variance
+    mean, variance = eq1_moments(mu, n, model)
+    np.testing.assert_allclose(s2.mean(axis=0), mean, rtol=0.05)
+    np.testing.assert_allclose(s2.var(axis=0), variance, rtol=0.15)
+    # Eq. 1 as the project computes it, on one set of frames
+    _, eq1 = variance_field(per_rep[0])
+    np.testing.assert_allclose(eq1, s2[0].mean(axis=-1), rtol=1e-6)
+    # the one-step draws: same mean and spread of the channel-averaged field
+    draws = np.stack([simulated_sensor_variance(mu, n, model, seed=(k,)) for k in range(3000)])
+    brute = s2.mean(axis=-1)
+    np.testing.assert_allclose(draws.mean(axis=0), brute.mean(axis=0), rtol=0.05)
+    np.testing.assert_allclose(draws.std(axis=0), brute.std(axis=0), rtol=0.1)
 
 
 def test_sensor_frames_are_reproducible_and_views_independent():

@@ -11,10 +11,10 @@ from stereovar.statistics.correlation import pearson_over_mask
 from stereovar.statistics.regions import region_masks
 from stereovar.statistics.registry import METHODS
 
+from .reference.correlation import correlation_rows
+
 FIELD_METHODS = ("warp", "spearman", "log", "trimmed", "no_warp")
 """Statistics of the two variance fields alone (the controls need the job's inputs)."""
-
-from .reference.correlation import correlation_rows
 
 Z = 1.959963984540054
 
@@ -157,9 +157,7 @@ def test_warp_recovers_a_shifted_field_and_no_warp_does_not(d, sign):
     left, right, gt = stereo_pair(d, sign)
     rows = correlation_rows(left, right, gt, sign=sign)
     assert [(r["region"], r["method"]) for r in rows] == [
-        (region, method)
-        for region in ("all", "non_glass", "glass")
-        for method in METHODS.names()
+        (region, method) for region in ("all", "non_glass", "glass") for method in METHODS.names()
     ]
     by = {(r["region"], r["method"]): r for r in rows}
     for region in ("all", "non_glass", "glass"):

@@ -262,7 +262,9 @@ def test_rho_vs_spp_degenerate_rows():
     fig = rho_vs_spp_figure([])
     assert [t.get_text() for t in fig.axes[0].texts] == ["no data"]
     rows = [{"spp": 64, "region": "glass", "rho": math.nan, "fisher_low": 0.1, "fisher_high": 0.2}]
-    rows.append({"spp": 64, "region": "all", "rho": 0.5, "fisher_low": math.nan, "fisher_high": 0.6})
+    rows.append(
+        {"spp": 64, "region": "all", "rho": 0.5, "fisher_low": math.nan, "fisher_high": 0.6}
+    )
     fig = rho_vs_spp_figure(rows)
     containers = _containers(fig)
     assert len(containers) == 1

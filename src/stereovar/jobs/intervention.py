@@ -11,6 +11,7 @@ INTERVENTION_COLUMNS = [
     "max_disparity",
     "window",
     "block",
+    "source",
     "cost",
     "metric",
     "region",
@@ -44,9 +45,15 @@ def intervention_job(
     disparity_margin=4,
     margin_samples=2000,
     workers=1,
+    sensor=None,
 ) -> list[dict]:
     """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4), and a
-    sample of the per-pixel GT margins for the distribution figure."""
+    sample of the per-pixel GT margins for the distribution figure.
+
+    With ``sensor`` (the ``controls.sensor`` settings) the same metrics are computed again on
+    N simulated Poisson-Gaussian frames per view around the seed mean
+    (:class:`stereovar.controls.sensor.SensorFrames`): rows with ``source`` ``sensor``
+    beside the renders' ``render`` rows, Table 3's sensor column."""
     import math
 
     from ..intervention.metrics import intervention_metrics
@@ -84,6 +91,24 @@ def intervention_job(
     attrs = RenderStore(left[0]).attrs
     scene = attrs.get("scene", gt.attrs.get("scene"))
     for row in result.rows:
+        row["source"] = "render"
+    if sensor is not None:
+        result.rows.extend(
+            sensor_rows(
+                renders_l,
+                renders_r,
+                gl,
+                sensor,
+                label=str(scene),
+                sign=int(gt.attrs["disparity_sign"]),
+                max_disparity=int(max_disparity),
+                window=window,
+                block=block,
+                seed=seed,
+                workers=workers,
+            )
+        )
+    for row in result.rows:
         row.update(
             scene=scene,
             spp=attrs.get("spp"),
@@ -93,7 +118,8 @@ def intervention_job(
             block=block,
         )
         log.info(
-            "%-13s %-13s %-9s %-12s %.4g (chance %.4g, n=%d)%s",
+            "%-6s %-13s %-13s %-9s %-12s %.4g (chance %.4g, n=%d)%s",
+            row["source"],
             row["cost"],
             row["metric"],
             row["region"],
@@ -108,6 +134,38 @@ def intervention_job(
     run = {"renderer": attrs.get("renderer", ""), "estimator": ESTIMATOR}
     write_tables(result.margins, MARGIN_COLUMNS, {"csv": margins}, constants=run)
     write_tables(result.rows, INTERVENTION_COLUMNS, {"csv": out}, constants=run)
+    return result.rows
+
+
+def sensor_rows(renders_l, renders_r, ground_truth_left, sensor: dict, *, label, **options):
+    """Table 3's metrics on simulated sensor frames around each view's seed mean.
+
+    Each view gets as many frames as it has seeds, drawn from its own stream
+    (``controls.sensor.seed``, the scene, the view), so only the clean image is shared
+    between views.
+    """
+    from ..controls.sensor import SensorFrames, SensorModel
+    from ..estimators.seeds import StreamingVariance
+    from ..intervention.metrics import intervention_metrics
+    from ..seeding import derive_seed
+
+    model = SensorModel(**{k: sensor[k] for k in ("gain", "read_noise", "seed") if k in sensor})
+    frames = {}
+    for view, renders in (("left", renders_l), ("right", renders_r)):
+        acc = StreamingVariance()
+        for image in renders:
+            acc.update(image)
+        seed = (int(model.seed), derive_seed("sensor-intervention", label, view))
+        frames[view] = SensorFrames(acc.mean, len(renders), model, seed)
+        if frames[view].n_floored:
+            log.info(
+                "sensor %s: %d seed-mean entries <= 0 floored at 0", view, frames[view].n_floored
+            )
+    result = intervention_metrics(
+        frames["left"], frames["right"], ground_truth_left, margin_samples=0, **options
+    )
+    for row in result.rows:
+        row["source"] = "sensor"
     return result.rows
 
 

@@ -165,7 +165,7 @@ def pearson_over_mask(a, b, mask, *, min_pixels: int = 30) -> dict:
     db = bv - bv.mean()
     da /= np.abs(da).max()  # Pearson is scale-invariant; this keeps the sums from overflowing
     db /= np.abs(db).max()
-    sxx, syy, sxy = da @ da, db @ db, da @ db
+    sxx, syy, sxy = (np.einsum("i,i->", x, y) for x, y in ((da, da), (db, db), (da, db)))
     if not (sxx > 0 and syy > 0):
         return undefined_result(n, n_nonfinite, CONSTANT)
     rho = float(np.clip(sxy / math.sqrt(sxx * syy), -1.0, 1.0))

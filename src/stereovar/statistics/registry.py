@@ -176,7 +176,9 @@ def pearson_point(a, b) -> float:
     if not (sa > 0 and sb > 0):
         return float("nan")
     da, db = da / sa, db / sb
-    return float(np.clip(da @ db / np.sqrt((da @ da) * (db @ db)), -1.0, 1.0))
+    # einsum, not BLAS: a threaded BLAS dot stalls when parallel jobs share the cores
+    sab, saa, sbb = (np.einsum("i,i->", x, y) for x, y in ((da, db), (da, da), (db, db)))
+    return float(np.clip(sab / np.sqrt(saa * sbb), -1.0, 1.0))
 
 
 class BootstrapDraws:

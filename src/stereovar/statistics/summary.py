@@ -64,8 +64,8 @@ def cross_scene_table(rows: list[dict], *, spp: int | None = None) -> list[dict]
     the sample standard deviation (``ddof=1``; NaN when :math:`S = 1`), with the range
     :math:`[\\min_s \\rho_s, \\max_s \\rho_s]` and the 95% interval of the mean from the
     scenes' block-bootstrap intervals (``boot_low``, ``boot_high``;
-    :func:`~stereovar.statistics.across.combined_interval`). ``mean_rho_no_warp`` averages the no-warp rows
-    (Eq. 3 without Eq. 2) over the scenes where that value is finite.
+    :func:`~stereovar.statistics.across.combined_interval`). ``mean_rho_no_warp`` averages
+    the no-warp rows (Eq. 3 without Eq. 2) over the scenes where that value is finite.
 
     Parameters
     ----------
@@ -266,9 +266,11 @@ def spp_sweep_table(entries: list[dict]) -> tuple[list[dict], dict]:
 def intervention_table(rows: list[dict]) -> list[dict]:
     """Table 3 from per-scene intervention rows (paper Sec. 3.4).
 
-    For each (cost, metric, region): the mean and sample standard deviation (ddof 1) across
-    scenes of the normal and the decorrelated values, their mean chance levels, the number
-    of scenes with a finite value, and the relative change
+    For each (source, cost, metric, region), ``source`` being ``render`` or ``sensor`` (the
+    same metrics on simulated sensor frames; rows without one are renders): the mean and
+    sample standard deviation (ddof 1) across scenes of the normal and the decorrelated
+    values, their mean chance levels, the number of scenes with a finite value, and the
+    relative change
 
     .. math:: \\Delta = \\frac{\\bar v_{\\text{normal}} - \\bar v_{\\text{decorr}}}
         {|\\bar v_{\\text{decorr}}|}.
@@ -278,17 +280,19 @@ def intervention_table(rows: list[dict]) -> list[dict]:
     keys = []
     groups: dict = {}
     for r in rows:
-        key = (r["cost"], r["metric"], r["region"])
+        key = (str(r.get("source") or "render"), r["cost"], r["metric"], r["region"])
         if key not in groups:
             keys.append(key)
             groups[key] = {"normal": [], "decorrelated": []}
         groups[key][r["condition"]].append(r)
     out = []
-    for cost, metric, region in keys:
-        row = {"cost": cost, "metric": metric, "region": region}
+    for source, cost, metric, region in keys:
+        row = {"source": source, "cost": cost, "metric": metric, "region": region}
         means = {}
         for condition in ("normal", "decorrelated"):
-            items = [g for g in groups[(cost, metric, region)][condition] if _finite(g["value"])]
+            items = [
+                g for g in groups[(source, cost, metric, region)][condition] if _finite(g["value"])
+            ]
             values = np.array([float(g["value"]) for g in items])
             chances = [float(g["chance"]) for g in items if _finite(g.get("chance"))]
             means[condition] = float(values.mean()) if values.size else math.nan
