@@ -10,6 +10,7 @@ rule intervention:
         margins="results/{renderer}/seeds/intervention/margins/{scene}.csv",
     params:
         **config["intervention"],
+        sensor=config["controls"]["sensor"],
     log:
         "logs/{renderer}/seeds/intervention/{scene}.log",
     benchmark:
