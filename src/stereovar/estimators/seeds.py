@@ -271,7 +271,9 @@ def _blocks(paths, chunk_rows):
             yield pending.result()
 
 
-def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
+def variance_from_stores(
+    paths, *, chunk_rows: int | None = None, subsets: bool = True
+) -> xr.Dataset:
     """Stream the render stores of one view into :class:`StreamingVariance` (Eq. 1).
 
     Stores are opened and read one at a time (``chunk_rows`` rows at a time when given), so
@@ -292,6 +294,10 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         is one seed.
     chunk_rows : int, keyword-only, optional
         Rows read per block; whole renders when omitted.
+    subsets : bool, keyword-only
+        Also accumulate the split halves and disjoint seed subsets
+        (:class:`~stereovar.estimators.subsets.SeedSubsets`): ``half_variance`` and
+        ``subset_variance``.
 
     Returns
     -------
@@ -313,7 +319,7 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows}")
     acc = None
     coords = {}
-    subsets, render = SeedSubsets(), None
+    split, render = (SeedSubsets() if subsets else None), None
     for radiance, rows, block in _blocks(paths, chunk_rows):
         if acc is None:
             acc = StreamingVariance(shape=radiance.shape)
@@ -323,14 +329,16 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
                 radiance.path, f"shape {radiance.shape} differs from {acc.shape} of {paths[0]}"
             )
         acc.update(block, rows=rows)
+        if split is None:
+            continue
         if rows.start == 0 and rows.stop == acc.shape[0]:
-            subsets.update(block)
+            split.update(block)
         else:
             if render is None:
                 render = np.empty(acc.shape, dtype=block.dtype)
             render[rows] = block
             if rows.stop == acc.shape[0]:
-                subsets.update(render)
+                split.update(render)
     yx = ("y", "x")
     return xr.Dataset(
         {
@@ -345,10 +353,12 @@ def variance_from_stores(paths, *, chunk_rows: int | None = None) -> xr.Dataset:
         },
         coords=coords,
         attrs={"n_seeds": acc.n, "estimator": ESTIMATOR},
-    ).merge(subset_dataset(subsets))
+    ).merge(subset_dataset(split) if split is not None else xr.Dataset())
 
 
-def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) -> xr.Dataset:
+def variance_dataset(
+    left_paths, right_paths, *, chunk_rows: int | None = None, subsets: bool = True
+) -> xr.Dataset:
     """Variance fields of both views: the variance contract (:mod:`stereovar.io.contracts`).
 
     .. math::
@@ -362,7 +372,7 @@ def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) 
     ----------
     left_paths, right_paths : sequence of path-like
         Render stores of the left and right view, the same number of seeds each.
-    chunk_rows : int, keyword-only, optional
+    chunk_rows, subsets : keyword-only, optional
         Passed to :func:`variance_from_stores`.
 
     Returns
@@ -391,7 +401,8 @@ def variance_dataset(left_paths, right_paths, *, chunk_rows: int | None = None) 
     with ThreadPoolExecutor(max_workers=2) as pool:
         views = list(
             pool.map(
-                lambda p: variance_from_stores(p, chunk_rows=chunk_rows), (left_paths, right_paths)
+                lambda p: variance_from_stores(p, chunk_rows=chunk_rows, subsets=subsets),
+                (left_paths, right_paths),
             )
         )
     left_shape, right_shape = (tuple(v["mean"].shape) for v in views)
