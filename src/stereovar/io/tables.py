@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .store import write_file
 
-FORMATS = ("csv", "md", "tex")
+FORMATS = ("csv", "md", "tex", "html")
 
 
 def _fmt(value, digits: int) -> str:
@@ -91,6 +91,36 @@ def to_latex(rows: list[dict], columns: list[str], *, digits: int = 4, caption: 
     return "\n".join(body) + "\n"
 
 
+HTML_STYLE = (
+    "body{font-family:system-ui,sans-serif;margin:1em}"
+    "table{border-collapse:collapse;font-size:0.85em}"
+    "caption{caption-side:top;text-align:left;margin-bottom:0.5em;max-width:60em}"
+    "th,td{border-bottom:1px solid #ccc;padding:0.25em 0.6em;text-align:right}"
+    "th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}"
+)
+
+
+def to_html(rows: list[dict], columns: list[str], *, digits: int = 4, caption: str = "") -> str:
+    """A self-contained HTML page holding the table (shown inline by ``snakemake --report``)."""
+    import html
+
+    import pandas as pd
+
+    frame = pd.DataFrame([{c: row.get(c, "") for c in columns} for row in rows], columns=columns)
+    body = frame.to_html(
+        index=False,
+        na_rep="NaN",
+        float_format=lambda v: f"{v:.{digits}g}",
+        border=0,
+    )
+    if caption:
+        body = body.replace(">", f"><caption>{html.escape(caption)}</caption>", 1)
+    return (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><style>{HTML_STYLE}</style>"
+        f"</head><body>{body}</body></html>\n"
+    )
+
+
 def write_tables(
     rows: list[dict],
     columns: list[str],
@@ -100,7 +130,8 @@ def write_tables(
     digits: int = 4,
     constants: dict | None = None,
 ) -> None:
-    """Write ``rows`` to each of ``paths`` (keys among ``csv``, ``md``, ``tex``) atomically.
+    """Write ``rows`` to each of ``paths`` (keys among ``csv``, ``md``, ``tex``, ``html``)
+    atomically.
 
     ``constants`` (e.g. ``{"renderer": "mitsuba", "estimator": "seeds"}``) say what every row
     shows: the CSV gets them as trailing columns, the Markdown and LaTeX captions name them.
@@ -115,6 +146,7 @@ def write_tables(
         "csv": lambda: to_csv(csv_rows, csv_columns),
         "md": lambda: to_markdown(rows, columns, digits=digits, caption=caption),
         "tex": lambda: to_latex(rows, columns, digits=digits, caption=caption),
+        "html": lambda: to_html(rows, columns, digits=digits, caption=caption),
     }
     for kind, path in paths.items():
         text = render[kind]()
