@@ -209,16 +209,18 @@ def all_targets():
     return [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
         *expand("results/{renderer}/previews/{scene}.png", renderer=renderer, scene=SCENES),
-        *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex"]),
+        *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
         *[f"{run}/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
         *expand(
             "{run}/tables/{name}.{ext}",
             run=run,
             name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
-            ext=["csv", "md", "tex"],
+            ext=["csv", "md", "tex", "html"],
         ),
         *expand("{run}/intervention/{scene}.csv", run=intervention, scene=SCENES),
-        *expand("{run}/tables/intervention.{ext}", run=intervention, ext=["csv", "md", "tex"]),
+        *expand(
+            "{run}/tables/intervention.{ext}", run=intervention, ext=["csv", "md", "tex", "html"]
+        ),
         f"{run}/figures/fig1_teaser.png",
         f"{run}/figures/fig2_rho_vs_spp.png",
         f"{run}/figures/fig3_material_scatter.png",

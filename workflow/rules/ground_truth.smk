@@ -27,14 +27,15 @@ rule scene_summary:
     input:
         expand("results/ground_truth/{scene}.zarr", scene=SCENES),
     output:
-        csv=report(
-            "results/tables/scenes.csv",
-            caption="../report/scenes.rst",
-            category="Scenes",
-            labels={"table": "scene summary", "format": "csv"},
-        ),
+        csv="results/tables/scenes.csv",
         md="results/tables/scenes.md",
         tex="results/tables/scenes.tex",
+        html=report(
+            "results/tables/scenes.html",
+            caption="../report/scenes.rst",
+            category="Scenes",
+            labels={"table": "scene summary"},
+        ),
     log:
         "logs/tables/scenes.log",
     benchmark:

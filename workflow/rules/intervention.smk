@@ -28,8 +28,11 @@ rule intervention_table:
     input:
         scene_files("{run}/intervention/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
     output:
-        csv=report(
-            "results/{renderer}/seeds/tables/intervention.csv",
+        csv="results/{renderer}/seeds/tables/intervention.csv",
+        md="results/{renderer}/seeds/tables/intervention.md",
+        tex="results/{renderer}/seeds/tables/intervention.tex",
+        html=report(
+            "results/{renderer}/seeds/tables/intervention.html",
             caption="../report/intervention.rst",
             category="Tables",
             labels={
@@ -38,8 +41,6 @@ rule intervention_table:
                 "estimator": INTERVENTION_ESTIMATOR,
             },
         ),
-        md="results/{renderer}/seeds/tables/intervention.md",
-        tex="results/{renderer}/seeds/tables/intervention.tex",
     log:
         "logs/{renderer}/seeds/tables/intervention.log",
     benchmark:
@@ -60,7 +61,7 @@ rule margin_figure:
             caption="../report/fig4_intervention_margins.rst",
             category="Figures",
             labels={
-                "figure": "Table 3: GT-margin distributions",
+                "figure": "Fig. 4: GT-margin distributions",
                 "renderer": "{renderer}",
                 "estimator": INTERVENTION_ESTIMATOR,
             },

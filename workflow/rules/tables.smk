@@ -6,8 +6,11 @@ rule cross_scene_table:
     input:
         scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
     output:
-        csv=report(
-            "results/{renderer}/{estimator}/tables/cross_scene.csv",
+        csv="results/{renderer}/{estimator}/tables/cross_scene.csv",
+        md="results/{renderer}/{estimator}/tables/cross_scene.md",
+        tex="results/{renderer}/{estimator}/tables/cross_scene.tex",
+        html=report(
+            "results/{renderer}/{estimator}/tables/cross_scene.html",
             caption="../report/cross_scene.rst",
             category="Tables",
             labels={
@@ -16,8 +19,6 @@ rule cross_scene_table:
                 "estimator": "{estimator}",
             },
         ),
-        md="results/{renderer}/{estimator}/tables/cross_scene.md",
-        tex="results/{renderer}/{estimator}/tables/cross_scene.tex",
     params:
         spp=MAIN_SPP,
     log:
@@ -37,8 +38,11 @@ rule spp_sweep_table:
         variances=sweep_inputs("{run}/variance/{scene}/spp{spp}.zarr"),
         warped=sweep_inputs("{run}/warped/{scene}/spp{spp}.zarr"),
     output:
-        csv=report(
-            "results/{renderer}/{estimator}/tables/spp_sweep.csv",
+        csv="results/{renderer}/{estimator}/tables/spp_sweep.csv",
+        md="results/{renderer}/{estimator}/tables/spp_sweep.md",
+        tex="results/{renderer}/{estimator}/tables/spp_sweep.tex",
+        html=report(
+            "results/{renderer}/{estimator}/tables/spp_sweep.html",
             caption="../report/spp_sweep.rst",
             category="Tables",
             labels={
@@ -47,10 +51,11 @@ rule spp_sweep_table:
                 "estimator": "{estimator}",
             },
         ),
-        md="results/{renderer}/{estimator}/tables/spp_sweep.md",
-        tex="results/{renderer}/{estimator}/tables/spp_sweep.tex",
-        fit_csv=report(
-            "results/{renderer}/{estimator}/tables/spp_sweep_fit.csv",
+        fit_csv="results/{renderer}/{estimator}/tables/spp_sweep_fit.csv",
+        fit_md="results/{renderer}/{estimator}/tables/spp_sweep_fit.md",
+        fit_tex="results/{renderer}/{estimator}/tables/spp_sweep_fit.tex",
+        fit_html=report(
+            "results/{renderer}/{estimator}/tables/spp_sweep_fit.html",
             caption="../report/spp_sweep_fit.rst",
             category="Tables",
             labels={
@@ -59,8 +64,6 @@ rule spp_sweep_table:
                 "estimator": "{estimator}",
             },
         ),
-        fit_md="results/{renderer}/{estimator}/tables/spp_sweep_fit.md",
-        fit_tex="results/{renderer}/{estimator}/tables/spp_sweep_fit.tex",
     log:
         "logs/{renderer}/{estimator}/tables/spp_sweep.log",
     benchmark:

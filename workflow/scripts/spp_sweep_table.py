@@ -9,6 +9,6 @@ run_job(
     correlations=snakemake.input.correlations,
     variances=snakemake.input.variances,
     warped=snakemake.input.warped,
-    outputs={k: snakemake.output[k] for k in ("csv", "md", "tex")},
-    fit_outputs={k: snakemake.output["fit_" + k] for k in ("csv", "md", "tex")},
+    outputs={k: snakemake.output[k] for k in ("csv", "md", "tex", "html")},
+    fit_outputs={k: snakemake.output["fit_" + k] for k in ("csv", "md", "tex", "html")},
 )
