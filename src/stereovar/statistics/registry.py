@@ -69,8 +69,9 @@ class Method:
         finite values (a tuple of 1-D arrays in the order ``pair`` returns them); ``keep``
         (bool) drops pairs. None: Pearson of ``a`` and ``b`` as they are.
     estimator_noise : bool
-        The fields are Eq. 1 estimates, so split-half reliability and the seed-subset curve
-        apply (False for the sensor baselines).
+        Report split-half reliability and the attenuation-corrected rho (False for the sensor
+        baselines, whose fields are not Eq. 1 of the renders, and for the null warps, whose
+        level is the point).
     curve : bool
         Report this statistic at :math:`N' < N` seeds too.
     """
@@ -368,13 +369,19 @@ def unaligned_pair(fields: AlignedFields):
     return fields.left, fields.right
 
 
-@register_method("null_shift", "Eq. 3 with the disparity off by controls.null_shift pixels")
+@register_method(
+    "null_shift",
+    "Eq. 3 with the disparity off by controls.null_shift pixels",
+    estimator_noise=False,
+)
 def shifted_pair(fields: AlignedFields):
     """Null warp (:func:`stereovar.controls.null_warps.shifted_warp`)."""
     return fields.left, fields["null_shift"]
 
 
-@register_method("null_flip", "Eq. 3 with the right variance field flipped upside down")
+@register_method(
+    "null_flip", "Eq. 3 with the right variance field flipped upside down", estimator_noise=False
+)
 def flipped_pair(fields: AlignedFields):
     """Null warp (:func:`stereovar.controls.null_warps.flipped_warp`)."""
     return fields.left, fields["null_flip"]
