@@ -38,7 +38,13 @@ DEFAULTS = {
         "seeds_per_job": 8,
         "spp_sweep": {"scene": "scene_000", "spp": [8, 16, 32, 64, 128]},
     },
-    "analysis": {"min_pixels": 30},
+    "analysis": {
+        "min_pixels": 30,
+        "trim_fraction": 0.001,
+        "firefly_factor": 100,
+        "bootstrap": {"tile": 16, "reps": 1000, "seed": 0},
+    },
+    "controls": {"null_shift": 8, "sensor": {"gain": 1000, "read_noise": 2, "seed": 0}},
     "intervention": {
         "window": 5,
         "block": 16,
@@ -92,7 +98,8 @@ BAD_CONFIGS = [
         [
             "'colour'",
             "not known",
-            "scenes, generator, resolution, rig, render, analysis, intervention, cluster, preview",
+            "scenes, generator, resolution, rig, render, analysis, controls, intervention, "
+            "cluster, preview",
         ],
         id="unknown-top-level-key",
     ),
@@ -305,3 +312,9 @@ def test_command_line_strings_become_the_scalars_the_schema_asks_for():
     # The same string in a config file (not given on the command line) stays an error.
     with pytest.raises(ConfigError, match="cluster.gpus_per_render"):
         validate_config({"cluster": {"gpus_per_render": "1"}}, SCHEMA)
+
+
+def test_a_bootstrap_tile_larger_than_the_image_is_a_one_line_error():
+    config = {"resolution": {"width": 64, "height": 32}, "analysis": {"bootstrap": {"tile": 40}}}
+    with pytest.raises(ConfigError, match=r"analysis\.bootstrap\.tile.*at most 32"):
+        validate_config(config, SCHEMA)

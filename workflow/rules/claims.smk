@@ -79,3 +79,55 @@ rule claims:
         ENV
     script:
         "../scripts/claims.py"
+
+
+rule rho_vs_seeds_figure:
+    input:
+        "results/{renderer}/{estimator}/tables/seed_curve.csv",
+    output:
+        report(
+            "results/{renderer}/{estimator}/figures/rho_vs_seeds.png",
+            caption="../report/fig_rho_vs_seeds.rst",
+            category="Figures",
+            labels={
+                "figure": "rho against the number of seeds",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
+        ),
+    log:
+        "logs/{renderer}/{estimator}/figures/rho_vs_seeds.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/figures/rho_vs_seeds.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/rho_vs_seeds_figure.py"
+
+
+rule statistics_dot_figure:
+    input:
+        scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
+    output:
+        report(
+            "results/{renderer}/{estimator}/figures/statistics_dots.png",
+            caption="../report/fig_statistics_dots.rst",
+            category="Figures",
+            labels={
+                "figure": "every statistic and control per scene",
+                "renderer": "{renderer}",
+                "estimator": "{estimator}",
+            },
+        ),
+    params:
+        spp=MAIN_SPP,
+    log:
+        "logs/{renderer}/{estimator}/figures/statistics_dots.log",
+    benchmark:
+        "benchmarks/{renderer}/{estimator}/figures/statistics_dots.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/statistics_dot_figure.py"

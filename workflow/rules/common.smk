@@ -225,6 +225,8 @@ def all_targets():
         f"{run}/figures/fig2_rho_vs_spp.png",
         f"{run}/figures/fig3_material_scatter.png",
         f"{intervention}/figures/fig4_intervention_margins.png",
+        f"{run}/figures/rho_vs_seeds.png",
+        f"{run}/figures/statistics_dots.png",
         *expand(
             "{run}/tables/{name}.{ext}",
             run=run,

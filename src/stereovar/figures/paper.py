@@ -254,11 +254,15 @@ def _relative_variation(values) -> float:
     return float((v.max() - v.min()) / abs(mean))
 
 
-def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
+def rho_vs_spp_figure(
+    rows, *, title: str = "", primary: str = "warp", secondary=("spearman", "log")
+):
     """Fig. 2: cross-view correlation :math:`\\rho` against samples per pixel, per region.
 
     One line with markers per material region (all pixels, non-glass, glass; paper Fig. 2,
-    Sec. 3.3), with asymmetric error bars from the confidence interval, on a
+    Sec. 3.3), with asymmetric error bars from the spatial block bootstrap's 95% interval
+    (``boot_low``, ``boot_high``; the Fisher-z interval, which assumes independent pixels,
+    only where a row has no bootstrap interval), on a
     :math:`\\log_2` SPP axis with a tick at every given SPP. Each legend label carries the
     region's relative variation :math:`(\\max\\rho - \\min\\rho) / \\overline{\\rho}` over
     its plotted points, the figure the paper quotes (0.12 % for non-glass).
@@ -267,19 +271,22 @@ def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
     with a missing confidence bound gets no bar on that side. A bound on the wrong side of
     ``rho`` is drawn as a zero-length bar on that side.
 
-    Rows of the other registered statistics (:mod:`stereovar.statistics.registry`, e.g. the
-    no-warp baseline) are drawn as thin dashed lines in the region's colour, without bars.
+    Rows of the ``secondary`` statistics (:mod:`stereovar.statistics.registry`; by default
+    the robust ones, Spearman and Pearson of the logarithms) are drawn beside it as thin
+    lines in the region's colour (dashed, dotted), with their bootstrap bars.
 
     Parameters
     ----------
     rows : list of dict
         Keys ``spp`` (int), ``region`` (one of ``"all"``, ``"non_glass"``, ``"glass"``),
-        ``rho``, ``ci_low``, ``ci_high`` (float, NaN allowed) and optionally ``method``
-        (rows without one are ``primary``).
+        ``rho``, ``boot_low``, ``boot_high`` and/or ``fisher_low``, ``fisher_high`` (float,
+        NaN allowed) and optionally ``method`` (rows without one are ``primary``).
     title : str, keyword-only
         Axes title.
     primary : str, keyword-only
-        The statistic drawn with error bars.
+        The statistic drawn with markers and a line per region.
+    secondary : sequence of str, keyword-only
+        Statistics drawn beside it; rows of any other statistic are ignored.
 
     Returns
     -------
@@ -297,7 +304,7 @@ def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
 
     plt = _pyplot()
     by_region: dict[str, list[tuple[float, float, float, float]]] = {r: [] for r in REGIONS}
-    secondary: dict[tuple[str, str], list[tuple[float, float]]] = {}
+    extra: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {}
     all_spp: set[float] = set()
     for row in rows:
         region = row["region"]
@@ -311,12 +318,14 @@ def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
         if not math.isfinite(rho):
             continue
         method = row.get("method", primary)
+        low, high = _finite(row.get("boot_low")), _finite(row.get("boot_high"))
+        if not (math.isfinite(low) or math.isfinite(high)):
+            low, high = _finite(row.get("fisher_low")), _finite(row.get("fisher_high"))
         if method != primary:
-            secondary.setdefault((method, region), []).append((spp, rho))
+            if method in secondary:
+                extra.setdefault((method, region), []).append((spp, rho, low, high))
             continue
-        by_region[region].append(
-            (spp, rho, _finite(row.get("fisher_low")), _finite(row.get("fisher_high")))
-        )
+        by_region[region].append((spp, rho, low, high))
 
     fig, ax = plt.subplots(figsize=(5.5, 4.0), constrained_layout=True)
     plotted = False
@@ -342,14 +351,21 @@ def rho_vs_spp_figure(rows, *, title: str = "", primary: str = "warp"):
             label=f"{label} (rel. var. {rel_text})",
         )
         plotted = True
-    for (method, region), pts in secondary.items():
-        spp, rho = (np.asarray(c, dtype=np.float64) for c in zip(*sorted(pts), strict=True))
-        ax.plot(
-            spp,
+    styles = ("--", ":", "-.")
+    for (method, region), pts in extra.items():
+        spp, rho, low, high = (
+            np.asarray(c, dtype=np.float64) for c in zip(*sorted(pts), strict=True)
+        )
+        lower = np.where(np.isfinite(low), np.maximum(rho - low, 0.0), 0.0)
+        upper = np.where(np.isfinite(high), np.maximum(high - rho, 0.0), 0.0)
+        ax.errorbar(
+            spp * (1.04 if secondary.index(method) == 0 else 0.96),
             rho,
-            linestyle="--",
+            yerr=np.vstack([lower, upper]),
+            linestyle=styles[secondary.index(method) % len(styles)],
             linewidth=1.0,
             marker=".",
+            capsize=2,
             color=REGION_COLOURS[region],
             alpha=0.7,
             label=f"{REGION_LABELS[region]}, {method.replace('_', '-')}",

@@ -22,8 +22,8 @@ def teaser_figure_job(variance, warped, out) -> None:
 
 
 def rho_vs_spp_figure_job(correlations, out) -> None:
-    """Fig. 2: rho against SPP per region, with Fisher-z intervals for the primary statistic
-    and dashed lines for the other registered statistics."""
+    """Fig. 2: rho against SPP per region with bootstrap intervals, and the robust statistics
+    (Spearman, log-Pearson) beside Pearson."""
     from ..figures.paper import rho_vs_spp_figure
     from ..io.tables import read_rows
     from ..statistics.registry import PRIMARY_METHOD
@@ -66,3 +66,25 @@ def margin_figure_job(margins, out) -> None:
     if rows and rows[0].get("renderer"):
         title += f"\n{run_label(rows[0]['renderer'], rows[0].get('estimator'))}"
     save_figure(margin_distribution_figure(rows, title=title), out)
+
+
+def rho_vs_seeds_figure_job(curve_table, out) -> None:
+    """rho against the number of seeds N' per region, with the reliability-corrected
+    asymptote (``tables/seed_curve.csv``)."""
+    from ..figures.uncertainty import rho_vs_seeds_figure
+    from ..io.tables import read_rows
+
+    rows = read_rows(curve_table)
+    attrs = rows[0] if rows else {}
+    save_figure(rho_vs_seeds_figure(rows, title=_title(attrs, "rho against seeds N'")), out)
+
+
+def statistics_dot_figure_job(correlations, out, *, spp) -> None:
+    """Every statistic and control per scene with its bootstrap interval, at the main SPP."""
+    from ..figures.uncertainty import statistics_dot_figure
+    from ..io.tables import read_rows
+
+    rows = [r for path in correlations for r in read_rows(path)]
+    attrs = rows[0] if rows else {}
+    title = _title(attrs, f"every statistic and control, SPP {spp}")
+    save_figure(statistics_dot_figure(rows, title=title), out)
