@@ -14,6 +14,7 @@ import yaml
 
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
+from stereovar.statistics.registry import METHODS
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = ["scene_000", "scene_001"]
@@ -30,6 +31,13 @@ TINY = {
 }
 #: Jobs that depend on one non-sweep scene at the main SPP.
 SCENE_CHAIN = {"render": 1, "variance": 1, "warp": 1, "correlation": 1}
+SUMMARIES = {
+    "statistics_table": 1,
+    "rho_vs_seeds_figure": 1,
+    "statistics_dot_figure": 1,
+    "claims": 1,
+}
+"""Jobs downstream of every scene's correlation rows."""
 RUN = "results/mitsuba/seeds"
 FIXTURE = REPO / "tests" / "fixtures" / "before_tiny"
 
@@ -106,7 +114,7 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         rows = (workdir / f"{RUN}/correlation/{scene}/spp{spp}.csv").read_text().splitlines()
         assert rows[0].startswith("scene,spp,n_seeds,region,method,rho,n_pixels,fisher_low")
         assert rows[0].endswith(",renderer,estimator") and rows[1].endswith(",mitsuba,seeds")
-        assert len(rows) == 7
+        assert len(rows) == 1 + 3 * len(METHODS)
         renders = [
             open_dataset(workdir / f"results/mitsuba/renders/{scene}/{v}/spp{spp}/seeds0-1.zarr")
             for v in ("left", "right")
@@ -123,8 +131,8 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
         assert warped["x"].attrs["units"] == "px"
     for scene in SCENES:
         rows = (workdir / f"{RUN}/intervention/{scene}.csv").read_text().splitlines()
-        assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,cost,metric")
-        assert len(rows) == 1 + 5 * 2 * 2
+        assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,source,cost,metric")
+        assert len(rows) == 1 + 5 * 2 * 2 * 2  # render and sensor sources
         margins = (workdir / f"{RUN}/intervention/margins/{scene}.csv").read_text()
         assert margins.startswith("scene,cost,region,condition,seed,y,x,margin")
     for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention"):
@@ -173,6 +181,7 @@ def test_editing_one_scene_reruns_only_that_scene(workdir):
             "intervention": 1,
             "intervention_table": 1,
             "margin_figure": 1,
+            **SUMMARIES,
             "all": 1,
         }
         out = snakemake(workdir, "-n", "all").stdout
@@ -205,6 +214,7 @@ def test_analysis_parameter_change_renders_nothing(workdir):
         "cross_scene_table": 1,
         "spp_sweep_table": 1,
         "rho_vs_spp_figure": 1,
+        **SUMMARIES,
         "all": 1,
     }
 
@@ -298,35 +308,57 @@ FIXTURE_PATHS = {
 
 @pytest.mark.parametrize("before", sorted(FIXTURE_PATHS))
 def test_tables_equal_the_flat_layouts(workdir, before):
-    """Every table the workflow wrote before the library was split into subpackages comes
-    out the same: the same rows and columns, every number bit for bit; the only additions
-    are the renderer and estimator columns."""
+    """Every row and column the workflow wrote before the controls were added comes out the
+    same, every number bit for bit: the Fisher-z columns are renamed ``fisher_low`` and
+    ``fisher_high``, the new statistics and the sensor intervention rows are extra rows, the
+    intervals and diagnostics extra columns."""
+    renamed = {"ci_low": "fisher_low", "ci_high": "fisher_high"}
     old = read_rows(FIXTURE / before)
     new = read_rows(workdir / FIXTURE_PATHS[before])
+    old_methods = {r.get("method") for r in old}
+    new = [
+        r for r in new if r.get("method") in old_methods and r.get("source", "render") == "render"
+    ]
     assert len(new) == len(old) and old
-    added = set(new[0]) - set(old[0])
-    assert added <= {"renderer", "estimator"}
     for row_old, row_new in zip(old, new, strict=True):
         for key, value in row_old.items():
-            got = row_new[key]
+            got = row_new[renamed.get(key, key)]
             if isinstance(value, float) and math.isnan(value):
                 assert isinstance(got, float) and math.isnan(got), (key, got)
             else:
                 assert got == value, (before, key, got, value)
-        assert all(row_new[k] == {"renderer": "mitsuba", "estimator": "seeds"}[k] for k in added)
+        assert (row_new["renderer"], row_new["estimator"]) == ("mitsuba", "seeds")
 
 
-def test_markdown_and_latex_tables_equal_the_flat_layouts(workdir):
-    """The Markdown and LaTeX tables hold the same cells; only the caption names the run."""
-    for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention", "scenes"):
+def _md_cells(lines):
+    rows = [
+        [c.strip() for c in re.split(r"(?<!\\)\|", ln.strip()[1:-1])]
+        for ln in lines
+        if ln.startswith("|")
+    ]
+    return [rows[0], *rows[2:]]
+
+
+def _cell(value) -> str:
+    if isinstance(value, float):
+        return "NaN" if math.isnan(value) else f"{value:.4g}"
+    return str(value)
+
+
+def test_markdown_and_latex_tables_hold_the_csv_cells(workdir):
+    """The Markdown table holds the CSV's cells to 4 significant digits; the LaTeX table is a
+    booktabs tabular with one line per row; both captions name the run."""
+    names = ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention", "scenes", "statistics")
+    for name in names:
         where = "results/tables" if name == "scenes" else f"{RUN}/tables"
-        old_md = (FIXTURE / f"tables/{name}.md").read_text().splitlines()
-        new_md = (workdir / f"{where}/{name}.md").read_text().splitlines()
-        assert [ln for ln in new_md if ln.startswith("|")] == old_md
-        old_tex = (FIXTURE / f"tables/{name}.tex").read_text().splitlines()
-        new_tex = (workdir / f"{where}/{name}.tex").read_text().splitlines()
-        body = [ln for ln in new_tex if not ln.startswith(r"\caption")]
-        assert body == [ln for ln in old_tex if not ln.startswith(r"\caption")]
+        rows = read_rows(workdir / f"{where}/{name}.csv")
+        cells = _md_cells((workdir / f"{where}/{name}.md").read_text().splitlines())
+        header = cells[0]
+        assert [[_cell(r[c]) for c in header] for r in rows] == cells[1:], name
+        tex = (workdir / f"{where}/{name}.tex").read_text()
+        assert "\\toprule" in tex and tex.count("\\\\\n") >= len(rows) + 1
+    claims = (workdir / "results/tables/claims.md").read_text()
+    assert "mitsuba" in claims and "verdict" in claims
 
 
 def test_one_views_renders_stack_with_open_mfdataset(workdir):

@@ -69,7 +69,6 @@ rule claims:
         summary="results/summary.json",
     params:
         spp=MAIN_SPP,
-        config_digest=CONFIG_DIGEST,
     log:
         "logs/tables/claims.log",
     benchmark:

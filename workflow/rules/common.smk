@@ -8,7 +8,6 @@ from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
 from stereovar.estimators import ESTIMATORS
-from stereovar.io.contracts import config_digest
 from stereovar.experiment import (
     batch_label,
     batch_seeds,
@@ -73,7 +72,6 @@ def get_estimator():
 
 RUN = run_prefix(get_renderer(), get_estimator())
 INTERVENTION_RUN = run_prefix(get_renderer(), INTERVENTION_ESTIMATOR)
-CONFIG_DIGEST = config_digest(config)
 
 
 # Result paths (stereovar.experiment): renders under results/{renderer}/renders/, everything

@@ -1,5 +1,6 @@
 """Snakemake adapter: stereovar.jobs.claims.claims_job."""
 
+from stereovar.io.contracts import config_digest
 from stereovar.jobs.claims import claims_job
 from stereovar.jobs.common import run_job
 
@@ -13,5 +14,7 @@ run_job(
     interventions=list(snakemake.input.interventions),
     outputs={k: v for k, v in outputs.items() if k != "summary"},
     summary=outputs["summary"],
+    # read here, not a param: a config change outside the analysis must not rerun the claims
+    config_digest=config_digest(dict(snakemake.config)),
     **snakemake.params,
 )

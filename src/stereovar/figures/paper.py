@@ -254,26 +254,98 @@ def _relative_variation(values) -> float:
     return float((v.max() - v.min()) / abs(mean))
 
 
+BOOTSTRAP = "bootstrap"
+FISHER = "fisher"
+"""Kinds of 95% interval a correlation row carries (:func:`_interval`)."""
+
+
+def _interval(row) -> tuple[float, float, str | None]:
+    """A correlation row's 95% interval and its kind.
+
+    The spatial block bootstrap interval (``boot_low``, ``boot_high``) where the row has a
+    finite bound of it, else the Fisher-z interval (``fisher_low``, ``fisher_high``, which
+    assumes independent pixels); the kind is :data:`BOOTSTRAP`, :data:`FISHER` or ``None``
+    when neither has a finite bound.
+    """
+    low, high = _finite(row.get("boot_low")), _finite(row.get("boot_high"))
+    if math.isfinite(low) or math.isfinite(high):
+        return low, high, BOOTSTRAP
+    low, high = _finite(row.get("fisher_low")), _finite(row.get("fisher_high"))
+    if math.isfinite(low) or math.isfinite(high):
+        return low, high, FISHER
+    return low, high, None
+
+
+def _bar_extents(centre, low, high) -> np.ndarray:
+    """Asymmetric error-bar lengths, shape (2, n), from interval bounds.
+
+    A missing bound gives no bar on its side and a bound on the wrong side of ``centre`` a
+    zero-length one.
+    """
+    centre, low, high = (np.asarray(a, dtype=np.float64) for a in (centre, low, high))
+    lower = np.where(np.isfinite(low), np.maximum(centre - low, 0.0), 0.0)
+    upper = np.where(np.isfinite(high), np.maximum(high - centre, 0.0), 0.0)
+    return np.vstack([lower, upper])
+
+
+def _interval_note(kinds) -> str:
+    """Legend title naming the intervals drawn as error bars."""
+    kinds = set(kinds)
+    lines = []
+    if BOOTSTRAP in kinds:
+        lines.append("bars: spatial block bootstrap 95%")
+    if FISHER in kinds:
+        lines.append("hollow: Fisher-z 95% (no bootstrap)")
+    return "\n".join(lines)
+
+
+STATISTIC_LABELS = {
+    "warp": "Pearson (Eq. 3)",
+    "spearman": "Spearman",
+    "log": r"Pearson of $\ln\sigma^2$",
+    "trimmed": "trimmed Pearson",
+}
+"""Legend names of the statistics of :mod:`stereovar.statistics.registry`."""
+
+SECONDARY_STYLES = (("--", "s"), (":", "^"), ("-.", "v"))
+"""Line style and marker of the first, second, ... secondary statistic of Fig. 2."""
+
+SECONDARY_SHIFT = 0.07
+"""Horizontal shift of the secondary statistics in Fig. 2, in octaves of SPP (alternating
+right and left, growing), so their bars stand beside the primary's."""
+
+
+def _statistic_label(method: str) -> str:
+    return STATISTIC_LABELS.get(method, method.replace("_", "-"))
+
+
 def rho_vs_spp_figure(
     rows, *, title: str = "", primary: str = "warp", secondary=("spearman", "log")
 ):
     """Fig. 2: cross-view correlation :math:`\\rho` against samples per pixel, per region.
 
     One line with markers per material region (all pixels, non-glass, glass; paper Fig. 2,
-    Sec. 3.3), with asymmetric error bars from the spatial block bootstrap's 95% interval
-    (``boot_low``, ``boot_high``; the Fisher-z interval, which assumes independent pixels,
-    only where a row has no bootstrap interval), on a
-    :math:`\\log_2` SPP axis with a tick at every given SPP. Each legend label carries the
-    region's relative variation :math:`(\\max\\rho - \\min\\rho) / \\overline{\\rho}` over
-    its plotted points, the figure the paper quotes (0.12 % for non-glass).
+    Sec. 3.3) for the ``primary`` statistic (Pearson, Eq. 3), on a :math:`\\log_2` SPP axis
+    with a tick at every given SPP. Its legend (:meth:`~matplotlib.axes.Axes.get_legend`)
+    has one entry per region with the region's relative variation
+    :math:`(\\max\\rho - \\min\\rho) / \\overline{\\rho}` over its plotted points, the
+    figure the paper quotes (0.12 % for non-glass), and a title naming the intervals drawn.
 
-    A row whose ``rho`` or ``spp`` is missing or not finite is omitted; a finite ``rho``
-    with a missing confidence bound gets no bar on that side. A bound on the wrong side of
-    ``rho`` is drawn as a zero-length bar on that side.
+    Error bars are the spatial block bootstrap's 95% interval (``boot_low``,
+    ``boot_high``). A row with no finite bootstrap bound falls back to its Fisher-z interval
+    (``fisher_low``, ``fisher_high``), which assumes independent pixels and is far too
+    narrow for spatially correlated fields; such points get a hollow marker and the legend
+    title says so. A missing bound gives no bar on that side, a bound on the wrong side of
+    ``rho`` a zero-length one.
 
-    Rows of the ``secondary`` statistics (:mod:`stereovar.statistics.registry`; by default
-    the robust ones, Spearman and Pearson of the logarithms) are drawn beside it as thin
-    lines in the region's colour (dashed, dotted), with their bootstrap bars.
+    The ``secondary`` statistics (:mod:`stereovar.statistics.registry`; by default the
+    robust ones, Spearman and Pearson of :math:`\\ln\\sigma^2`) are drawn beside it in the
+    region's colour, thinner, with their own line style and marker (named by a second
+    legend) and their own bars, shifted by :data:`SECONDARY_SHIFT` octaves so the bars do
+    not overlap.
+
+    A row whose ``rho`` or ``spp`` is missing or not finite is omitted (its SPP still gets
+    a tick when finite); rows of any other statistic are ignored.
 
     Parameters
     ----------
@@ -284,93 +356,100 @@ def rho_vs_spp_figure(
     title : str, keyword-only
         Axes title.
     primary : str, keyword-only
-        The statistic drawn with markers and a line per region.
+        The statistic drawn with markers and a solid line per region.
     secondary : sequence of str, keyword-only
-        Statistics drawn beside it; rows of any other statistic are ignored.
+        Statistics drawn beside it.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes; its ``containers`` hold one
-        :class:`matplotlib.container.ErrorbarContainer` per region with data, in
-        :data:`REGIONS` order.
+        One axes. Its ``containers`` hold one
+        :class:`matplotlib.container.ErrorbarContainer` per region with primary data, in
+        :data:`REGIONS` order, labelled ``"<region label> (rel. var. ...)"``, then one per
+        (secondary statistic, region) with data, labelled ``"<region label>, <method>"``.
 
     Raises
     ------
     ValueError
         If a row names an unknown region.
     """
+    from matplotlib.lines import Line2D
     from matplotlib.ticker import NullLocator
 
     plt = _pyplot()
-    by_region: dict[str, list[tuple[float, float, float, float]]] = {r: [] for r in REGIONS}
-    extra: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {}
+    secondary = tuple(m for m in secondary if m != primary)
+    points: dict[tuple[str, str], list[tuple[float, float, float, float, str | None]]] = {}
     all_spp: set[float] = set()
     for row in rows:
         region = row["region"]
-        if region not in by_region:
+        if region not in REGIONS:
             raise ValueError(f"unknown region {region!r}; expected one of {REGIONS}")
         spp = _finite(row.get("spp"))
         if not (math.isfinite(spp) and spp > 0):
             continue
         all_spp.add(spp)
         rho = _finite(row.get("rho"))
-        if not math.isfinite(rho):
-            continue
         method = row.get("method", primary)
-        low, high = _finite(row.get("boot_low")), _finite(row.get("boot_high"))
-        if not (math.isfinite(low) or math.isfinite(high)):
-            low, high = _finite(row.get("fisher_low")), _finite(row.get("fisher_high"))
-        if method != primary:
-            if method in secondary:
-                extra.setdefault((method, region), []).append((spp, rho, low, high))
+        if not math.isfinite(rho) or (method != primary and method not in secondary):
             continue
-        by_region[region].append((spp, rho, low, high))
+        points.setdefault((method, region), []).append((spp, rho, *_interval(row)))
 
-    fig, ax = plt.subplots(figsize=(5.5, 4.0), constrained_layout=True)
-    plotted = False
-    for region in REGIONS:
-        pts = sorted(by_region[region])
-        label = REGION_LABELS[region]
-        colour = REGION_COLOURS[region]
-        if not pts:
-            continue
-        spp, rho, low, high = (np.asarray(c, dtype=np.float64) for c in zip(*pts, strict=True))
-        lower = np.where(np.isfinite(low), np.maximum(rho - low, 0.0), 0.0)
-        upper = np.where(np.isfinite(high), np.maximum(high - rho, 0.0), 0.0)
-        rel = _relative_variation(rho)
-        rel_text = "n/a" if not math.isfinite(rel) else f"{100 * rel:.2f}%"
-        ax.errorbar(
-            spp,
-            rho,
-            yerr=np.vstack([lower, upper]),
-            marker="o",
-            markersize=4,
-            capsize=3,
-            color=colour,
-            label=f"{label} (rel. var. {rel_text})",
-        )
-        plotted = True
-    styles = ("--", ":", "-.")
-    for (method, region), pts in extra.items():
-        spp, rho, low, high = (
-            np.asarray(c, dtype=np.float64) for c in zip(*sorted(pts), strict=True)
-        )
-        lower = np.where(np.isfinite(low), np.maximum(rho - low, 0.0), 0.0)
-        upper = np.where(np.isfinite(high), np.maximum(high - rho, 0.0), 0.0)
-        ax.errorbar(
-            spp * (1.04 if secondary.index(method) == 0 else 0.96),
-            rho,
-            yerr=np.vstack([lower, upper]),
-            linestyle=styles[secondary.index(method) % len(styles)],
-            linewidth=1.0,
-            marker=".",
-            capsize=2,
-            color=REGION_COLOURS[region],
-            alpha=0.7,
-            label=f"{REGION_LABELS[region]}, {method.replace('_', '-')}",
-        )
-        plotted = True
+    fig, ax = plt.subplots(figsize=(8.0, 4.2), constrained_layout=True)
+    kinds: set[str | None] = set()
+    region_handles, region_labels = [], []
+    for method in (primary, *secondary):
+        if method == primary:
+            style = {"linestyle": "-", "marker": "o", "markersize": 4, "capsize": 3}
+            shift = 1.0
+        else:
+            i = secondary.index(method)
+            linestyle, marker = SECONDARY_STYLES[i % len(SECONDARY_STYLES)]
+            style = {
+                "linestyle": linestyle,
+                "marker": marker,
+                "markersize": 3,
+                "capsize": 2,
+                "linewidth": 1.0,
+                "elinewidth": 0.8,
+                "alpha": 0.75,
+            }
+            shift = 2.0 ** (SECONDARY_SHIFT * (i // 2 + 1) * (1 if i % 2 == 0 else -1))
+        for region in REGIONS:
+            pts = sorted(points.get((method, region), []), key=lambda p: p[0])
+            if not pts:
+                continue
+            spp = np.array([p[0] for p in pts]) * shift
+            rho = np.array([p[1] for p in pts])
+            low = np.array([p[2] for p in pts])
+            high = np.array([p[3] for p in pts])
+            kind = [p[4] for p in pts]
+            kinds.update(kind)
+            colour = REGION_COLOURS[region]
+            if method == primary:
+                rel = _relative_variation(rho)
+                rel_text = "n/a" if not math.isfinite(rel) else f"{100 * rel:.2f}%"
+                label = f"{REGION_LABELS[region]} (rel. var. {rel_text})"
+            else:
+                label = f"{REGION_LABELS[region]}, {method}"
+            container = ax.errorbar(
+                spp, rho, yerr=_bar_extents(rho, low, high), color=colour, label=label, **style
+            )
+            fallback = np.array([k == FISHER for k in kind])
+            if fallback.any():
+                ax.plot(
+                    spp[fallback],
+                    rho[fallback],
+                    linestyle="none",
+                    marker=style["marker"],
+                    markersize=style["markersize"] + 1,
+                    markerfacecolor="white",
+                    markeredgecolor=colour,
+                    zorder=container.lines[0].get_zorder() + 0.1,
+                    label="_Fisher-z fallback",
+                )
+            if method == primary:
+                region_handles.append(container)
+                region_labels.append(label)
     ax.set_xscale("log", base=2)
     ticks = sorted(all_spp)
     if ticks:
@@ -378,8 +457,38 @@ def rho_vs_spp_figure(
         ax.xaxis.set_minor_locator(NullLocator())
     ax.set_xlabel("samples per pixel (SPP)")
     ax.set_ylabel(r"$\rho$")
-    if plotted:
-        ax.legend(fontsize="small")
+    drawn_secondary = [m for m in secondary if any(k[0] == m for k in points)]
+    if drawn_secondary:
+        proxies = [Line2D([], [], color="black", linestyle="-", marker="o", markersize=4)]
+        proxies += [
+            Line2D([], [], color="black", linestyle=ls, marker=mk, markersize=3, linewidth=1.0)
+            for ls, mk in (
+                SECONDARY_STYLES[secondary.index(m) % len(SECONDARY_STYLES)]
+                for m in drawn_secondary
+            )
+        ]
+        statistics_legend = ax.legend(
+            proxies,
+            [_statistic_label(m) for m in (primary, *drawn_secondary)],
+            title="statistic",
+            fontsize="small",
+            title_fontsize="small",
+            loc="lower left",
+            bbox_to_anchor=(1.02, 0.0),
+            borderaxespad=0.0,
+        )
+        ax.add_artist(statistics_legend)
+    if points:
+        ax.legend(
+            region_handles,
+            region_labels,
+            title=_interval_note(kinds) or None,
+            fontsize="small",
+            title_fontsize="small",
+            loc="upper left",
+            bbox_to_anchor=(1.02, 1.0),
+            borderaxespad=0.0,
+        )
     else:
         ax.text(0.5, 0.5, "no data", ha="center", va="center", transform=ax.transAxes)
     ax.grid(True, alpha=0.3)
