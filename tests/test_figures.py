@@ -11,6 +11,7 @@ import pytest
 import xarray as xr
 from matplotlib.collections import PathCollection, QuadMesh
 from matplotlib.colors import LogNorm, to_rgba
+from matplotlib.legend import Legend
 
 from stereovar.figures.paper import (
     GLASS_COLOUR,
@@ -256,6 +257,120 @@ def test_rho_vs_spp_axis_is_log2_with_ticks_at_the_given_spps():
     assert [t.get_text() for t in ax.get_xticklabels()] == [str(s) for s in SPPS]
     assert "rho" in ax.get_ylabel()
     assert ax.get_title() == "sweep"
+
+
+def _boot_rows():
+    """Rows of Pearson and the robust statistics, with bootstrap and Fisher-z intervals."""
+    rows = []
+    for i, region in enumerate(REGIONS):
+        for j, method in enumerate(("warp", "spearman", "log", "trimmed")):
+            for k, spp in enumerate(SPPS):
+                rho = 0.3 + 0.1 * i + 0.02 * j + 0.001 * k
+                rows.append(
+                    {
+                        "spp": spp,
+                        "region": region,
+                        "method": method,
+                        "rho": rho,
+                        "boot_low": rho - 0.05 - 0.01 * k,
+                        "boot_high": rho + 0.03 + 0.01 * j,
+                        "fisher_low": rho - 0.001,
+                        "fisher_high": rho + 0.002,
+                    }
+                )
+    # glass, warp, SPP 256: no bootstrap interval, so the Fisher-z one, marked hollow
+    fallback = next(
+        r for r in rows if (r["region"], r["method"], r["spp"]) == ("glass", "warp", 256)
+    )
+    fallback["boot_low"] = fallback["boot_high"] = math.nan
+    return rows
+
+
+def test_rho_vs_spp_bars_are_the_bootstrap_interval_with_fisher_only_as_fallback():
+    rows = _boot_rows()
+    fig = rho_vs_spp_figure(rows)
+    ax = fig.axes[0]
+    containers = _containers(fig)
+    for region in REGIONS:
+        label = next(k for k in containers if k.startswith(REGION_LABELS[region] + " ("))
+        expected = sorted(
+            (r for r in rows if (r["region"], r["method"]) == (region, "warp")),
+            key=lambda r: r["spp"],
+        )
+        data_line, _caps, (bars,) = containers[label].lines
+        np.testing.assert_array_equal(data_line.get_xdata(), SPPS)
+        np.testing.assert_allclose(data_line.get_ydata(), [r["rho"] for r in expected])
+        for seg, r in zip(bars.get_segments(), expected, strict=True):
+            if math.isfinite(r["boot_low"]):
+                bounds = [r["boot_low"], r["boot_high"]]
+            else:
+                bounds = [r["fisher_low"], r["fisher_high"]]
+            np.testing.assert_allclose(sorted(seg[:, 1]), bounds)
+    # the one Fisher-z point is marked with a hollow marker, and the legend says so
+    (hollow,) = [ln for ln in ax.get_lines() if ln.get_label() == "_Fisher-z fallback"]
+    np.testing.assert_array_equal(hollow.get_xdata(), [256])
+    (fallback,) = [r for r in rows if not math.isfinite(r["boot_low"])]
+    assert hollow.get_markerfacecolor() == "white"
+    assert hollow.get_ydata()[0] == pytest.approx(fallback["rho"])
+    title = ax.get_legend().get_title().get_text()
+    assert "bootstrap" in title and "Fisher-z" in title
+
+
+def test_rho_vs_spp_draws_the_robust_statistics_beside_pearson():
+    rows = _boot_rows()
+    fig = rho_vs_spp_figure(rows)
+    ax = fig.axes[0]
+    containers = _containers(fig)
+    assert len(containers) == 3 * len(REGIONS)  # warp, spearman, log; not trimmed
+    for region in REGIONS:
+        colour = next(
+            c.lines[0].get_color()
+            for k, c in containers.items()
+            if k.startswith(REGION_LABELS[region] + " (")
+        )
+        for method, shift, style in (("spearman", 2**0.07, "--"), ("log", 2**-0.07, ":")):
+            container = containers[f"{REGION_LABELS[region]}, {method}"]
+            expected = sorted(
+                (r for r in rows if (r["region"], r["method"]) == (region, method)),
+                key=lambda r: r["spp"],
+            )
+            line = container.lines[0]
+            np.testing.assert_allclose(line.get_xdata(), np.array(SPPS) * shift)
+            np.testing.assert_allclose(line.get_ydata(), [r["rho"] for r in expected])
+            assert line.get_linestyle() == style
+            assert line.get_color() == colour
+            (bars,) = container.lines[2]
+            for seg, r in zip(bars.get_segments(), expected, strict=True):
+                np.testing.assert_allclose(sorted(seg[:, 1]), [r["boot_low"], r["boot_high"]])
+    # the region legend keeps one entry per region; a second legend names the statistics
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert [label.split(" (")[0] for label in labels] == [REGION_LABELS[r] for r in REGIONS]
+    legends = [a for a in ax.get_children() if isinstance(a, Legend)]
+    assert len(legends) == 2
+    statistics = next(lg for lg in legends if lg is not ax.get_legend())
+    assert [t.get_text() for t in statistics.get_texts()] == [
+        "Pearson (Eq. 3)",
+        "Spearman",
+        r"Pearson of $\ln\sigma^2$",
+    ]
+    fig.canvas.draw()
+    # without secondary statistics only Pearson is drawn and there is one legend
+    fig = rho_vs_spp_figure(rows, secondary=())
+    assert len(_containers(fig)) == len(REGIONS)
+    assert sum(isinstance(a, Legend) for a in fig.axes[0].get_children()) == 1
+
+
+def test_rho_vs_spp_legend_names_fisher_bars_when_there_is_no_bootstrap():
+    fig = rho_vs_spp_figure(_spp_rows())
+    ax = fig.axes[0]
+    title = ax.get_legend().get_title().get_text()
+    assert "Fisher-z" in title and "bootstrap 95%" not in title
+    # every point falls back, so every point of each region is hollow
+    hollow = [ln for ln in ax.get_lines() if ln.get_label() == "_Fisher-z fallback"]
+    assert len(hollow) == len(REGIONS)
+    for line, container in zip(hollow, _containers(fig).values(), strict=True):
+        np.testing.assert_array_equal(line.get_xdata(), container.lines[0].get_xdata())
+        np.testing.assert_array_equal(line.get_ydata(), container.lines[0].get_ydata())
 
 
 def test_rho_vs_spp_degenerate_rows():

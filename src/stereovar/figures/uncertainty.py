@@ -1,5 +1,10 @@
-"""Figures of the uncertainty and the controls: rho against the number of seeds, and every
-statistic and control per scene with its bootstrap interval."""
+"""Figures of the uncertainty and the controls: :math:`\\rho` against the number of seeds, and
+every statistic and control per scene with its bootstrap interval.
+
+Like :mod:`stereovar.figures.paper`, every function here is pure: it takes rows (dicts, as
+:func:`stereovar.io.tables.read_rows` gives them; numbers may be NaN), builds a matplotlib
+figure on the Agg backend and returns it; the caller saves it.
+"""
 
 from __future__ import annotations
 
@@ -7,211 +12,333 @@ import math
 
 import numpy as np
 
-from .paper import REGION_COLOURS, REGION_LABELS, REGIONS, _finite, _pyplot
+from .paper import (
+    REGION_LABELS,
+    REGIONS,
+    _bar_extents,
+    _finite,
+    _pyplot,
+    _statistic_label,
+)
 
 STATISTICS = ("warp", "spearman", "log", "trimmed")
-"""The statistics of the dot plot, above the controls."""
+"""The statistics of the dot plot, in this order, above the controls."""
 
 CONTROLS = ("no_warp", "null_shift", "null_flip", "partial", "relative", "sensor", "sensor_sim")
 """The controls of the dot plot, in this order."""
+
+METHOD_STYLES = {"warp": ("#1f3b73", "-", "o"), "log": ("#dd8452", "--", "s")}
+"""Colour, line style and marker per statistic in :func:`rho_vs_seeds_figure`; other
+statistics get the next colour of ``tab10`` and a dotted line."""
+
+ASYMPTOTE_LABEL = "reliability-corrected asymptote"
+"""Legend label (prefix) of the dotted lines at the mean attenuation-corrected rho."""
 
 
 def _no_data(ax) -> None:
     ax.text(0.5, 0.5, "no data", ha="center", va="center", transform=ax.transAxes)
 
 
-def rho_vs_seeds_figure(curve_rows, *, title: str = "", methods=("warp", "log")):
-    """:math:`\\rho` against the number of seeds :math:`N'` of Eq. 1, per region.
+def _method_style(method: str, k: int) -> tuple:
+    if method in METHOD_STYLES:
+        return METHOD_STYLES[method]
+    import matplotlib
 
-    One panel per region; per statistic, the mean over scenes of :math:`\\rho` from disjoint
-    subsets of :math:`N'` seeds with the spread over scenes as error bars, and a dotted line
-    at the mean attenuation-corrected :math:`\\rho` of the full estimate,
-    :math:`\\rho / \\sqrt{r_L r_R}` (:mod:`stereovar.statistics.reliability`): the level the
-    curve tends to as the estimator noise vanishes.
+    return matplotlib.colormaps["tab10"]((k + 2) % 10), "-.", "^"
+
+
+def _seed_legend(fig, axes) -> None:
+    """One figure legend below the panels: the curves, then the asymptotes."""
+    handles: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    labels = sorted(handles, key=lambda label: label.startswith(ASYMPTOTE_LABEL))
+    if labels:
+        fig.legend(
+            [handles[label] for label in labels],
+            labels,
+            loc="outside lower center",
+            ncols=min(len(labels), 4),
+            fontsize="small",
+        )
+
+
+def rho_vs_seeds_figure(
+    curve_rows, *, region_order=REGIONS, title: str = "", methods=("warp", "log")
+):
+    """:math:`\\rho` against the number of seeds :math:`N'` in Eq. 1, per region.
+
+    One panel per region. Per statistic (``warp``, Pearson of Eq. 3, solid; ``log``,
+    Pearson of :math:`\\ln\\sigma^2`, dashed), the mean over scenes of :math:`\\rho` from
+    disjoint subsets of :math:`N'` seeds (``mean_rho``) against :math:`N'` on a
+    :math:`\\log_2` axis with a tick at every :math:`N'`, with error bars of
+    :math:`\\pm` the standard deviation over scenes (``std_rho``; none where NaN), and a
+    horizontal dotted line in the statistic's colour at the mean over scenes of the
+    attenuation-corrected :math:`\\rho / \\sqrt{r_L r_R}` of the full estimate
+    (``mean_rho_corrected``, :mod:`stereovar.statistics.reliability`), labelled
+    :data:`ASYMPTOTE_LABEL`: the level the curve heads for as the estimator noise
+    vanishes. The table repeats that value on every :math:`N'` row; the line takes it from
+    the largest :math:`N'` with a finite one.
+
+    Rows with a non-finite or non-positive ``n_prime`` or a non-finite ``mean_rho`` are
+    left out; a panel with nothing to draw says "no data". Rows of other regions or
+    statistics are ignored.
 
     Parameters
     ----------
     curve_rows : list of dict
         Rows of ``tables/seed_curve.csv``: ``region``, ``method``, ``n_prime``,
-        ``mean_rho``, ``std_rho``, ``mean_rho_corrected``.
+        ``mean_rho``, ``std_rho``, ``mean_rho_corrected`` and optionally ``n_scenes``.
+    region_order : sequence of str, keyword-only
+        The regions, one panel each, left to right.
     title : str, keyword-only
+        Figure title.
     methods : sequence of str, keyword-only
-        Statistics drawn (solid, dashed, ...).
+        The statistics drawn.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes per region; each holds one errorbar container per drawn statistic and one
-        horizontal line (label starting ``asymptote``) per statistic with a finite corrected
-        :math:`\\rho`.
+        One axes per region in ``region_order``. Each holds one
+        :class:`~matplotlib.container.ErrorbarContainer` per statistic with data, in
+        ``methods`` order and labelled by the statistic, and one horizontal line per
+        statistic with a finite corrected :math:`\\rho`, labelled
+        ``"reliability-corrected asymptote, <statistic>"``. One figure legend below.
     """
+    from matplotlib.ticker import NullLocator
+
     plt = _pyplot()
+    region_order = tuple(region_order)
     fig, axes = plt.subplots(
-        1, len(REGIONS), figsize=(11, 3.6), sharey=True, constrained_layout=True
+        1,
+        len(region_order),
+        figsize=(3.8 * len(region_order), 4.0),
+        sharey=True,
+        constrained_layout=True,
+        squeeze=False,
     )
-    styles = ("-", "--", ":", "-.")
-    for ax, region in zip(axes, REGIONS, strict=True):
+    axes = list(axes[0])
+    for ax, region in zip(axes, region_order, strict=True):
+        ticks: set[float] = set()
+        n_scenes: set[int] = set()
         drawn = False
-        ticks = set()
         for k, method in enumerate(methods):
+            selected = [r for r in curve_rows if (r["region"], r["method"]) == (region, method)]
             pts = sorted(
                 (
-                    _finite(r["n_prime"]),
-                    _finite(r["mean_rho"]),
+                    _finite(r.get("n_prime")),
+                    _finite(r.get("mean_rho")),
                     _finite(r.get("std_rho")),
-                    _finite(r.get("mean_rho_corrected")),
                 )
-                for r in curve_rows
-                if r["region"] == region
-                and r["method"] == method
-                and math.isfinite(_finite(r["mean_rho"]))
-                and _finite(r["n_prime"]) > 0
+                for r in selected
+                if _finite(r.get("n_prime")) > 0 and math.isfinite(_finite(r.get("mean_rho")))
             )
-            if not pts:
-                continue
-            n, rho, std, corrected = (
-                np.asarray(c, dtype=np.float64) for c in zip(*pts, strict=True)
+            colour, linestyle, marker = _method_style(method, k)
+            name = _statistic_label(method)
+            if pts:
+                n, rho, std = (np.array(c, dtype=np.float64) for c in zip(*pts, strict=True))
+                ticks.update(n.tolist())
+                n_scenes.update(
+                    int(v)
+                    for v in (_finite(r.get("n_scenes")) for r in selected)
+                    if math.isfinite(v)
+                )
+                ax.errorbar(
+                    n,
+                    rho,
+                    yerr=np.where(np.isfinite(std), std, 0.0),
+                    marker=marker,
+                    markersize=4,
+                    capsize=3,
+                    linestyle=linestyle,
+                    color=colour,
+                    label=name,
+                )
+                drawn = True
+            corrected = sorted(
+                (_finite(r.get("n_prime")), _finite(r.get("mean_rho_corrected")))
+                for r in selected
+                if math.isfinite(_finite(r.get("mean_rho_corrected")))
             )
-            ticks.update(n.tolist())
-            ax.errorbar(
-                n,
-                rho,
-                yerr=np.where(np.isfinite(std), std, 0.0),
-                marker="o",
-                markersize=4,
-                capsize=3,
-                linestyle=styles[k % len(styles)],
-                color=REGION_COLOURS[region],
-                label=f"{method.replace('_', '-')}",
-            )
-            asymptote = corrected[np.isfinite(corrected)]
-            if asymptote.size:
+            if corrected:
                 ax.axhline(
-                    float(asymptote[0]),
-                    color=REGION_COLOURS[region],
-                    linewidth=1.0,
+                    corrected[-1][1],
+                    color=colour,
+                    linewidth=1.2,
                     linestyle=":",
-                    alpha=0.8,
-                    label=f"asymptote, {method} (reliability-corrected)",
+                    label=f"{ASYMPTOTE_LABEL}, {name}",
                 )
-            drawn = True
+                drawn = True
         ax.set_xscale("log", base=2)
         if ticks:
             ax.set_xticks(sorted(ticks), labels=[f"{t:g}" for t in sorted(ticks)])
-            ax.minorticks_off()
-        ax.set_xlabel("seeds N' in Eq. 1")
-        ax.set_title(REGION_LABELS[region])
+            ax.xaxis.set_minor_locator(NullLocator())
+        ax.set_xlabel(r"seeds $N'$ per subset (largest: all $N$)")
+        heading = REGION_LABELS.get(region, region)
+        if n_scenes:
+            count = max(n_scenes)
+            heading += f" ({count} scene{'s' if count != 1 else ''})"
+        ax.set_title(heading)
         ax.grid(True, alpha=0.3)
-        if drawn:
-            ax.legend(fontsize="x-small")
-        else:
+        if not drawn:
             _no_data(ax)
-    axes[0].set_ylabel(r"$\rho$ (mean over scenes)")
+    axes[0].set_ylabel(r"$\rho$, mean over scenes $\pm$ std")
+    _seed_legend(fig, axes)
     if title:
         fig.suptitle(title)
     return fig
 
 
-def statistics_dot_figure(rows, *, title: str = ""):
-    """Every statistic and control per scene: :math:`\\rho` with its 95% bootstrap interval.
+def _dot_offsets(n: int) -> np.ndarray:
+    """Vertical offsets of ``n`` scenes within one method's row (at most 0.6 apart)."""
+    if n <= 1:
+        return np.zeros(max(n, 0))
+    spread = min(0.6, 0.12 * (n - 1))
+    return np.linspace(-spread / 2, spread / 2, n)
 
-    One panel per region; one row per statistic (the statistics, then the controls), one
-    dot per scene with a bar over its block-bootstrap interval and a short thick tick over
-    its Fisher-z interval (which assumes independent pixels), and a vertical line at 0.
+
+def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIONS):
+    """Every statistic and control per scene: :math:`\\rho` with its 95% intervals.
+
+    One panel per region. One row per method: the statistics (:data:`STATISTICS`), a
+    dashed separator, then the controls (:data:`CONTROLS`, tick labels in grey), then any
+    other method present, alphabetically. Per scene (one colour each, offset vertically
+    within the row) a dot at ``rho``, a thin bar with caps over its spatial block bootstrap
+    95% interval (``boot_low``, ``boot_high``) and a short thick translucent bar under the
+    dot over its Fisher-z interval (``fisher_low``, ``fisher_high``), which assumes
+    independent pixels: where it hides under the dot, the pixels alone would claim a far
+    narrower interval than the bootstrap gives. A vertical line marks :math:`\\rho = 0`.
+
+    Rows with a non-finite ``rho`` are left out (their method keeps its row); a missing
+    bound gives no bar on its side; a panel with nothing to draw says "no data". Rows of
+    regions not in ``region_order`` are ignored.
 
     Parameters
     ----------
     rows : list of dict
-        The correlation rows of every scene at one SPP (``scene``, ``region``, ``method``,
-        ``rho``, ``boot_low``, ``boot_high``, ``fisher_low``, ``fisher_high``).
+        The correlation rows of every scene (``scene``, ``region``, ``method``, ``rho``,
+        ``boot_low``, ``boot_high``, ``fisher_low``, ``fisher_high``; optionally ``spp``).
+    spp : int, keyword-only, optional
+        Keep only the rows at this SPP (rows without an ``spp`` are kept).
     title : str, keyword-only
+        Figure title.
+    region_order : sequence of str, keyword-only
+        The regions, one panel each, left to right.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes per region; each holds one errorbar container per scene with data.
+        One axes per region in ``region_order``. Each holds one
+        :class:`~matplotlib.container.ErrorbarContainer` per scene with data (sorted by
+        scene, labelled by it; x: rho, y: method row plus the scene's offset) and one
+        :class:`~matplotlib.collections.LineCollection` of its Fisher-z intervals, labelled
+        ``"_fisher <scene>"``. One figure legend below: the scenes and the two intervals.
     """
+    from matplotlib.lines import Line2D
+
     plt = _pyplot()
+    region_order = tuple(region_order)
+    if spp is not None:
+        rows = [r for r in rows if _finite(r.get("spp", spp)) == float(spp)]
+    rows = [r for r in rows if r["region"] in region_order]
     present = {r["method"] for r in rows}
     methods = [m for m in (*STATISTICS, *CONTROLS) if m in present]
     methods += sorted(present - set(methods))
+    row_of = {m: k for k, m in enumerate(methods)}
     scenes = sorted({str(r.get("scene", "")) for r in rows})
-    cmap = plt.get_cmap("tab10")
+    offsets = dict(zip(scenes, _dot_offsets(len(scenes)), strict=True))
+    colours = {s: plt.get_cmap("tab10")(i % 10) for i, s in enumerate(scenes)}
     fig, axes = plt.subplots(
         1,
-        len(REGIONS),
-        figsize=(12, 0.35 * max(len(methods), 4) + 1.5),
+        len(region_order),
+        figsize=(4.2 * len(region_order), 0.42 * max(len(methods), 4) + 1.8),
         sharey=True,
         constrained_layout=True,
+        squeeze=False,
     )
-    for ax, region in zip(axes, REGIONS, strict=True):
+    axes = list(axes[0])
+    n_statistics = sum(m in STATISTICS for m in methods)
+    for ax, region in zip(axes, region_order, strict=True):
         drawn = False
-        for s, scene in enumerate(scenes):
-            pts = []
-            for k, method in enumerate(methods):
-                for r in rows:
-                    if (str(r.get("scene", "")), r["region"], r["method"]) != (
-                        scene,
-                        region,
-                        method,
-                    ):
-                        continue
-                    rho = _finite(r["rho"])
-                    if not math.isfinite(rho):
-                        continue
-                    pts.append(
-                        (
-                            k,
-                            rho,
-                            _finite(r.get("boot_low")),
-                            _finite(r.get("boot_high")),
-                            _finite(r.get("fisher_low")),
-                            _finite(r.get("fisher_high")),
-                        )
-                    )
+        for scene in scenes:
+            pts = sorted(
+                (
+                    row_of[r["method"]],
+                    _finite(r.get("rho")),
+                    _finite(r.get("boot_low")),
+                    _finite(r.get("boot_high")),
+                    _finite(r.get("fisher_low")),
+                    _finite(r.get("fisher_high")),
+                )
+                for r in rows
+                if r["region"] == region
+                and str(r.get("scene", "")) == scene
+                and math.isfinite(_finite(r.get("rho")))
+            )
             if not pts:
                 continue
-            k, rho, lo, hi, flo, fhi = (
-                np.asarray(c, dtype=np.float64) for c in zip(*pts, strict=True)
+            k, rho, low, high, f_low, f_high = (
+                np.array(c, dtype=np.float64) for c in zip(*pts, strict=True)
             )
-            offset = (s - (len(scenes) - 1) / 2) * 0.12
-            y = k + offset
-            colour = cmap(s % 10)
+            y = k + offsets[scene]
+            colour = colours[scene]
+            has_fisher = np.isfinite(f_low) & np.isfinite(f_high)
+            ax.hlines(
+                y[has_fisher],
+                f_low[has_fisher],
+                f_high[has_fisher],
+                colors=[colour],
+                linewidth=5,
+                alpha=0.45,
+                zorder=2,
+                label=f"_fisher {scene}",
+            )
             ax.errorbar(
                 rho,
                 y,
-                xerr=np.vstack(
-                    [
-                        np.where(np.isfinite(lo), np.maximum(rho - lo, 0), 0),
-                        np.where(np.isfinite(hi), np.maximum(hi - rho, 0), 0),
-                    ]
-                ),
+                xerr=_bar_extents(rho, low, high),
                 fmt="o",
-                markersize=3,
+                markersize=3.5,
                 capsize=2,
-                linewidth=0.8,
+                elinewidth=0.9,
                 color=colour,
                 label=scene,
+                zorder=3,
             )
-            ok = np.isfinite(flo) & np.isfinite(fhi)
-            ax.hlines(y[ok], flo[ok], fhi[ok], colors=[colour], linewidth=3, alpha=0.6)
             drawn = True
-        ax.axvline(0.0, color="black", linewidth=0.8)
-        ax.axhline(
-            len([m for m in methods if m in STATISTICS]) - 0.5,
-            color="grey",
-            linewidth=0.6,
-            linestyle="--",
-        )
+        ax.axvline(0.0, color="black", linewidth=0.8, zorder=1)
+        if 0 < n_statistics < len(methods):
+            ax.axhline(n_statistics - 0.5, color="grey", linewidth=0.8, linestyle="--")
         ax.set_yticks(range(len(methods)), labels=[m.replace("_", "-") for m in methods])
+        for tick, method in zip(ax.get_yticklabels(), methods, strict=False):
+            if method not in STATISTICS:
+                tick.set_color("dimgrey")
         ax.set_ylim(max(len(methods), 1) - 0.5, -0.5)
-        ax.set_xlabel(r"$\rho$ (bar: bootstrap 95%; thick: Fisher-z)")
-        ax.set_title(REGION_LABELS[region])
+        ax.set_xlabel(r"$\rho$")
+        ax.set_title(REGION_LABELS.get(region, region))
         ax.grid(True, axis="x", alpha=0.3)
         if not drawn:
             _no_data(ax)
-    if scenes and any(ax.containers for ax in axes):
-        axes[-1].legend(fontsize="x-small", loc="lower right")
+    if n_statistics and n_statistics < len(methods):
+        axes[0].set_ylabel("statistics (above dashed line), controls (grey)")
+    if any(ax.containers for ax in axes):
+        handles = {}
+        for ax in axes:
+            for c in ax.containers:
+                handles.setdefault(c.get_label(), c)
+        labels = sorted(handles)
+        proxies = [
+            Line2D([], [], color="black", linewidth=0.9, marker="|", markersize=6),
+            Line2D([], [], color="black", linewidth=5, alpha=0.45),
+        ]
+        fig.legend(
+            [handles[s] for s in labels] + proxies,
+            labels + ["block bootstrap 95%", "Fisher-z 95% (independent pixels)"],
+            loc="outside lower center",
+            ncols=min(len(labels) + 2, 6),
+            fontsize="small",
+        )
     if title:
         fig.suptitle(title)
     return fig

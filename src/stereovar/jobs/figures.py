@@ -1,4 +1,5 @@
-"""Jobs of ``workflow/rules/figures.smk``: Figures 1-3 on the representative scene."""
+"""Jobs of ``workflow/rules/figures.smk`` (Figures 1-3 on the representative scene) and of the
+uncertainty figures in ``workflow/rules/claims.smk`` (rho against seeds, the dot plot)."""
 
 from __future__ import annotations
 
@@ -86,5 +87,6 @@ def statistics_dot_figure_job(correlations, out, *, spp) -> None:
 
     rows = [r for path in correlations for r in read_rows(path)]
     attrs = rows[0] if rows else {}
-    title = _title(attrs, f"every statistic and control, SPP {spp}")
-    save_figure(statistics_dot_figure(rows, title=title), out)
+    n_scenes = len({r["scene"] for r in rows})
+    title = _title(attrs, f"every statistic and control, {n_scenes} scenes, SPP {spp}")
+    save_figure(statistics_dot_figure(rows, spp=spp, title=title), out)
