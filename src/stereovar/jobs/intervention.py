@@ -76,17 +76,16 @@ def intervention_job(
             n_lost,
         )
     renders_l, renders_r = LazyRenders(left), LazyRenders(right)
+    options = {
+        "sign": int(gt.attrs["disparity_sign"]),
+        "max_disparity": int(max_disparity),
+        "window": window,
+        "block": block,
+        "seed": seed,
+        "workers": workers,
+    }
     result = intervention_metrics(
-        renders_l,
-        renders_r,
-        gl,
-        sign=int(gt.attrs["disparity_sign"]),
-        max_disparity=int(max_disparity),
-        window=window,
-        block=block,
-        seed=seed,
-        margin_samples=margin_samples,
-        workers=workers,
+        renders_l, renders_r, gl, margin_samples=margin_samples, **options
     )
     attrs = RenderStore(left[0]).attrs
     scene = attrs.get("scene", gt.attrs.get("scene"))
@@ -94,19 +93,7 @@ def intervention_job(
         row["source"] = "render"
     if sensor is not None:
         result.rows.extend(
-            sensor_rows(
-                renders_l,
-                renders_r,
-                gl,
-                sensor,
-                label=str(scene),
-                sign=int(gt.attrs["disparity_sign"]),
-                max_disparity=int(max_disparity),
-                window=window,
-                block=block,
-                seed=seed,
-                workers=workers,
-            )
+            sensor_rows(renders_l, renders_r, gl, sensor, label=str(scene), **options)
         )
     for row in result.rows:
         row.update(

@@ -87,6 +87,16 @@ def combined_interval(rhos, lows, highs) -> tuple[float, float, float]:
     return mean, mean - half, mean + half
 
 
+def rows_interval(rows) -> tuple[float, float, float]:
+    """:func:`combined_interval` of correlation rows (``rho``, ``boot_low``, ``boot_high``)."""
+    nan = math.nan
+    return combined_interval(
+        [r["rho"] for r in rows],
+        [r.get("boot_low", nan) for r in rows],
+        [r.get("boot_high", nan) for r in rows],
+    )
+
+
 def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
     """One row per region and statistic: cross-scene mean :math:`\\rho` with its interval,
     the spread over scenes and the diagnostics' means.
@@ -117,11 +127,7 @@ def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
                 continue
             ok = [r for r in group if math.isfinite(float(r["rho"]))]
             rho = _finite(r["rho"] for r in ok)
-            mean, low, high = combined_interval(
-                [r["rho"] for r in ok],
-                [r.get("boot_low", math.nan) for r in ok],
-                [r.get("boot_high", math.nan) for r in ok],
-            )
+            _, low, high = rows_interval(ok)
             reasons = sorted({str(r.get("reason", "")) for r in group} - {""})
             corrected = _finite(r.get("rho_corrected", math.nan) for r in ok)
             out.append(

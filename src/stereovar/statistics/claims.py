@@ -24,7 +24,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from .across import combined_interval
+from .across import combined_interval, rows_interval
 from .registry import PRIMARY_METHOD
 
 HOLDS = "holds"
@@ -144,12 +144,7 @@ def t_interval(values) -> tuple[float, float, float]:
 
 
 def _rho(rows, region, method):
-    sel = [r for r in rows if r["region"] == region and r["method"] == method]
-    return combined_interval(
-        [r["rho"] for r in sel],
-        [r.get("boot_low", math.nan) for r in sel],
-        [r.get("boot_high", math.nan) for r in sel],
-    )
+    return rows_interval([r for r in rows if r["region"] == region and r["method"] == method])
 
 
 def _row(claim, kind, paper, ours, control_name, control, **rule) -> dict:
@@ -168,13 +163,18 @@ def _row(claim, kind, paper, ours, control_name, control, **rule) -> dict:
     }
 
 
-def _glass_minus_non_glass(rows, method):
-    by_scene: dict = {}
+def _per_scene(rows, key: str, value=lambda r: r) -> dict:
+    """Scene to ``{row[key]: value(row)}``."""
+    out: dict = {}
     for r in rows:
-        if r["method"] == method and r["region"] in ("glass", "non_glass"):
-            by_scene.setdefault(r.get("scene"), {})[r["region"]] = r
+        out.setdefault(r.get("scene"), {})[r[key]] = value(r)
+    return out
+
+
+def _glass_minus_non_glass(rows, method):
+    selected = [r for r in rows if r["method"] == method and r["region"] in ("glass", "non_glass")]
     diffs, lows, highs = [], [], []
-    for pair in by_scene.values():
+    for pair in _per_scene(selected, "region").values():
         g, n = pair.get("glass"), pair.get("non_glass")
         if not g or not n or not _ok(g["rho"], n["rho"]):
             continue
@@ -287,11 +287,8 @@ def claims_table(
         )
     )
     ratios = []
-    by_scene: dict = {}
-    for r in rows:
-        if r["method"] == PRIMARY_METHOD:
-            by_scene.setdefault(r.get("scene"), {})[r["region"]] = r.get("mean_a", math.nan)
-    for means in by_scene.values():
+    primary = [r for r in rows if r["method"] == PRIMARY_METHOD]
+    for means in _per_scene(primary, "region", lambda r: r.get("mean_a", math.nan)).values():
         g, n = means.get("glass", math.nan), means.get("non_glass", math.nan)
         if _ok(g, n) and float(n) > 0:
             ratios.append(float(g) / float(n))
@@ -343,16 +340,15 @@ def _corrected(rows):
 def _effect(intervention, cost, metric, region, source):
     if not intervention:
         return (math.nan,) * 3
-    by_scene: dict = {}
-    for r in intervention:
-        if (r["cost"], r["metric"], r["region"]) != (cost, metric, region):
-            continue
-        if str(r.get("source", "render") or "render") != source:
-            continue
-        by_scene.setdefault(r.get("scene"), {})[r["condition"]] = r["value"]
+    selected = [
+        r
+        for r in intervention
+        if (r["cost"], r["metric"], r["region"]) == (cost, metric, region)
+        and str(r.get("source") or "render") == source
+    ]
     diffs = [
         float(c["normal"]) - float(c["decorrelated"])
-        for c in by_scene.values()
+        for c in _per_scene(selected, "condition", lambda r: r["value"]).values()
         if "normal" in c and "decorrelated" in c and _ok(c["normal"], c["decorrelated"])
     ]
     return t_interval(diffs)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .bootstrap import BootstrapSettings
-from .warp import warp_right_to_left
+from .warp import warp_finite, warp_right_to_left
 
 
 class MissingField(KeyError):
@@ -160,12 +160,10 @@ def warped_intensity(mean_right, ground_truth_left, *, sign: int) -> np.ndarray:
 def warp_field(right, ground_truth_left, *, sign: int) -> np.ndarray:
     """Any right-view (H, W) field warped into the left view (Eq. 2), NaN outside the valid
     set and where a non-finite right pixel has non-zero weight."""
-    right = np.asarray(right, dtype=np.float64)
-    finite = np.isfinite(right)
-    d = np.asarray(ground_truth_left["disparity"])
-    valid = np.asarray(ground_truth_left["valid"])
-    w, omega = warp_right_to_left(np.where(finite, right, 0.0), d, sign=sign, valid=valid)
-    if not finite.all():
-        spoiled, _ = warp_right_to_left((~finite).astype(np.float64), d, sign=sign)
-        omega = omega & (spoiled == 0)
-    return np.where(omega, w, np.nan)
+    warped, omega, clean = warp_finite(
+        right,
+        np.asarray(ground_truth_left["disparity"]),
+        sign=sign,
+        valid=np.asarray(ground_truth_left["valid"]),
+    )
+    return np.where(omega & clean, warped, np.nan)

@@ -8,7 +8,7 @@ The rows are the contract of ``results/{renderer}/{estimator}/correlation/{scene
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -194,7 +194,7 @@ def correlation_rows(
     """
     settings = settings or AnalysisSettings()
     if min_pixels is not None:
-        settings = AnalysisSettings(**{**settings.__dict__, "min_pixels": int(min_pixels)})
+        settings = replace(settings, min_pixels=int(min_pixels))
     if settings.min_pixels < 4:
         raise ValueError(f"min_pixels must be at least 4, got {settings.min_pixels}")
     inputs = inputs or SceneInputs()

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .across import combined_interval
+from .across import rows_interval
 from .regions import REGIONS, as_field
 from .registry import PRIMARY_METHOD, secondary_methods
 
@@ -97,20 +97,7 @@ def cross_scene_table(rows: list[dict], *, spp: int | None = None) -> list[dict]
     for region in REGIONS:
         primary = [r for r in rows if r["region"] == region and r["method"] == PRIMARY_METHOD]
         rho = np.array([float(r["rho"]) for r in primary if _finite(r["rho"])], dtype=np.float64)
-        _, low, high = (
-            combined_interval(
-                *zip(
-                    *[
-                        (r["rho"], r.get("boot_low", nan), r.get("boot_high", nan))
-                        for r in primary
-                        if _finite(r["rho"])
-                    ],
-                    strict=True,
-                )
-            )
-            if rho.size
-            else (nan, nan, nan)
-        )
+        _, low, high = rows_interval(primary)
         row = {
             "region": region,
             "mean_rho": float(rho.mean()) if rho.size else nan,

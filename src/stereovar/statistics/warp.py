@@ -75,6 +75,33 @@ def warp_right_to_left(right, disparity, *, sign: int = 1, valid=None):
     return np.where(mask, warped, 0.0).astype(np.result_type(right.dtype, np.float32)), omega
 
 
+def warp_finite(right, disparity, *, sign: int, valid=None, finite=None):
+    """Eq. 2 of a right-view field with non-finite pixels: their values and their spoiling.
+
+    .. math:: \\hat f_{R\\to L}(x, y) = f_R\\bigl(x + s\\,d(x, y),\\, y\\bigr)
+
+    with non-finite right pixels (or those ``finite`` marks False) read as 0.
+
+    Returns
+    -------
+    warped : numpy.ndarray, float64 (H, W)
+        0 outside the geometric valid set.
+    omega : numpy.ndarray of bool (H, W)
+        The geometric valid set (:func:`warp_right_to_left`).
+    clean : numpy.ndarray of bool (H, W)
+        No right pixel with non-zero bilinear weight was non-finite.
+    """
+    right = np.asarray(right, dtype=np.float64)
+    fin = np.isfinite(right)
+    if finite is not None:
+        fin &= np.asarray(finite, dtype=bool)
+    warped, omega = warp_right_to_left(np.where(fin, right, 0.0), disparity, sign=sign, valid=valid)
+    if fin.all():
+        return warped, omega, np.ones(omega.shape, dtype=bool)
+    spoiled, _ = warp_right_to_left((~fin).astype(np.float64), disparity, sign=sign)
+    return warped, omega, spoiled == 0
+
+
 def align_variance(
     sigma_left, sigma_right, ground_truth_left, *, sign: int, finite_left=None, finite_right=None
 ) -> dict:
@@ -103,24 +130,17 @@ def align_variance(
     if left.shape != right.shape or left.ndim != 2:
         raise ValueError(f"fields must share one (H, W) shape, got {left.shape}, {right.shape}")
     fin_left = np.isfinite(left)
-    fin_right = np.isfinite(right)
     if finite_left is not None:
         fin_left &= as_field(finite_left).astype(bool)
-    if finite_right is not None:
-        fin_right &= as_field(finite_right).astype(bool)
-    disparity = as_field(ground_truth_left["disparity"])
-    warped, omega_gt = warp_right_to_left(
-        np.where(fin_right, right, 0.0),
-        disparity,
+    warped, omega_gt, clean = warp_finite(
+        right,
+        as_field(ground_truth_left["disparity"]),
         sign=sign,
         valid=as_field(ground_truth_left["valid"]),
+        finite=None if finite_right is None else as_field(finite_right).astype(bool),
     )
     # a warped value is clean when no neighbour with non-zero weight is non-finite
-    if fin_right.all():
-        usable = fin_left
-    else:
-        spoiled, _ = warp_right_to_left((~fin_right).astype(np.float64), disparity, sign=sign)
-        usable = fin_left & (spoiled == 0)
+    usable = fin_left & clean
     return {
         "warped": warped,
         "omega_geometry": omega_gt,
