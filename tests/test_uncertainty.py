@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy import ndimage, stats
 
+from stereovar.estimators.seeds import StreamingVariance
 from stereovar.estimators.subsets import SeedSubsets, pooled_moments, subset_dataset
 from stereovar.statistics.bootstrap import (
     FEWER_THAN_2_TILES,
@@ -241,10 +242,11 @@ def test_fewer_than_4_seeds_give_nan_reliability_with_a_reason():
 def test_seed_subsets_match_numpy_on_every_subset():
     rng = np.random.default_rng(10)
     images = rng.normal(size=(11, 6, 7, 3))
-    acc = SeedSubsets()
+    acc, moments = SeedSubsets(), StreamingVariance()
     for image in images:
         acc.update(image)
-    ds = subset_dataset(acc)
+        moments.update(image)
+    ds = subset_dataset(acc, moments.half_variance)
     np.testing.assert_allclose(
         ds["half_variance"].sel(half="even"), images[0::2].var(axis=0).mean(-1), rtol=1e-5
     )
@@ -258,7 +260,11 @@ def test_seed_subsets_match_numpy_on_every_subset():
         np.testing.assert_allclose(ds["subset_variance"][k], want, rtol=1e-5, atol=1e-7)
     n, mean, m2 = pooled_moments((1, images[0], None), (1, images[1], None))
     np.testing.assert_allclose(m2 / n, images[:2].var(axis=0))
-    assert "half_variance" not in subset_dataset(SeedSubsets().update(images[0]))
+    few = StreamingVariance()
+    for image in images[:3]:
+        few.update(image)
+    assert few.half_variance is None
+    assert "half_variance" not in subset_dataset(SeedSubsets().update(images[0]), None)
 
 
 def test_reference_rows_still_give_eq3_for_the_field_statistics():

@@ -28,8 +28,9 @@ def intensity_residuals(log_variance, log_intensity, *, degree: int = DEGREE) ->
     Poisson-Gaussian law :math:`\\sigma^2 = a\\mu + b` has in log-log coordinates (slope 0 in
     the read-noise floor, 1 in the shot-noise regime) and the different slopes of diffuse and
     specular pixels, without the step artefacts of a monotone (isotonic) fit, which also
-    could not follow a non-monotone relation. The fit is solved on a centred and scaled
-    :math:`\\ln\\mu` (``numpy.polynomial.Polynomial.fit``) for conditioning.
+    could not follow a non-monotone relation. The fit solves the normal equations of the
+    powers of :math:`\\ln\\mu` mapped onto :math:`[-1, 1]` (the mapping of
+    ``numpy.polynomial.Polynomial.fit``, which keeps the 4x4 system well conditioned).
 
     Parameters
     ----------
@@ -46,11 +47,40 @@ def intensity_residuals(log_variance, log_intensity, *, degree: int = DEGREE) ->
     x = np.asarray(log_intensity, dtype=np.float64)
     if y.size < degree + 2:
         return np.full(y.shape, np.nan)
-    degree = min(degree, np.unique(x).size - 1)
+    design = _scaled_powers(x, degree)
+    degree = design.shape[0] - 1
     if degree < 1:
         return y - y.mean()
-    fit = np.polynomial.Polynomial.fit(x, y, degree)
-    return y - fit(x)
+    # normal equations of the scaled powers: (K+1) passes, not a QR of an (n, K+1) matrix
+    gram = np.einsum("in,jn->ij", design, design)
+    beta = np.linalg.solve(gram, np.einsum("in,n->i", design, y))
+    residual = y - beta[0]
+    for k in range(1, degree + 1):
+        residual -= beta[k] * design[k]
+    return residual
+
+
+def _scaled_powers(x, degree: int) -> np.ndarray:
+    """Rows :math:`u^0, \\ldots, u^K` of :math:`u = (x - c)/h \\in [-1, 1]`, with
+    :math:`K` lowered to the number of distinct values minus one."""
+    low, high = float(x.min()), float(x.max())
+    distinct = np.unique(x[:1024]).size  # enough distinct values in a prefix: done
+    rest = x
+    if distinct <= degree:
+        distinct = 0
+        while rest.size and distinct <= degree:
+            rest = rest[rest != rest[0]]
+            distinct += 1
+    degree = min(degree, distinct - 1)
+    centre, half = (high + low) / 2.0, (high - low) / 2.0 or 1.0
+    design = np.empty((degree + 1, x.size))
+    design[0] = 1.0
+    if degree >= 1:
+        np.subtract(x, centre, out=design[1])
+        design[1] *= 1.0 / half
+    for k in range(2, degree + 1):
+        np.multiply(design[k - 1], design[1], out=design[k])
+    return design
 
 
 def partial_pair(a, b, mu_a, mu_b, *, degree: int = DEGREE) -> tuple[np.ndarray, np.ndarray]:

@@ -148,13 +148,18 @@ def eq1_moments(mu, n: int, model: SensorModel) -> tuple[np.ndarray, np.ndarray]
     if n < 2:
         raise ValueError(f"Eq. 1 needs at least 2 frames, got {n}")
     g, r2 = float(model.gain), float(model.read_noise) ** 2
-    lam = clean * g
-    var = lam + r2
-    m4 = lam + 3 * lam * lam + 6 * lam * r2 + 3 * r2 * r2
     scale = (n - 1) / n
-    mean = scale * var / g**2
-    variance = scale**2 * (m4 / n - var * var * (n - 3) / (n * (n - 1))) / g**4
-    return mean, np.maximum(variance, 0.0)
+    # Var[s^2] as a quadratic in lambda: c2 lambda^2 + c1 lambda + c0 (Horner, in place)
+    a, b = 1.0 / n, (n - 3) / (n * (n - 1))
+    c2, c1, c0 = 3 * a - b, a * (1 + 6 * r2) - 2 * b * r2, (3 * a - b) * r2 * r2
+    unit = scale**2 / g**4
+    variance = clean * (g * c2 * unit)
+    variance += c1 * unit
+    variance *= clean * g
+    variance += c0 * unit
+    mean = clean * (scale / g)
+    mean += scale * r2 / g**2
+    return mean, np.maximum(variance, 0.0, out=variance)
 
 
 def simulated_sensor_variance(mu, n: int, model: SensorModel, seed) -> np.ndarray:
@@ -182,7 +187,11 @@ def simulated_sensor_variance(mu, n: int, model: SensorModel, seed) -> np.ndarra
     mean, variance = eq1_moments(mu, n, model)
     rng = np.random.default_rng(tuple(np.atleast_1d(seed).tolist()))
     with np.errstate(divide="ignore", invalid="ignore"):
-        shape = np.where(variance > 0, mean * mean / variance, 1.0)
-        theta = np.where(variance > 0, variance / mean, 0.0)
-    draws = rng.gamma(shape, 1.0) * theta
+        theta = variance / mean
+        shape = mean / theta
+    if not variance.min() > 0:  # no read noise and mu = 0: s^2 is 0 there
+        zero = ~(variance > 0)
+        theta[zero], shape[zero] = 0.0, 1.0
+    draws = rng.standard_gamma(shape)
+    draws *= theta
     return draws.mean(axis=-1)

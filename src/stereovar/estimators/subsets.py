@@ -10,8 +10,9 @@ expose that:
 * **disjoint subsets** of :math:`N' = 2, 4, 8, \\ldots < N` consecutive seeds, which give
   :math:`\\rho` as a function of :math:`N'`.
 
-:class:`SeedSubsets` accumulates both in one pass over the renders, next to
-:class:`~stereovar.estimators.seeds.StreamingVariance`.
+:class:`~stereovar.estimators.seeds.StreamingVariance` keeps the halves' sums apart as it
+accumulates Eq. 1; :class:`SeedSubsets` builds the disjoint subsets in the same pass over the
+renders.
 """
 
 from __future__ import annotations
@@ -65,14 +66,25 @@ def channel_variance(moments: tuple) -> np.ndarray:
     return (np.maximum(m2, 0.0).mean(axis=-1) / n).astype(np.float32)
 
 
-class SeedSubsets:
-    """Split-half and disjoint-subset variance fields of one view, fed one render at a time.
+def _channel_variance(moments: list, n: int) -> np.ndarray:
+    """Eq. 1 of in-place moments ``(mean, m2)`` over ``n`` renders, float32 (H, W)."""
+    m2 = moments[1]
+    total = m2[..., 0].copy()
+    for c in range(1, m2.shape[-1]):
+        total += m2[..., c]
+    total *= np.float32(1.0 / (m2.shape[-1] * n))
+    return np.maximum(total, np.float32(0.0), out=total)
 
-    Seed :math:`k` (0-based, in the order added) goes to half :math:`k \\bmod 2`; the
-    disjoint subsets of size :math:`N' = 2^j` are the runs of :math:`N'` consecutive seeds
+
+class SeedSubsets:
+    """Disjoint-subset variance fields of one view, fed one render at a time.
+
+    The disjoint subsets of size :math:`N' = 2^j` are the runs of :math:`N'` consecutive seeds
     :math:`\\{iN', \\ldots, (i+1)N' - 1\\}`, built by pairwise pooling
     (:func:`pooled_moments`) like a binary counter, so at most one pending subset per size is
-    held in memory.
+    held in memory. The moments are float32 (the stored fields' precision) and pooled in
+    place: Chan's update has no cancellation, and a render costs a handful of passes over
+    preallocated buffers.
 
     Non-finite values propagate into the fields of the subsets they fall in; downstream
     statistics drop non-finite pixels.
@@ -80,34 +92,56 @@ class SeedSubsets:
 
     def __init__(self):
         self.n = 0
-        self._halves = [None, None]
-        self._pending: dict[int, tuple] = {}
+        self._pending: dict[int, list] = {}
+        self._free: list = []
+        self._tmp = None
         self.subsets: list[tuple[int, int, np.ndarray]] = []
+
+    def _buffers(self, shape) -> list:
+        if self._free:
+            return self._free.pop()
+        return [np.empty(shape, np.float32), np.empty(shape, np.float32)]
+
+    def _pool_into(self, into: list, n1: int, mean2, m2, n2: int) -> None:
+        """``into`` (mean, m2) over ``n1`` renders absorbs ``(mean2, m2)`` over ``n2``
+        (:func:`pooled_moments`, in place)."""
+        mean1, spread = into
+        n = n1 + n2
+        delta, scratch = self._tmp
+        np.subtract(mean2, mean1, out=delta)
+        if m2 is not None:
+            spread += m2
+        np.multiply(delta, delta, out=scratch)
+        scratch *= np.float32(n1 * n2 / n)
+        spread += scratch
+        delta *= np.float32(n2 / n)
+        mean1 += delta
+
+    def _start(self, image) -> list:
+        buf = self._buffers(image.shape)
+        np.copyto(buf[0], image)
+        buf[1].fill(0.0)
+        return buf
 
     def update(self, image) -> SeedSubsets:
         """Add one whole render (H, W, C)."""
-        item = (1, np.asarray(image, dtype=np.float64), None)
-        half = self.n % 2
-        self._halves[half] = (
-            item if self._halves[half] is None else pooled_moments(self._halves[half], item)
-        )
+        x = np.asarray(image, dtype=np.float32)
+        if self._tmp is None:
+            self._tmp = (np.empty(x.shape, np.float32), np.empty(x.shape, np.float32))
         self.n += 1
-        size = 1
+        carry, size = None, 1  # None: the render itself
         while size in self._pending:
-            item = pooled_moments(self._pending.pop(size), item)
+            pending = self._pending.pop(size)
+            if carry is None:
+                self._pool_into(pending, size, x, None, 1)
+            else:
+                self._pool_into(pending, size, carry[0], carry[1], size)
+                self._free.append(carry)
+            carry = pending
             size *= 2
-            index = self.n // size - 1
-            self.subsets.append((size, index, channel_variance(item)))
-        self._pending[size] = item
+            self.subsets.append((size, self.n // size - 1, _channel_variance(carry, size)))
+        self._pending[size] = self._start(x) if carry is None else carry
         return self
-
-    @property
-    def halves(self) -> np.ndarray | None:
-        """float32 (2, H, W): Eq. 1 over the even and the odd seeds; None below
-        :data:`MIN_SPLIT_SEEDS` seeds."""
-        if self.n < MIN_SPLIT_SEEDS:
-            return None
-        return np.stack([channel_variance(h) for h in self._halves])
 
     def subset_fields(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """``(sizes, indices, fields)`` of every complete subset smaller than :math:`N`,
@@ -119,8 +153,15 @@ class SeedSubsets:
         return np.array(sizes), np.array(indices), np.stack(fields)
 
 
-def subset_dataset(subsets: SeedSubsets):
+def subset_dataset(subsets: SeedSubsets, halves=None):
     """The optional sub-estimate variables of the variance contract for one view.
+
+    Parameters
+    ----------
+    subsets : SeedSubsets
+    halves : numpy.ndarray (2, H, W), optional
+        Eq. 1 over the even and the odd seeds
+        (:attr:`~stereovar.estimators.seeds.StreamingVariance.half_variance`).
 
     Returns
     -------
@@ -133,10 +174,9 @@ def subset_dataset(subsets: SeedSubsets):
     import xarray as xr
 
     out = xr.Dataset()
-    halves = subsets.halves
     if halves is not None:
         out["half_variance"] = xr.DataArray(
-            halves,
+            np.asarray(halves, dtype=np.float32),
             dims=("half", "y", "x"),
             coords={"half": ["even", "odd"]},
             attrs={"long_name": "Eq. 1 over the even- and the odd-indexed seeds"},

@@ -84,6 +84,8 @@ def correlation_job(
 ) -> list[dict]:
     """Every registered statistic and control over every region (Eq. 3), to one CSV per scene
     and SPP, and :math:`\\rho` against the number of seeds to ``curve``."""
+    from concurrent.futures import ThreadPoolExecutor
+
     from ..io.contracts import read_alignment
     from ..io.store import open_dataset
     from ..io.tables import write_tables
@@ -93,6 +95,7 @@ def correlation_job(
         SceneInputs,
         correlation_rows,
         seed_curve_rows,
+        subset_rhos,
     )
 
     analysis = {"min_pixels": min_pixels, **dict(analysis or {})}
@@ -119,15 +122,31 @@ def correlation_job(
     )
     aligned = read_alignment(open_dataset(warped))
     glass = gl["glass"].values
-    rows = correlation_rows(
-        sigma_l,
-        sigma_r,
-        aligned,
-        glass,
-        finite_right=v["finite"].sel(view="right"),
-        settings=settings,
-        inputs=inputs,
-    )
+    subsets = None
+    if curve is not None and "subset_variance" in v:
+        sv = v["subset_variance"]
+        subsets = {
+            k: (
+                sv["subset_size"].values,
+                sv["subset_index"].values,
+                sv.sel(view=k).transpose("subset", "y", "x").values,
+            )
+            for k in views
+        }
+    _ = inputs.plan  # built once, before the two threads share it
+    # The seed-subset curve is independent of the rows: compute it on the second core.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        values = pool.submit(subset_rhos, subsets, aligned, glass, settings=settings, inputs=inputs)
+        rows = correlation_rows(
+            sigma_l,
+            sigma_r,
+            aligned,
+            glass,
+            finite_right=v["finite"].sel(view="right"),
+            settings=settings,
+            inputs=inputs,
+        )
+        values = values.result()
     run = {
         "renderer": v.attrs.get("renderer", ""),
         "estimator": v.attrs.get("estimator", ""),
@@ -148,19 +167,15 @@ def correlation_job(
         )
     write_tables(rows, CORRELATION_COLUMNS, {"csv": out})
     if curve is not None:
-        subsets = None
-        if "subset_variance" in v:
-            sv = v["subset_variance"]
-            subsets = {
-                k: (
-                    sv["subset_size"].values,
-                    sv["subset_index"].values,
-                    sv.sel(view=k).transpose("subset", "y", "x").values,
-                )
-                for k in views
-            }
         curve_rows = seed_curve_rows(
-            subsets, aligned, glass, rows, n_seeds=n_seeds, settings=settings, inputs=inputs
+            subsets,
+            aligned,
+            glass,
+            rows,
+            n_seeds=n_seeds,
+            settings=settings,
+            inputs=inputs,
+            values=values,
         )
         for row in curve_rows:
             row.update(scene=scene, spp=spp, **run)

@@ -67,8 +67,64 @@ def tile_labels(shape: tuple[int, int], tile: int) -> np.ndarray:
     return ys[:, None] * n_x + xs[None, :]
 
 
+def standardized_pair(a, b) -> tuple[np.ndarray, np.ndarray]:
+    """Centre two value arrays on their means and scale each by its largest deviation.
+
+    .. math:: \\tilde a_i = \\frac{a_i - \\bar a}{\\max_j |a_j - \\bar a|}
+
+    Pearson's :math:`\\rho` is invariant to both, and the scaled values keep the tile sums
+    from overflowing or cancelling. A constant array becomes all zeros.
+    """
+    return _standardized(a), _standardized(b)
+
+
+def _standardized(values) -> np.ndarray:
+    values = np.asarray(values, dtype=np.float64)
+    if not values.size:
+        return values.copy()
+    mean = float(np.mean(values))
+    deviation = max(float(values.max()) - mean, mean - float(values.min()))
+    out = np.subtract(values, mean)
+    out *= 1.0 / max(deviation, np.finfo(float).tiny)
+    return out
+
+
+def product_sums(labels, da, db, products=None) -> np.ndarray:
+    """Per-tile sums of standardized pairs (:func:`standardized_pair`) over non-empty tiles.
+
+    Parameters
+    ----------
+    labels : numpy.ndarray of int, shape (n,)
+        Tile index of each pair (non-negative).
+    da, db : numpy.ndarray, shape (n,)
+    products : tuple of numpy.ndarray, optional
+        :math:`(\\tilde a^2, \\tilde b^2, \\tilde a \\tilde b)` when already computed.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 6)
+        As :func:`tile_sums`.
+    """
+    labels = np.asarray(labels)
+    if products is None:
+        products = (da * da, db * db, da * db)
+    if labels.size and np.all(labels[1:] >= labels[:-1]):
+        # sorted by tile: one sequential pass per column
+        starts = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
+        counts = np.diff(starts, append=labels.size).astype(np.float64)
+        columns = [counts] + [np.add.reduceat(c, starts) for c in (da, db, *products)]
+        return np.stack(columns, axis=1)
+    size = int(labels.max()) + 1 if labels.size else 0
+    counts = np.bincount(labels, minlength=size)
+    used = counts > 0
+    columns = [counts[used].astype(np.float64)]
+    for c in (da, db, *products):
+        columns.append(np.bincount(labels, weights=c, minlength=size)[used])
+    return np.stack(columns, axis=1)
+
+
 def tile_sums(a, b, labels) -> np.ndarray:
-    """Per-tile sufficient statistics of Pearson's :math:`\\rho`, over the non-empty tiles.
+    """Per-tile sufficient statistics of Pearson's :math:`\rho`, over the non-empty tiles.
 
     Parameters
     ----------
@@ -82,20 +138,11 @@ def tile_sums(a, b, labels) -> np.ndarray:
     numpy.ndarray, shape (K, 6)
         Columns :math:`n_t, \\sum a, \\sum b, \\sum a^2, \\sum b^2, \\sum ab` of the
         :math:`K` tiles holding at least one pair, in tile order. The values are centred on
-        their overall means and scaled by their largest deviation first (Pearson's
-        :math:`\\rho` is invariant to both), so the sums neither overflow nor cancel.
+        their overall means and scaled by their largest deviation first
+        (:func:`standardized_pair`), so the sums neither overflow nor cancel.
     """
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
-    labels = np.asarray(labels)
-    da = a - a.mean()
-    db = b - b.mean()
-    da /= max(float(np.abs(da).max(initial=0.0)), np.finfo(float).tiny)
-    db /= max(float(np.abs(db).max(initial=0.0)), np.finfo(float).tiny)
-    used, inverse = np.unique(labels, return_inverse=True)
-    k = used.size
-    columns = [np.ones_like(da), da, db, da * da, db * db, da * db]
-    return np.stack([np.bincount(inverse, weights=c, minlength=k) for c in columns], axis=1)
+    da, db = standardized_pair(a, b)
+    return product_sums(labels, da, db)
 
 
 def draw_counts(n_tiles: int, reps: int, seed) -> np.ndarray:

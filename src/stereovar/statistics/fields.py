@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .bootstrap import BootstrapSettings
-from .warp import warp_finite, warp_right_to_left
+from .warp import WarpPlan, warp_finite
 
 
 class MissingField(KeyError):
@@ -131,9 +131,13 @@ def aligned_fields(
         for name in ("null_shift", "null_flip"):
             missing[name] = "no ground truth given for the null warps"
     if intensity is not None:
+        from ..controls.intensity import relative_variance
+
         extra["mean_left"], extra["mean_warped"] = intensity
+        extra["relative_left"] = lambda: relative_variance(left, intensity[0])
+        extra["relative_warped"] = lambda: relative_variance(warped, intensity[1])
     else:
-        for name in ("mean_left", "mean_warped"):
+        for name in ("mean_left", "mean_warped", "relative_left", "relative_warped"):
             missing[name] = "the variance store has no seed mean"
     for name in ("sensor_left", "sensor_warped", "sensor_sim_left", "sensor_sim_warped"):
         missing[name] = (
@@ -145,25 +149,27 @@ def aligned_fields(
     return AlignedFields(left, warped, right, extra=extra, missing=missing)
 
 
-def warped_intensity(mean_right, ground_truth_left, *, sign: int) -> np.ndarray:
+def warped_intensity(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:
     """The right view's RGB-mean seed mean warped into the left view (Eq. 2); NaN outside
-    the warp's valid set."""
-    w, omega = warp_right_to_left(
-        channel_mean(mean_right),
+    the warp's valid set. ``plan``: the scene's :class:`~stereovar.statistics.warp.WarpPlan`
+    when already built."""
+    plan = plan or WarpPlan(
         np.asarray(ground_truth_left["disparity"]),
         sign=sign,
         valid=np.asarray(ground_truth_left["valid"]),
     )
-    return np.where(omega, w, np.nan)
+    return np.where(plan.omega, plan.apply(channel_mean(mean_right)), np.nan)
 
 
-def warp_field(right, ground_truth_left, *, sign: int) -> np.ndarray:
+def warp_field(right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:
     """Any right-view (H, W) field warped into the left view (Eq. 2), NaN outside the valid
-    set and where a non-finite right pixel has non-zero weight."""
+    set and where a non-finite right pixel has non-zero weight. ``plan``: the scene's
+    :class:`~stereovar.statistics.warp.WarpPlan` when already built."""
     warped, omega, clean = warp_finite(
         right,
         np.asarray(ground_truth_left["disparity"]),
         sign=sign,
         valid=np.asarray(ground_truth_left["valid"]),
+        plan=plan,
     )
     return np.where(omega & clean, warped, np.nan)

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -46,11 +47,13 @@ from .bootstrap import (
     bootstrap_replicates,
     draw_counts,
     percentile_interval,
-    tile_sums,
+    product_sums,
+    standardized_pair,
 )
 from .correlation import CONSTANT, fisher_interval, undefined_result
 from .fields import AlignedFields, AnalysisSettings, MissingField
-from .robust import firefly_count, log_floor, ranks, top_share, trim_mask
+from .pixels import PixelSet
+from .robust import firefly_count, log_floor, products_top_share, ranks, trim_mask
 
 __all__ = ["AlignedFields", "METHODS", "Method", "PRIMARY_METHOD", "register_method"]
 
@@ -120,8 +123,34 @@ def secondary_methods() -> tuple[str, ...]:
 # ---------------------------------------------------------------- evaluation
 
 
-def region_values(arrays, transform, mask, settings: AnalysisSettings):
-    """The transformed pairs of one region and the pixels they come from.
+class RegionPairs(NamedTuple):
+    """The pairs one statistic correlates over one region (:func:`region_values`).
+
+    Attributes
+    ----------
+    a, b : numpy.ndarray (n,)
+        Transformed values (finite).
+    selected : numpy.ndarray of int or None
+        Positions, among the region's pixels, of the pairs used (None: all of them).
+    raw : tuple of numpy.ndarray
+        ``a`` and ``b`` before the transform and before it drops any pair (e.g. the
+        trimming): the region's finite values.
+    kept : numpy.ndarray of int or None
+        Positions, among ``raw``, of the pairs the transform kept (None: all of them).
+    n_nonfinite : int
+        Pixels of the region dropped because a field (or its transform) was not finite.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    selected: np.ndarray | None
+    raw: tuple
+    kept: np.ndarray | None
+    n_nonfinite: int
+
+
+def region_values(arrays, transform, pixels, settings: AnalysisSettings) -> RegionPairs:
+    """The transformed pairs of one region and where they come from.
 
     Parameters
     ----------
@@ -129,56 +158,51 @@ def region_values(arrays, transform, mask, settings: AnalysisSettings):
         A method's ``pair`` output.
     transform : callable or None
         The method's transform.
-    mask : array_like of bool (H, W)
+    pixels : PixelSet or array_like of bool (H, W)
+        The region (:class:`~stereovar.statistics.pixels.PixelSet` shares the gathered
+        values between statistics).
     settings : AnalysisSettings
 
     Returns
     -------
-    a, b : numpy.ndarray (n,)
-        Transformed values (finite).
-    index : numpy.ndarray of int (n,)
-        Flat pixel index of each pair.
-    raw : tuple of numpy.ndarray
-        ``a`` and ``b`` before the transform, at the same pixels.
-    n_nonfinite : int
-        Pixels of ``mask`` dropped because a field (or its transform) was not finite.
+    RegionPairs
     """
-    arrays = [np.asarray(f, dtype=np.float64) for f in arrays]
-    mask = np.asarray(mask, dtype=bool)
-    index = np.flatnonzero(mask)
-    values = [f.ravel()[index] for f in arrays]
-    ok = np.logical_and.reduce([np.isfinite(v) for v in values])
-    n_nonfinite = int(ok.size - ok.sum())
-    values = [v[ok] for v in values]
-    index = index[ok]
+    if not isinstance(pixels, PixelSet):
+        pixels = PixelSet(pixels)
+    values = [pixels.values(f) for f in arrays]
+    bad = [pixels.nonfinite(v) for v in values]
+    selected = None
+    if any(m is not None for m in bad):
+        ok = ~np.logical_or.reduce([m for m in bad if m is not None])
+        selected = np.flatnonzero(ok)
+        values = [v[selected] for v in values]
+    n_nonfinite = pixels.size - values[0].size
     raw = (values[0], values[1])
-    if transform is not None and values[0].size:
-        out = transform(tuple(values), settings)
-        a, b = out[0], out[1]
-        keep = np.isfinite(a) & np.isfinite(b)
-        if len(out) > 2:
-            keep &= out[2]
-        n_nonfinite += int((~(np.isfinite(a) & np.isfinite(b))).sum())
-        a, b, index = a[keep], b[keep], index[keep]
-        raw = (raw[0][keep], raw[1][keep])
-    else:
-        a, b = values[0], values[1]
-    return a, b, index, raw, n_nonfinite
+    if transform is None or not values[0].size:
+        return RegionPairs(values[0], values[1], selected, raw, None, n_nonfinite)
+    out = transform(tuple(values), settings)
+    a, b = out[0], out[1]
+    finite = np.isfinite(a) & np.isfinite(b)
+    n_nonfinite += int(finite.size - np.count_nonzero(finite))
+    keep = finite if len(out) < 3 else finite & out[2]
+    kept = None
+    if not keep.all():
+        kept = np.flatnonzero(keep)
+        a, b = a[kept], b[kept]
+        selected = kept if selected is None else selected[kept]
+    return RegionPairs(a, b, selected, raw, kept, n_nonfinite)
 
 
 def pearson_point(a, b) -> float:
     """Pearson's :math:`\\rho` of two value arrays (NaN when either is constant)."""
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
-    if a.size < 2:
+    if np.size(a) < 2:
         return float("nan")
-    da, db = a - a.mean(), b - b.mean()
-    sa, sb = np.abs(da).max(), np.abs(db).max()
-    if not (sa > 0 and sb > 0):
-        return float("nan")
-    da, db = da / sa, db / sb
+    da = np.subtract(a, np.mean(a), dtype=np.float64)
+    db = np.subtract(b, np.mean(b), dtype=np.float64)
     # einsum, not BLAS: a threaded BLAS dot stalls when parallel jobs share the cores
     sab, saa, sbb = (np.einsum("i,i->", x, y) for x, y in ((da, db), (da, da), (db, db)))
+    if not (saa > 0 and sbb > 0):
+        return float("nan")
     return float(np.clip(sab / np.sqrt(saa * sbb), -1.0, 1.0))
 
 
@@ -217,16 +241,24 @@ def evaluate(
     bootstrap's percentile interval over the tiles of ``labels`` (ranks, logarithms and the
     trimming are computed once over the region and the replicates resample the transformed
     pairs tile by tile), :func:`~stereovar.statistics.robust.top_share` of the transformed
-    values and :func:`~stereovar.statistics.robust.firefly_count` of the raw ones.
+    values and :func:`~stereovar.statistics.robust.firefly_count` of the raw ones (the
+    region's finite values, before any trimming).
+
+    Parameters
+    ----------
+    mask : PixelSet or array_like of bool (H, W)
+        The region; a :class:`~stereovar.statistics.pixels.PixelSet` built with the tile
+        labels replaces ``labels``.
 
     Returns
     -------
     dict
         The :data:`~stereovar.statistics.correlation.RESULT_KEYS`.
     """
+    pixels = mask if isinstance(mask, PixelSet) else PixelSet(mask, labels)
     try:
-        a, b, index, raw, n_nonfinite = region_values(
-            method.pair(fields), method.transform, mask, settings
+        a, b, selected, raw, kept, n_nonfinite = region_values(
+            method.pair(fields), method.transform, pixels, settings
         )
     except MissingField as missing:
         return undefined_result(0, 0, str(missing))
@@ -235,19 +267,28 @@ def evaluate(
         return undefined_result(
             n, n_nonfinite, f"fewer than {settings.min_pixels} valid pixels (n={n})"
         )
-    rho = pearson_point(a, b)
-    if not np.isfinite(rho):
+    da, db = standardized_pair(a, b)
+    products = (da * da, db * db, da * db)
+    saa, sbb, sab = (float(p.sum()) for p in products)
+    if not (saa > 0 and sbb > 0):
         return undefined_result(n, n_nonfinite, CONSTANT)
+    rho = float(np.clip(sab / np.sqrt(saa * sbb), -1.0, 1.0))
     result = {
         **undefined_result(n, n_nonfinite, ""),
         "rho": rho,
         **fisher_interval(rho, n),
-        "mean_a": float(raw[0].mean()),
-        "top_share": top_share(a, b),
-        "n_fireflies": firefly_count(raw[0], raw[1], settings.firefly_factor),
+        "mean_a": float((raw[0] if kept is None else raw[0][kept]).mean()),
+        "top_share": products_top_share(products[2]),
+        "n_fireflies": firefly_count(
+            raw[0],
+            raw[1],
+            settings.firefly_factor,
+            medians=(pixels.median(raw[0]), pixels.median(raw[1])),
+        ),
     }
-    if labels is not None and draws is not None:
-        sums = tile_sums(a, b, np.asarray(labels).ravel()[index])
+    if pixels.tiles is not None and draws is not None:
+        tiles = pixels.tiles if selected is None else pixels.tiles[selected]
+        sums = product_sums(tiles, da, db, products)
         result["n_tiles"] = int(sums.shape[0])
         if sums.shape[0] < 2:
             result["reason"] = FEWER_THAN_2_TILES
@@ -257,6 +298,18 @@ def evaluate(
     return result
 
 
+def point_rho(method: Method, fields: AlignedFields, mask, settings: AnalysisSettings) -> float:
+    """:math:`\\rho` of a statistic alone, without intervals or diagnostics (the seed-subset
+    curve); NaN when undefined."""
+    try:
+        pairs = region_values(method.pair(fields), method.transform, mask, settings)
+    except MissingField:
+        return float("nan")
+    if pairs.a.size < settings.min_pixels:
+        return float("nan")
+    return pearson_point(pairs.a, pairs.b)
+
+
 def point_estimate(method: Method, fields_a, fields_b, mask, settings, *, side: int) -> float:
     """:math:`\\rho` between one view's field in two estimates (e.g. the two split halves).
 
@@ -264,19 +317,17 @@ def point_estimate(method: Method, fields_a, fields_b, mask, settings, *, side: 
     view, warped); covariates are taken from the same view.
     """
     try:
-        one = [np.asarray(f, dtype=np.float64) for f in method.pair(fields_a)]
-        two = [np.asarray(f, dtype=np.float64) for f in method.pair(fields_b)]
+        one = method.pair(fields_a)
+        two = method.pair(fields_b)
     except MissingField:
         return float("nan")
-    covariates = one[2:]
+    covariates = list(one[2:])
     if covariates:
         covariates = [covariates[side]] * 2
-    a, b, _, _, _ = region_values(
-        [one[side], two[side], *covariates], method.transform, mask, settings
-    )
-    if a.size < settings.min_pixels:
+    pairs = region_values([one[side], two[side], *covariates], method.transform, mask, settings)
+    if pairs.a.size < settings.min_pixels:
         return float("nan")
-    return pearson_point(a, b)
+    return pearson_point(pairs.a, pairs.b)
 
 
 # ---------------------------------------------------------------- transforms
@@ -406,12 +457,7 @@ def relative_pair(fields: AlignedFields):
         \\rho_{\\text{rel}} = \\mathrm{corr}\\bigl(\\sigma_L^2/\\mu_L^2,\\
             \\hat\\sigma_{R\\to L}^2/\\hat\\mu_{R\\to L}^2\\bigr)
     """
-    from ..controls.intensity import relative_variance
-
-    return (
-        relative_variance(fields.left, fields["mean_left"]),
-        relative_variance(fields.warped, fields["mean_warped"]),
-    )
+    return fields["relative_left"], fields["relative_warped"]
 
 
 @register_method(

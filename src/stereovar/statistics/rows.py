@@ -15,9 +15,17 @@ import numpy as np
 from ..seeding import derive_seed
 from .bootstrap import tile_labels
 from .correlation import NO_GLASS, RESULT_KEYS, undefined_result
-from .fields import AnalysisSettings, aligned_fields, channel_mean, warp_field, warped_intensity
+from .fields import (
+    AlignedFields,
+    AnalysisSettings,
+    aligned_fields,
+    channel_mean,
+    warp_field,
+    warped_intensity,
+)
+from .pixels import PixelSet
 from .regions import REGIONS, as_field, region_masks
-from .registry import METHODS, BootstrapDraws, evaluate, point_estimate
+from .registry import METHODS, BootstrapDraws, evaluate, point_estimate, point_rho
 from .reliability import (
     CORRECTED_ABOVE_1,
     TOO_FEW_SEEDS,
@@ -25,6 +33,7 @@ from .reliability import (
     curve_summary,
     spearman_brown,
 )
+from .warp import WarpPlan
 
 RELIABILITY_KEYS = ("reliability_left", "reliability_right", "rho_corrected")
 
@@ -86,6 +95,22 @@ class SceneInputs:
     sensor: object = None
     label: str = ""
     notes: dict = field(default_factory=dict)
+    _plan: object = field(default=None, repr=False)
+
+    @property
+    def plan(self) -> WarpPlan:
+        """The Eq. 2 sampling plan of the left ground truth, built once per scene."""
+        if self._plan is None:
+            gtl = self.ground_truth_left
+            self._plan = WarpPlan(
+                np.asarray(gtl["disparity"]), sign=self.sign, valid=np.asarray(gtl["valid"])
+            )
+        return self._plan
+
+    def warp(self, right) -> np.ndarray:
+        """:func:`~stereovar.statistics.fields.warp_field` of a right-view field by
+        :attr:`plan`."""
+        return warp_field(right, self.ground_truth_left, sign=self.sign, plan=self.plan)
 
 
 def sensor_fields(inputs: SceneInputs) -> dict:
@@ -93,7 +118,7 @@ def sensor_fields(inputs: SceneInputs) -> dict:
     (:mod:`stereovar.controls.sensor`); notes the floored :math:`\\mu` entries."""
     from ..controls.sensor import sensor_variance, simulated_sensor_variance
 
-    model, gtl, sign = inputs.sensor, inputs.ground_truth_left, inputs.sign
+    model = inputs.sensor
     cache = {}
 
     def analytic(view):
@@ -109,11 +134,11 @@ def sensor_fields(inputs: SceneInputs) -> dict:
 
     fields = {
         "sensor_left": lambda: analytic("left"),
-        "sensor_warped": lambda: warp_field(analytic("right"), gtl, sign=sign),
+        "sensor_warped": lambda: inputs.warp(analytic("right")),
     }
     if inputs.n_seeds >= 2:
         fields["sensor_sim_left"] = lambda: simulated("left", 0)
-        fields["sensor_sim_warped"] = lambda: warp_field(simulated("right", 1), gtl, sign=sign)
+        fields["sensor_sim_warped"] = lambda: inputs.warp(simulated("right", 1))
     return fields
 
 
@@ -214,7 +239,9 @@ def correlation_rows(
     if inputs.mean is not None and inputs.ground_truth_left is not None:
         intensity = (
             channel_mean(inputs.mean["left"]),
-            warped_intensity(inputs.mean["right"], inputs.ground_truth_left, sign=inputs.sign),
+            warped_intensity(
+                inputs.mean["right"], inputs.ground_truth_left, sign=inputs.sign, plan=inputs.plan
+            ),
         )
         if inputs.sensor is not None:
             sensor = sensor_fields(inputs)
@@ -225,7 +252,7 @@ def correlation_rows(
             _fields(
                 as_field(inputs.halves["left"][h]).astype(np.float64),
                 as_field(inputs.halves["right"][h]).astype(np.float64),
-                warp_field(inputs.halves["right"][h], inputs.ground_truth_left, sign=inputs.sign),
+                inputs.warp(inputs.halves["right"][h]),
                 inputs,
                 settings,
                 intensity,
@@ -240,16 +267,15 @@ def correlation_rows(
         draws = BootstrapDraws(
             settings.bootstrap, derive_seed(settings.bootstrap.seed, inputs.label, region)
         )
+        pixels = PixelSet(masks[region], labels)
         for name, method in METHODS.items():
             if region == "glass" and not has_glass:
                 result = undefined_result(0, 0, NO_GLASS)
             else:
-                result = evaluate(
-                    method, fields, masks[region], settings=settings, labels=labels, draws=draws
-                )
+                result = evaluate(method, fields, pixels, settings=settings, draws=draws)
                 result["n_nonfinite"] += excluded
             row = {"region": region, "method": name, **result}
-            row.update(_reliability(method, halves, masks[region], settings, row, inputs))
+            row.update(_reliability(method, halves, pixels, settings, row, inputs))
             rows.append(row)
     floored = {k: v for k, v in inputs.notes.items() if k.startswith("mu_floored")}
     if floored:
@@ -284,6 +310,44 @@ def _reliability(method, halves, mask, settings, row, inputs) -> dict:
     return out
 
 
+def subset_rhos(subsets: dict, aligned: dict, glass, *, settings=None, inputs=None) -> dict:
+    """:math:`\\rho` of every ``curve=True`` statistic on every disjoint seed subset.
+
+    .. math:: \\rho^{(i)}_{N'} = \\mathrm{corr}\\bigl(\\sigma^{2\\,(i)}_{L,N'},\\,
+        \\hat\\sigma^{2\\,(i)}_{R\\to L,N'}\\bigr)\\big|_{\\Omega_r}
+
+    Parameters
+    ----------
+    subsets, aligned, glass, settings, inputs
+        As in :func:`seed_curve_rows`.
+
+    Returns
+    -------
+    dict
+        ``(region, method, N')`` to the list of :math:`\\rho` over the subsets of size
+        :math:`N'`, in subset order.
+    """
+    settings = settings or AnalysisSettings()
+    inputs = inputs or SceneInputs()
+    values: dict = {}
+    if not subsets or inputs.ground_truth_left is None:
+        return values
+    glass = as_field(glass).astype(bool)
+    masks = region_masks({"glass": glass}, as_field(aligned["omega"]).astype(bool))
+    curve_methods = [(n, m) for n, m in METHODS.items() if m.curve]
+    sizes, _, left_stack = subsets["left"]
+    right_stack = subsets["right"][2]
+    regions = [(r, PixelSet(masks[r])) for r in REGIONS if masks[r].any()]
+    for k, size in enumerate(sizes):
+        right = np.asarray(right_stack[k])
+        fields = AlignedFields(np.asarray(left_stack[k]), inputs.warp(right), right)
+        for region, pixels in regions:
+            for name, method in curve_methods:
+                rho = point_rho(method, fields, pixels, settings)
+                values.setdefault((region, name, int(size)), []).append(rho)
+    return values
+
+
 def seed_curve_rows(
     subsets: dict,
     aligned: dict,
@@ -293,17 +357,15 @@ def seed_curve_rows(
     n_seeds: int,
     settings=None,
     inputs: SceneInputs | None = None,
+    values: dict | None = None,
 ) -> list[dict]:
     """:math:`\\rho` against the number of seeds, from disjoint seed subsets.
 
     For each subset size :math:`N'` (:mod:`stereovar.estimators.subsets`), region and
     statistic with ``curve=True``, the mean and sample standard deviation over the
-    :math:`\\lfloor N/N' \\rfloor` disjoint subsets of
-
-    .. math:: \\rho^{(i)}_{N'} = \\mathrm{corr}\\bigl(\\sigma^{2\\,(i)}_{L,N'},\\,
-        \\hat\\sigma^{2\\,(i)}_{R\\to L,N'}\\bigr)\\big|_{\\Omega_r},
-
-    and the full estimate's :math:`\\rho` (one "subset", :math:`N' = N`) from ``rows``.
+    :math:`\\lfloor N/N' \\rfloor` disjoint subsets of :math:`\\rho^{(i)}_{N'}`
+    (:func:`subset_rhos`), and the full estimate's :math:`\\rho` (one "subset",
+    :math:`N' = N`) from ``rows``.
 
     Parameters
     ----------
@@ -318,39 +380,20 @@ def seed_curve_rows(
     settings : AnalysisSettings, optional
     inputs : SceneInputs, optional
         Its ground truth warps the subsets' right fields.
+    values : dict, optional
+        :func:`subset_rhos` when already computed (e.g. beside the correlation rows).
 
     Returns
     -------
     list of dict
         ``region``, ``method``, ``n_prime``, ``mean_rho``, ``std_rho``, ``n_subsets``.
     """
-    settings = settings or AnalysisSettings()
-    inputs = inputs or SceneInputs()
-    glass = as_field(glass).astype(bool)
-    masks = region_masks({"glass": glass}, as_field(aligned["omega"]).astype(bool))
-    curve_methods = [(n, m) for n, m in METHODS.items() if m.curve]
+    if values is None:
+        values = subset_rhos(subsets, aligned, glass, settings=settings, inputs=inputs)
+    curve_methods = [n for n, m in METHODS.items() if m.curve]
     out = []
-    values: dict = {}
-    if subsets and inputs.ground_truth_left is not None:
-        sizes, indices, left_stack = subsets["left"]
-        right_stack = subsets["right"][2]
-        for k, size in enumerate(sizes):
-            fields = _fields(
-                np.asarray(left_stack[k], dtype=np.float64),
-                np.asarray(right_stack[k], dtype=np.float64),
-                warp_field(right_stack[k], inputs.ground_truth_left, sign=inputs.sign),
-                inputs,
-                settings,
-                None,
-            )
-            for region in REGIONS:
-                for name, method in curve_methods:
-                    if not masks[region].any():
-                        continue
-                    rho = evaluate(method, fields, masks[region], settings=settings)["rho"]
-                    values.setdefault((region, name, int(size)), []).append(rho)
     for region in REGIONS:
-        for name, _ in curve_methods:
+        for name in curve_methods:
             sizes_here = sorted(s for (r, m, s) in values if (r, m) == (region, name))
             for size in sizes_here:
                 out.append(

@@ -59,23 +59,90 @@ def warp_right_to_left(right, disparity, *, sign: int = 1, valid=None):
         )
         return warped.transpose(*right.dims), omega
     right = np.asarray(right)
-    d = np.asarray(disparity, dtype=np.float64)
-    height, width = right.shape[:2]
-    if d.shape != (height, width):
-        raise ValueError(f"disparity shape {d.shape} does not match the field's {(height, width)}")
-    omega = valid_set(d, sign=sign, valid=valid)
-    xs = np.where(omega, np.arange(width)[None, :] + sign * d, 0.0)
-    x0 = np.minimum(np.floor(xs).astype(np.int64), width - 2 if width > 1 else 0)
-    t = xs - x0
-    rows = np.broadcast_to(np.arange(height)[:, None], (height, width))
-    x1 = np.minimum(x0 + 1, width - 1)
-    t = t.reshape(t.shape + (1,) * (right.ndim - 2))
-    warped = (1.0 - t) * right[rows, x0] + t * right[rows, x1]
-    mask = omega.reshape(omega.shape + (1,) * (right.ndim - 2))
-    return np.where(mask, warped, 0.0).astype(np.result_type(right.dtype, np.float32)), omega
+    d = np.asarray(disparity)
+    if d.shape != right.shape[:2]:
+        raise ValueError(f"disparity shape {d.shape} does not match the field's {right.shape[:2]}")
+    plan = WarpPlan(d, sign=sign, valid=valid)
+    return plan.apply(right), plan.omega
 
 
-def warp_finite(right, disparity, *, sign: int, valid=None, finite=None):
+class WarpPlan:
+    """Eq. 2's sampling positions for one disparity map, applied to any number of fields.
+
+    .. math::
+
+        \\hat f_{R\\to L}(x, y) = (1 - t) f_R(x_0, y) + t f_R(x_0 + 1, y), \\quad
+        x_0 = \\lfloor x + s\\,d \\rfloor,\\ t = x + s\\,d - x_0
+
+    on :math:`\\Omega_{\\text{geom}}` (:func:`~stereovar.statistics.regions.valid_set`).
+    The variance fields, the seed means, the split halves, the seed subsets and the sensor
+    fields of a scene share one disparity, so they share one plan.
+
+    Parameters
+    ----------
+    disparity : array_like, shape (H, W)
+    sign : {1, -1}, keyword-only
+    valid : array_like of bool, shape (H, W), optional
+    """
+
+    def __init__(self, disparity, *, sign: int = 1, valid=None):
+        if sign not in (1, -1):
+            raise ValueError(f"sign must be +1 or -1, got {sign}")
+        d = np.asarray(disparity, dtype=np.float64)
+        height, width = d.shape
+        self.shape = (height, width)
+        self.omega = valid_set(d, sign=sign, valid=valid)
+        self.index = np.flatnonzero(self.omega)
+        xs = (self.index % width) + sign * d.reshape(-1)[self.index]
+        x0 = np.minimum(np.floor(xs).astype(np.int64), width - 2 if width > 1 else 0)
+        row = self.index - self.index % width
+        self.first = row + x0
+        self.second = row + np.minimum(x0 + 1, width - 1)
+        self.weight = xs - x0
+
+    def sample(self, right, index=None) -> np.ndarray:
+        """Eq. 2 at some left pixels of :math:`\\Omega_{\\text{geom}}`.
+
+        Parameters
+        ----------
+        right : numpy.ndarray, shape (..., H, W)
+            Right-view fields, any leading dims (e.g. seed subsets).
+        index : numpy.ndarray of int, optional
+            Positions in :attr:`index` (the plan's pixels) to sample; all when omitted.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., n), float64
+        """
+        first, second, weight = self.first, self.second, self.weight
+        if index is not None:
+            first, second, weight = first[index], second[index], weight[index]
+        flat = np.asarray(right).reshape(*np.shape(right)[:-2], -1)
+        out = np.take(flat, first, axis=-1).astype(np.float64)
+        out *= 1.0 - weight
+        out += weight * np.take(flat, second, axis=-1)
+        return out
+
+    def apply(self, right) -> np.ndarray:
+        """Eq. 2 of a right field (H, W, ...) into left coordinates, 0 outside
+        :math:`\\Omega_{\\text{geom}}`; dtype at least float32."""
+        right = np.asarray(right)
+        height, width = self.shape
+        if right.shape[:2] != (height, width):
+            raise ValueError(
+                f"field shape {right.shape[:2]} does not match the disparity's {self.shape}"
+            )
+        extra = right.shape[2:]
+        flat = right.reshape(height * width, -1)
+        weight = self.weight[:, None]
+        values = (1.0 - weight) * flat[self.first] + weight * flat[self.second]
+        dtype = np.result_type(right.dtype, np.float32)
+        out = np.zeros((height * width, flat.shape[1]), dtype=dtype)
+        out[self.index] = values
+        return out.reshape(height, width, *extra)
+
+
+def warp_finite(right, disparity, *, sign: int, valid=None, finite=None, plan=None):
     """Eq. 2 of a right-view field with non-finite pixels: their values and their spoiling.
 
     .. math:: \\hat f_{R\\to L}(x, y) = f_R\\bigl(x + s\\,d(x, y),\\, y\\bigr)
@@ -95,11 +162,13 @@ def warp_finite(right, disparity, *, sign: int, valid=None, finite=None):
     fin = np.isfinite(right)
     if finite is not None:
         fin &= np.asarray(finite, dtype=bool)
-    warped, omega = warp_right_to_left(np.where(fin, right, 0.0), disparity, sign=sign, valid=valid)
-    if fin.all():
-        return warped, omega, np.ones(omega.shape, dtype=bool)
+    plan = plan or WarpPlan(disparity, sign=sign, valid=valid)
+    all_finite = bool(fin.all())
+    warped = plan.apply(right if all_finite else np.where(fin, right, 0.0))
+    if all_finite:
+        return warped, plan.omega, np.ones(plan.omega.shape, dtype=bool)
     spoiled, _ = warp_right_to_left((~fin).astype(np.float64), disparity, sign=sign)
-    return warped, omega, spoiled == 0
+    return warped, plan.omega, spoiled == 0
 
 
 def align_variance(
