@@ -276,3 +276,93 @@ def test_reference_rows_still_give_eq3_for_the_field_statistics():
     by = {(r["region"], r["method"]): r for r in rows}
     assert by["all", "warp"]["rho"] == pytest.approx(1.0)
     assert by["all", "spearman"]["rho"] == pytest.approx(1.0)
+
+
+def test_seed_curve_matches_numpy_on_every_subset_with_a_nan_render():
+    """rho(N') per subset, region and curve statistic against Eq. 1-3 done by hand."""
+    from stereovar.statistics.rows import SceneInputs, seed_curve_rows, subset_rhos
+    from stereovar.statistics.warp import align_variance
+
+    rng = np.random.default_rng(12)
+    n, h, w, shift = 8, 10, 24, 2
+    scale = rng.lognormal(size=(h, w + shift, 1))
+    left = rng.normal(size=(n, h, w, 3)) * scale[:, shift:]
+    right = rng.normal(size=(n, h, w, 3)) * scale[:, :w]  # x_R = x_L + 2 sees x_L's scale
+    right[3, 4, 7, 1] = np.nan  # spoils right pixel x = 7 of row 4 in one seed
+    views = {}
+    for name, images in (("left", left), ("right", right)):
+        acc, moments = SeedSubsets(), StreamingVariance()
+        for image in images:
+            acc.update(image)
+            moments.update(image)
+        ds = subset_dataset(acc, moments.half_variance)
+        views[name] = (moments, ds)
+    gt = {"disparity": np.full((h, w), float(shift)), "valid": np.ones((h, w), bool)}
+    glass = np.zeros((h, w), bool)
+    glass[:, :8] = True
+    aligned = align_variance(
+        views["left"][0].variance,
+        views["right"][0].variance,
+        gt,
+        sign=1,
+        finite_right=views["right"][0].finite,
+    )
+    subsets = {
+        k: (
+            ds["subset_size"].values,
+            ds["subset_index"].values,
+            ds["subset_variance"].values,
+        )
+        for k, (_, ds) in views.items()
+    }
+    inputs = SceneInputs(ground_truth_left=gt, sign=1, n_seeds=n)
+    got = subset_rhos(subsets, aligned, glass, inputs=inputs)
+
+    omega = np.zeros((h, w), bool)
+    omega[:, : w - shift] = True
+    omega[4, 7 - shift] = False  # its warped value reads the NaN pixel with weight 1
+    assert np.array_equal(aligned["omega"], omega)
+    masks = {"all": omega, "non_glass": omega & ~glass, "glass": omega & glass}
+
+    def logs(v):
+        return np.log(np.maximum(v, v[v > 0].min()))
+
+    for size in (2, 4):
+        for i in range(n // size):
+            sl = slice(i * size, (i + 1) * size)
+            var_l = left[sl].var(axis=0).mean(-1)
+            warped = np.full((h, w), np.nan)
+            warped[:, : w - shift] = right[sl].var(axis=0).mean(-1)[:, shift:]
+            for region, mask in masks.items():
+                a, b = var_l[mask], warped[mask]
+                want = {"warp": stats.pearsonr(a, b)[0], "log": stats.pearsonr(logs(a), logs(b))[0]}
+                for method, value in want.items():
+                    assert got[region, method, size][i] == pytest.approx(value, abs=1e-6)
+    assert sorted({k[2] for k in got}) == [2, 4]
+    rows = [{"region": r, "method": m, "rho": 0.5} for r in masks for m in ("warp", "log")]
+    curve = seed_curve_rows(subsets, aligned, glass, rows, n_seeds=n, inputs=inputs, values=got)
+    by = {(r["region"], r["method"], r["n_prime"]): r for r in curve}
+    assert by["glass", "log", 2]["n_subsets"] == 4
+    assert by["glass", "log", 2]["mean_rho"] == pytest.approx(np.mean(got["glass", "log", 2]))
+    assert by["all", "warp", n]["mean_rho"] == 0.5
+
+
+def test_warped_field_samples_match_the_full_warp_with_non_finite_pixels():
+    from stereovar.statistics.fields import warp_field
+    from stereovar.statistics.warp import WarpPlan
+
+    rng = np.random.default_rng(13)
+    h, w = 9, 30
+    right = rng.random((h, w))
+    right[2, 5] = np.nan
+    right[6, 11] = np.inf
+    gt = {"disparity": rng.uniform(0.5, 6.0, (h, w)), "valid": rng.random((h, w)) > 0.1}
+    want = warp_field(right, gt, sign=-1)
+    plan = WarpPlan(gt["disparity"], sign=-1, valid=gt["valid"])
+    field = plan.field(right)
+    np.testing.assert_array_equal(np.asarray(field), want)
+    index = np.flatnonzero(plan.omega)[::3]
+    np.testing.assert_array_equal(field.at(index), want.ravel()[index])
+    assert np.isnan(want).any() and np.isfinite(want[plan.omega]).sum() > 100
+    with pytest.raises(ValueError, match="valid set"):
+        field.at(np.flatnonzero(~plan.omega)[:2])

@@ -51,12 +51,17 @@ class PixelSet:
 
     def values(self, field) -> np.ndarray:
         """float64 (n,): ``field`` (H, W) at the region's pixels, in :attr:`index` order
-        (row-major, or tile-major when built with tile labels; cached)."""
+        (row-major, or tile-major when built with tile labels; cached). A field with an
+        ``at(index)`` method (:class:`~stereovar.statistics.warp.WarpedField`) is evaluated
+        at those pixels only."""
         key = id(field)
         hit = self._values.get(key)
         if hit is None:
-            flat = np.asarray(field).reshape(-1)
-            hit = (field, flat[self.index].astype(np.float64, copy=False))
+            if hasattr(field, "at"):  # computed only where needed (a WarpedField)
+                values = np.asarray(field.at(self.index), dtype=np.float64)
+            else:
+                values = np.asarray(field).reshape(-1)[self.index].astype(np.float64, copy=False)
+            hit = (field, values)
             self._values[key] = hit
         return hit[1]
 

@@ -340,7 +340,7 @@ def subset_rhos(subsets: dict, aligned: dict, glass, *, settings=None, inputs=No
     regions = [(r, PixelSet(masks[r])) for r in REGIONS if masks[r].any()]
     for k, size in enumerate(sizes):
         right = np.asarray(right_stack[k])
-        fields = AlignedFields(np.asarray(left_stack[k]), inputs.warp(right), right)
+        fields = AlignedFields(np.asarray(left_stack[k]), inputs.plan.field(right), right)
         for region, pixels in regions:
             for name, method in curve_methods:
                 rho = point_rho(method, fields, pixels, settings)

@@ -99,29 +99,56 @@ class WarpPlan:
         self.first = row + x0
         self.second = row + np.minimum(x0 + 1, width - 1)
         self.weight = xs - x0
+        self._cache: dict = {}
 
-    def sample(self, right, index=None) -> np.ndarray:
+    def sample(self, right, pixels=None) -> np.ndarray:
         """Eq. 2 at some left pixels of :math:`\\Omega_{\\text{geom}}`.
 
         Parameters
         ----------
         right : numpy.ndarray, shape (..., H, W)
             Right-view fields, any leading dims (e.g. seed subsets).
-        index : numpy.ndarray of int, optional
-            Positions in :attr:`index` (the plan's pixels) to sample; all when omitted.
+        pixels : numpy.ndarray of int, optional
+            Flat indices of left pixels inside :attr:`omega`, any order; all of
+            :attr:`index` when omitted. The taps for an index array are cached.
 
         Returns
         -------
         numpy.ndarray, shape (..., n), float64
+
+        Raises
+        ------
+        ValueError
+            A pixel lies outside the valid set.
         """
-        first, second, weight = self.first, self.second, self.weight
-        if index is not None:
-            first, second, weight = first[index], second[index], weight[index]
+        first, second, weight, rest = self._taps(pixels)
         flat = np.asarray(right).reshape(*np.shape(right)[:-2], -1)
-        out = np.take(flat, first, axis=-1).astype(np.float64)
-        out *= 1.0 - weight
+        out = np.multiply(np.take(flat, first, axis=-1), rest)
         out += weight * np.take(flat, second, axis=-1)
         return out
+
+    def _taps(self, pixels) -> tuple:
+        key = None if pixels is None else id(pixels)
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit[1]
+        if pixels is None:
+            taps = (self.first, self.second, self.weight, 1.0 - self.weight)
+        else:
+            pixels = np.asarray(pixels)
+            found = np.searchsorted(self.index, pixels)
+            if found.size and (
+                found.max() >= self.index.size or not np.array_equal(self.index[found], pixels)
+            ):
+                raise ValueError("pixels outside the warp's valid set have no Eq. 2 sample")
+            weight = self.weight[found]
+            taps = (self.first[found], self.second[found], weight, 1.0 - weight)
+        self._cache[key] = (pixels, taps)
+        return taps
+
+    def field(self, right) -> WarpedField:
+        """The warp of a right field (H, W), sampled lazily (:class:`WarpedField`)."""
+        return WarpedField(self, right)
 
     def apply(self, right) -> np.ndarray:
         """Eq. 2 of a right field (H, W, ...) into left coordinates, 0 outside
@@ -140,6 +167,39 @@ class WarpPlan:
         out = np.zeros((height * width, flat.shape[1]), dtype=dtype)
         out[self.index] = values
         return out.reshape(height, width, *extra)
+
+
+class WarpedField:
+    """A right-view field warped by a :class:`WarpPlan`, computed only at the pixels asked
+    for (:meth:`at`); ``numpy.asarray`` gives the whole field as
+    :func:`~stereovar.statistics.fields.warp_field` would.
+
+    Non-finite right pixels spoil the left pixels that give them a non-zero weight (NaN
+    there), as in :func:`warp_finite`.
+    """
+
+    def __init__(self, plan: WarpPlan, right):
+        self.plan = plan
+        self.right = np.asarray(right)
+        self.shape = plan.shape
+
+    def at(self, index) -> np.ndarray:
+        """float64 values at flat left pixels ``index`` (inside the plan's valid set)."""
+        values = self.plan.sample(self.right, index)
+        if np.isfinite(values.sum()):
+            return values
+        right = np.asarray(self.right, dtype=np.float64)
+        finite = np.isfinite(right)
+        values = self.plan.sample(np.where(finite, right, 0.0), index)
+        spoiled = self.plan.sample((~finite).astype(np.float64), index)
+        values[spoiled != 0] = np.nan
+        return values
+
+    def __array__(self, dtype=None, copy=None):
+        out = np.full(self.shape[0] * self.shape[1], np.nan)
+        out[self.plan.index] = self.at(self.plan.index)
+        out = out.reshape(self.shape)
+        return out if dtype is None else out.astype(dtype)
 
 
 def warp_finite(right, disparity, *, sign: int, valid=None, finite=None, plan=None):
