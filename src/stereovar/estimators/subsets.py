@@ -58,17 +58,11 @@ def pooled_moments(first: tuple, second: tuple) -> tuple:
     return n, mean, spread
 
 
-def channel_variance(moments: tuple) -> np.ndarray:
-    """Eq. 1 from pooled moments: :math:`\\frac13 \\sum_c M_c / n`, float32 (H, W)."""
-    n, _, m2 = moments
-    if m2 is None:
-        return np.zeros(np.shape(moments[1])[:2], dtype=np.float32)
-    return (np.maximum(m2, 0.0).mean(axis=-1) / n).astype(np.float32)
+def channel_variance(m2, n: int) -> np.ndarray:
+    """Eq. 1 from the pooled sums of squared deviations of ``n`` renders, float32 (H, W).
 
-
-def _channel_variance(moments: list, n: int) -> np.ndarray:
-    """Eq. 1 of in-place moments ``(mean, m2)`` over ``n`` renders, float32 (H, W)."""
-    m2 = moments[1]
+    .. math:: \\sigma^2 = \\frac13 \\sum_c \\frac{M_c}{n}
+    """
     total = m2[..., 0].copy()
     for c in range(1, m2.shape[-1]):
         total += m2[..., c]
@@ -139,7 +133,7 @@ class SeedSubsets:
                 self._free.append(carry)
             carry = pending
             size *= 2
-            self.subsets.append((size, self.n // size - 1, _channel_variance(carry, size)))
+            self.subsets.append((size, self.n // size - 1, channel_variance(carry[1], size)))
         self._pending[size] = self._start(x) if carry is None else carry
         return self
 

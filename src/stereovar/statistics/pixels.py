@@ -31,8 +31,7 @@ class PixelSet:
     """
 
     def __init__(self, mask, labels=None):
-        self.mask = np.asarray(mask, dtype=bool)
-        self.index = np.flatnonzero(self.mask)
+        self.index = np.flatnonzero(np.asarray(mask, dtype=bool))
         self.tiles = None
         if labels is not None:
             # tile-major order: each tile's pixels are contiguous, so per-tile sums are one
