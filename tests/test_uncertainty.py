@@ -366,3 +366,17 @@ def test_warped_field_samples_match_the_full_warp_with_non_finite_pixels():
     assert np.isnan(want).any() and np.isfinite(want[plan.omega]).sum() > 100
     with pytest.raises(ValueError, match="valid set"):
         field.at(np.flatnonzero(~plan.omega)[:2])
+
+
+def test_mid_ranks_match_scipy_with_ties_zeros_and_one_value():
+    from stereovar.statistics.robust import ranks
+
+    rng = np.random.default_rng(14)
+    for values in (
+        rng.integers(0, 6, size=500).astype(float),
+        np.r_[np.zeros(40), rng.lognormal(size=200)],
+        rng.random(300),
+        np.array([2.5]),
+    ):
+        np.testing.assert_array_equal(ranks(values), stats.rankdata(values, method="average"))
+    assert ranks(np.empty(0)).size == 0
