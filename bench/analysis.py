@@ -11,7 +11,8 @@ process so peak RSS is its own:
   control with block-bootstrap intervals (1000 replicates), split-half reliability, the
   seed-subset curve and the sensor baseline.
 
-It prints full / Eq. 1-3 (goal <= 1.5), full / read, and the peak RSS for N and N/3 seeds
+It prints full / Eq. 1-3 in wall-clock (goal <= 1.5) and CPU time (the cost when scenes
+run as parallel jobs), full / read, each job's wall-clock time, and the peak RSS for N and N/3 seeds
 (goal < 1.5 GB and not growing with N).
 
 Usage::
@@ -36,13 +37,13 @@ READ = r"""
 import json, resource, sys, time
 from stereovar.io.store import open_dataset
 paths = json.loads(sys.argv[1])
-start = time.perf_counter()
+start, cpu0 = time.perf_counter(), time.process_time()
 total = 0.0
 for p in paths:
     total += float(open_dataset(p)["radiance"].values[0, 0, 0])
-seconds = time.perf_counter() - start
+seconds, cpu = time.perf_counter() - start, time.process_time() - cpu0
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps({"seconds": seconds, "rss_mb": rss}))
+print(json.dumps({"seconds": seconds, "cpu": cpu, "rss_mb": rss}))
 """
 
 EQ123 = r"""
@@ -54,7 +55,7 @@ from stereovar.statistics.correlation import pearson_over_mask
 from stereovar.statistics.regions import region_masks
 from stereovar.statistics.warp import align_variance
 args = json.loads(sys.argv[1])
-start = time.perf_counter()
+start, cpu0 = time.perf_counter(), time.process_time()
 v = variance_dataset(args["left"], args["right"], subsets=False)
 gt = open_dataset(args["gt"]).sel(view="left").load()
 left, right = (v["variance"].sel(view=k).values for k in ("left", "right"))
@@ -62,9 +63,9 @@ aligned = align_variance(left, right, gt, sign=1)
 for mask in region_masks(gt, aligned["omega"]).values():
     pearson_over_mask(left, aligned["warped"], mask)
     pearson_over_mask(left, right, mask)
-seconds = time.perf_counter() - start
+seconds, cpu = time.perf_counter() - start, time.process_time() - cpu0
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps({"seconds": seconds, "rss_mb": rss}))
+print(json.dumps({"seconds": seconds, "cpu": cpu, "rss_mb": rss}))
 """
 
 ANALYSE = r"""
@@ -74,14 +75,17 @@ import stereovar.statistics.rows, scipy.stats  # imported before the clock, as i
 from stereovar.jobs.correlation import correlation_job, warp_job
 from stereovar.jobs.variance import variance_job
 args = json.loads(sys.argv[1])
-start = time.perf_counter()
+start, cpu0 = time.perf_counter(), time.process_time()
 variance_job(args["left"], args["right"], args["work"] + "/var.zarr")
+stages = {"variance": time.perf_counter() - start}
 warp_job(args["work"] + "/var.zarr", args["gt"], args["work"] + "/warp.zarr")
+stages["warp"] = time.perf_counter() - start - stages["variance"]
 correlation_job(args["work"] + "/var.zarr", args["work"] + "/warp.zarr", args["gt"],
                 args["work"] + "/corr.csv", curve=args["work"] + "/curve.csv")
-seconds = time.perf_counter() - start
+seconds, cpu = time.perf_counter() - start, time.process_time() - cpu0
+stages["correlation"] = seconds - stages["variance"] - stages["warp"]
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps({"seconds": seconds, "rss_mb": rss}))
+print(json.dumps({"seconds": seconds, "cpu": cpu, "rss_mb": rss, "stages": stages}))
 """
 
 
@@ -158,10 +162,13 @@ def main(argv=None) -> int:
                 f"N={n}, {args.width}x{args.height}: read {read['seconds']:.2f} s; "
                 f"Eq. 1-3 {eq123['seconds']:.2f} s; all statistics and controls "
                 f"{analysis['seconds']:.2f} s; ratio to Eq. 1-3 "
-                f"{analysis['seconds'] / eq123['seconds']:.2f} (goal <= 1.5); ratio to read "
+                f"{analysis['seconds'] / eq123['seconds']:.2f} (goal <= 1.5); CPU time "
+                f"{analysis['cpu']:.2f} s against {eq123['cpu']:.2f} s, ratio "
+                f"{analysis['cpu'] / eq123['cpu']:.2f}; ratio to read "
                 f"{analysis['seconds'] / read['seconds']:.2f}; peak RSS "
                 f"{analysis['rss_mb']:.0f} MB (Eq. 1-3 {eq123['rss_mb']:.0f} MB, read alone "
-                f"{read['rss_mb']:.0f} MB)"
+                f"{read['rss_mb']:.0f} MB)\n  jobs: "
+                + ", ".join(f"{k} {v:.2f} s" for k, v in analysis["stages"].items())
             )
     small, large = min(results), max(results)
     growth = results[large][1]["rss_mb"] / results[small][1]["rss_mb"]

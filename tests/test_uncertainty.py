@@ -380,3 +380,30 @@ def test_mid_ranks_match_scipy_with_ties_zeros_and_one_value():
     ):
         np.testing.assert_array_equal(ranks(values), stats.rankdata(values, method="average"))
     assert ranks(np.empty(0)).size == 0
+
+
+def test_pixel_set_within_a_parent_reads_the_same_values_in_its_own_order():
+    from stereovar.statistics.bootstrap import tile_labels
+    from stereovar.statistics.pixels import PixelSet
+    from stereovar.statistics.warp import WarpPlan
+
+    rng = np.random.default_rng(15)
+    h, w = 12, 40
+    gt = {"disparity": rng.uniform(0.5, 6.0, (h, w)), "valid": rng.random((h, w)) > 0.1}
+    plan = WarpPlan(gt["disparity"], sign=1, valid=gt["valid"])
+    glass = rng.random((h, w)) > 0.7
+    labels = tile_labels((h, w), 4)
+    right, left = rng.random((h, w)), rng.random((h, w))
+    warped = plan.field(right)
+    for parent_labels in (None, labels):
+        parent = PixelSet(plan.omega, parent_labels)
+        child = PixelSet(plan.omega & glass, labels, parent=parent)
+        direct = PixelSet(plan.omega & glass, labels)
+        np.testing.assert_array_equal(child.index, direct.index)
+        np.testing.assert_array_equal(child.values(left), left.ravel()[direct.index])
+        want = np.asarray(warped).ravel()[direct.index]
+        np.testing.assert_array_equal(child.values(warped), want)
+        child.forget()
+        assert not child._values
+    with pytest.raises(ValueError, match="parent"):
+        PixelSet(~plan.omega, parent=PixelSet(plan.omega))

@@ -22,6 +22,10 @@ class PixelSet:
         The region (e.g. :math:`\\Omega \\cap G`).
     labels : array_like of int, shape (H, W), optional
         Bootstrap tile of each pixel (:func:`stereovar.statistics.bootstrap.tile_labels`).
+    parent : PixelSet, optional
+        A set holding every pixel of this one (e.g. :math:`\\Omega` for
+        :math:`\\Omega \\cap G`): a field's values here are taken from the parent's cached
+        values, so a field computed pixel by pixel (a warp) is evaluated once for both.
 
     Notes
     -----
@@ -30,8 +34,9 @@ class PixelSet:
     not be modified in place after they were read.
     """
 
-    def __init__(self, mask, labels=None):
-        self.index = np.flatnonzero(np.asarray(mask, dtype=bool))
+    def __init__(self, mask, labels=None, *, parent: PixelSet | None = None):
+        mask = np.asarray(mask, dtype=bool)
+        self.index = np.flatnonzero(mask)
         self.tiles = None
         if labels is not None:
             # tile-major order: each tile's pixels are contiguous, so per-tile sums are one
@@ -39,6 +44,13 @@ class PixelSet:
             tiles = np.asarray(labels).ravel()[self.index]
             order = np.argsort(tiles, kind="stable")
             self.index, self.tiles = self.index[order], tiles[order]
+        self.parent, self._positions = parent, None
+        if parent is not None:
+            where = np.full(mask.size, -1, dtype=np.int64)
+            where[parent.index] = np.arange(parent.size)
+            self._positions = where[self.index]
+            if self._positions.size and self._positions.min() < 0:
+                raise ValueError("a PixelSet's parent must hold every one of its pixels")
         self._values: dict[int, tuple] = {}
         self._medians: dict[int, tuple] = {}
         self._nonfinite: dict[int, tuple] = {}
@@ -52,17 +64,25 @@ class PixelSet:
         """float64 (n,): ``field`` (H, W) at the region's pixels, in :attr:`index` order
         (row-major, or tile-major when built with tile labels; cached). A field with an
         ``at(index)`` method (:class:`~stereovar.statistics.warp.WarpedField`) is evaluated
-        at those pixels only."""
+        at those pixels only, or at the parent's."""
         key = id(field)
         hit = self._values.get(key)
         if hit is None:
-            if hasattr(field, "at"):  # computed only where needed (a WarpedField)
+            if self.parent is not None:
+                values = self.parent.values(field)[self._positions]
+            elif hasattr(field, "at"):  # computed only where needed (a WarpedField)
                 values = np.asarray(field.at(self.index), dtype=np.float64)
             else:
                 values = np.asarray(field).reshape(-1)[self.index].astype(np.float64, copy=False)
             hit = (field, values)
             self._values[key] = hit
         return hit[1]
+
+    def forget(self) -> None:
+        """Drop every cached value (e.g. between seed subsets, whose fields are read once)."""
+        self._values.clear()
+        self._medians.clear()
+        self._nonfinite.clear()
 
     def median(self, values) -> float:
         """Median of a value array of this set (cached for the arrays :meth:`values` gave)."""

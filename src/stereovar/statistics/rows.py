@@ -337,7 +337,12 @@ def subset_rhos(subsets: dict, aligned: dict, glass, *, settings=None, inputs=No
     curve_methods = [(n, m) for n, m in METHODS.items() if m.curve]
     sizes, _, left_stack = subsets["left"]
     right_stack = subsets["right"][2]
-    regions = [(r, PixelSet(masks[r])) for r in REGIONS if masks[r].any()]
+    omega = PixelSet(masks["all"])
+    regions = [
+        (r, omega if r == "all" else PixelSet(masks[r], parent=omega))
+        for r in REGIONS
+        if masks[r].any()
+    ]
     for k, size in enumerate(sizes):
         right = np.asarray(right_stack[k])
         fields = AlignedFields(np.asarray(left_stack[k]), inputs.plan.field(right), right)
@@ -345,6 +350,8 @@ def subset_rhos(subsets: dict, aligned: dict, glass, *, settings=None, inputs=No
             for name, method in curve_methods:
                 rho = point_rho(method, fields, pixels, settings)
                 values.setdefault((region, name, int(size)), []).append(rho)
+        for _, pixels in regions:  # each subset's fields are read once
+            pixels.forget()
     return values
 
 
