@@ -34,5 +34,9 @@ include: "workflow/rules/intervention.smk"
 include: "workflow/rules/claims.smk"
 
 
+onstart:
+    preflight()
+
+
 onsuccess:
     print_claims("results/tables/claims.md")

@@ -1,12 +1,24 @@
 # Configuration validation, wildcard constraints, input functions and target lists.
 import math
+import os
 import re
+import shlex
+import sys
 from pathlib import Path
 
 import yaml
 from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
+from stereovar.errors import StereovarError
+from stereovar.preflight import (
+    check_backends,
+    check_scene_specs,
+    clear_stale_lock,
+    mark_run,
+    stored_backends,
+)
+from stereovar.scenes.references import xml_references
 from stereovar.estimators import ESTIMATORS
 from stereovar.experiment import (
     batch_label,
@@ -142,13 +154,16 @@ def scene_spec_path(scene):
 
 
 def scene_inputs(wildcards):
-    """The spec of a scene and, for XML scenes, the Mitsuba file it points at."""
+    """The spec of a scene and, for XML scenes, the Mitsuba file it points at and every
+    file that reads (meshes, textures, includes), so editing any of them reruns the scene."""
     spec = Path(scene_spec_path(wildcards.scene))
     inputs = {"spec": str(spec)}
     if spec.is_file():
         data = yaml.safe_load(spec.read_text()) or {}
         if isinstance(data, dict) and isinstance(data.get("mitsuba_xml"), str):
-            inputs["xml"] = str(spec.parent / data["mitsuba_xml"])
+            xml = spec.parent / data["mitsuba_xml"]
+            inputs["xml"] = str(xml)
+            inputs["xml_files"] = [str(p) for p in xml_references(xml)]
     return inputs
 
 
@@ -194,6 +209,13 @@ if UNKNOWN_SCENES:
         f"stereovar: config key 'scenes': no spec file for {', '.join(UNKNOWN_SCENES)} "
         "(expected scenes/<name>.yaml); add the spec or remove the name from 'scenes'"
     )
+# Every existing spec, with the XML file it points at and the files that reads, is checked
+# here, before any job starts: a job that found the problem would first have its outputs
+# deleted by Snakemake.
+try:
+    check_scene_specs(scene_spec_path(s) for s in SCENES if s not in TO_GENERATE)
+except StereovarError as err:
+    raise SystemExit(f"stereovar: {err}")
 # The generator rule only applies to specs that are missing (a pattern matching nothing
 # otherwise), so it never overwrites a committed or edited spec.
 GENERATE_PATTERN = "|".join(re.escape(s) for s in TO_GENERATE) or r"(?!x)x"
@@ -302,6 +324,70 @@ def intervention_resources():
         ),
         "cpus_per_task": 2,
     }
+
+
+def snakemake_arguments():
+    """This run's ``--configfile`` and ``--config`` options, as a shell fragment: the
+    rebuild commands printed for a damaged store repeat them."""
+    parts = [f"--configfile {shlex.quote(str(f))}" for f in workflow.overwrite_configfiles]
+    overrides = workflow.config_settings.config or {}
+    if overrides:
+        entries = []
+        for key, value in overrides.items():
+            text = yaml.safe_dump(value, default_flow_style=True, width=10**6).strip()
+            entries.append(shlex.quote(f"{key}={text.removesuffix('...').strip()}"))
+        parts.append("--config " + " ".join(entries))
+    return " ".join(parts)
+
+
+# Read by stereovar.io.renders.rebuild_command in every job this run starts.
+os.environ["STEREOVAR_SNAKEMAKE_ARGS"] = snakemake_arguments()
+
+# A run killed on this host leaves its lock behind; the same command then resumes instead
+# of asking for --unlock (stereovar.preflight.stale_lock: only a lock whose run is gone).
+STATE_DIR = ".snakemake"
+if workflow.is_main_process and clear_stale_lock(STATE_DIR):
+    print("stereovar: removed the lock of an earlier run that was killed", file=sys.stderr)
+
+
+def render_stores():
+    """Every render store the configured tables pool (all scenes, SPPs and batches)."""
+    renderer = get_renderer()
+    return [
+        path
+        for scene, spp in scene_spp_pairs(config)
+        for paths in view_renders(renderer, scene, spp).values()
+        for path in paths
+    ]
+
+
+RENDERER_RULES = {"render", "ground_truth", "preview"}
+
+
+def preflight():
+    """Checks made in ``onstart``, after the DAG is known and before any job (and so before
+    Snakemake deletes any output): the back end that this machine's jobs would use is
+    available, and the renders that the tables pool come from one back end
+    (:func:`stereovar.preflight.check_backends`). A cluster run's jobs resolve the back end
+    on their own nodes; their renders are checked by the jobs that pool them."""
+    from stereovar.renderers import get_renderer as renderer_named
+
+    mark_run(STATE_DIR)
+    jobs = list(workflow.dag.needrun_jobs())
+    outputs = {str(f) for job in jobs for f in job.output}
+    kept = stored_backends(p for p in render_stores() if p not in outputs)
+    rules = {job.rule.name for job in jobs}
+    planned = None
+    try:
+        if workflow.local_exec and rules & RENDERER_RULES:
+            planned = renderer_named(get_renderer()).backend(config["render"]["variant"])
+        check_backends(
+            kept,
+            planned if "render" in rules else None,
+            allow_mixed=config["render"]["allow_mixed_backends"],
+        )
+    except StereovarError as err:
+        raise SystemExit(f"stereovar: {err}")
 
 
 def print_claims(path):

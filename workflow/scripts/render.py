@@ -9,5 +9,6 @@ run_job(
     spec=snakemake.input.spec,
     outputs={"left": snakemake.output.left, "right": snakemake.output.right},
     threads=snakemake.threads,
+    cache=snakemake.config["render"]["cache"],
     **snakemake.params,
 )

@@ -20,6 +20,7 @@ block) at a time.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -103,11 +104,31 @@ def _one_line(text) -> str:
     return text if len(text) <= 200 else text[:197] + "..."
 
 
+RERUN_ARGS_ENV = "STEREOVAR_SNAKEMAKE_ARGS"
+"""Environment variable holding the ``--configfile`` and ``--config`` options of the
+Snakemake run a job belongs to (set by ``workflow/rules/common.smk``)."""
+
+
+def rebuild_command(path) -> str:
+    """The command that rebuilds the workflow output at ``path`` and nothing else.
+
+    ``snakemake -j1 <this run's --configfile and --config> --force <path>``: ``--force``
+    reruns the one job that writes ``path`` (whether or not the damaged copy is still there)
+    with the same config, so the rebuilt store matches the others. Outside a workflow run
+    the config options are unknown, and the command says to add them.
+    """
+    args = os.environ.get(RERUN_ARGS_ENV)
+    if args is None:
+        args = "--configfile <the config of the run that made it>"
+    return " ".join(p for p in ("snakemake", "-j1", args, "--force", str(path)) if p)
+
+
 def store_error(path, detail, *, what: str = "render store") -> StoreError:
-    """The one-line error for a damaged or incomplete store at ``path``."""
+    """The one-line error for a damaged or incomplete store at ``path``, with the command
+    that rebuilds it (:func:`rebuild_command`)."""
     return StoreError(
         f"{what} {path} is damaged or incomplete ({_one_line(detail)}); "
-        f"delete it and rerun `snakemake {path}`"
+        f"rebuild it with `{rebuild_command(path)}`"
     )
 
 
@@ -145,7 +166,9 @@ class RenderStore:
 
         self.path = path
         if not Path(path).exists():
-            raise StoreError(f"render store {path} does not exist; rerun `snakemake {path}`")
+            raise StoreError(
+                f"render store {path} does not exist; build it with `{rebuild_command(path)}`"
+            )
         try:
             group = zarr.open_consolidated(str(path), mode="r", zarr_format=ZARR_FORMAT)
             if "radiance" not in group:

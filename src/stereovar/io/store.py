@@ -96,6 +96,38 @@ def open_dataset(path) -> xr.Dataset:
     return xr.open_zarr(path, consolidated=True, zarr_format=ZARR_FORMAT, chunks=None)
 
 
+def load_store(path, what: str, variables=None) -> xr.Dataset:
+    """Open a stored dataset and read it (or ``variables`` of it) into memory, checked.
+
+    Parameters
+    ----------
+    path : path-like
+        A workflow output (a ground-truth, variance or warped store).
+    what : str
+        What it is, for the message (``"variance store"``).
+    variables : list of str, optional
+        Read only these (attributes are kept).
+
+    Raises
+    ------
+    StoreError
+        The store is missing, lacks a variable or cannot be read (a damaged or missing
+        chunk): one line with the command that rebuilds it
+        (:func:`stereovar.io.renders.store_error`).
+    """
+    from .renders import read_errors, store_error
+
+    if not Path(path).exists():
+        raise store_error(path, "it does not exist", what=what)
+    try:
+        ds = open_dataset(path)
+        if variables is not None:
+            ds = ds[list(variables)]
+        return ds.load()
+    except read_errors() as err:
+        raise store_error(path, f"{type(err).__name__}: {err}", what=what) from None
+
+
 def write_file(path, writer: Callable[[Path], None]) -> Path:
     """Write a file atomically: ``writer(tmp_path)`` writes, then the file is renamed."""
     with atomic_path(path) as tmp:

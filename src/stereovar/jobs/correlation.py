@@ -10,13 +10,13 @@ def warp_job(variance, ground_truth, out) -> None:
     import numpy as np
 
     from ..io.contracts import warped_store
-    from ..io.store import open_dataset, write_dataset
+    from ..io.store import load_store, write_dataset
     from ..statistics.regions import region_masks
     from ..statistics.warp import align_variance
 
-    v = open_dataset(variance)[["variance", "finite"]].load()
-    gt = open_dataset(ground_truth)
-    gl = gt[["disparity", "valid", "glass"]].sel(view="left").load()
+    v = load_store(variance, "variance store", ["variance", "finite"])
+    gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
+    gl = gt.sel(view="left")
     sigma_l, sigma_r = left_right(v, "variance")
     fin_l, fin_r = left_right(v, "finite")
     aligned = align_variance(
@@ -87,7 +87,7 @@ def correlation_job(
     from concurrent.futures import ThreadPoolExecutor
 
     from ..io.contracts import read_alignment
-    from ..io.store import open_dataset
+    from ..io.store import load_store
     from ..io.tables import write_tables
     from ..statistics.rows import (
         CORRELATION_COLUMNS,
@@ -100,9 +100,9 @@ def correlation_job(
 
     analysis = {"min_pixels": min_pixels, **dict(analysis or {})}
     settings, sensor = analysis_settings(analysis, controls)
-    v = open_dataset(variance).load()
-    gt = open_dataset(ground_truth)
-    gl = gt[["disparity", "valid", "glass"]].sel(view="left").load()
+    v = load_store(variance, "variance store")
+    gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
+    gl = gt.sel(view="left")
     sigma_l, sigma_r = left_right(v, "variance")
     n_seeds = int(v.attrs["n_seeds"])
     scene, spp = v.attrs["scene"], int(v.attrs["spp"])
@@ -120,7 +120,7 @@ def correlation_job(
         sensor=sensor,
         label=f"{scene}|spp{spp}",
     )
-    aligned = read_alignment(open_dataset(warped))
+    aligned = read_alignment(load_store(warped, "warped store"))
     glass = gl["glass"].values
     subsets = None
     if curve is not None and "subset_variance" in v:

@@ -13,10 +13,10 @@ def _title(attrs, text: str) -> str:
 def teaser_figure_job(variance, warped, out) -> None:
     """Fig. 1: sigma_L^2, sigma_R^2, the warped field and their joint histogram over Omega."""
     from ..figures.paper import teaser_figure
-    from ..io.store import open_dataset
+    from ..io.store import load_store
 
-    v = open_dataset(variance).load()
-    w = open_dataset(warped).load()
+    v = load_store(variance, "variance store")
+    w = load_store(warped, "warped store")
     sigma_l, sigma_r = left_right(v, "variance")
     title = _title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}, N = {v.attrs['n_seeds']}")
     save_figure(teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out)
@@ -41,11 +41,11 @@ def rho_vs_spp_figure_job(correlations, out) -> None:
 def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
     """Fig. 3: (sigma_L^2, warped sigma_R^2) over Omega, glass against non-glass."""
     from ..figures.paper import material_scatter_figure
-    from ..io.store import open_dataset
+    from ..io.store import load_store
 
-    v = open_dataset(variance).load()
-    w = open_dataset(warped).load()
-    gt = open_dataset(ground_truth)
+    v = load_store(variance, "variance store")
+    w = load_store(warped, "warped store")
+    gt = load_store(ground_truth, "ground-truth store")
     fig = material_scatter_figure(
         v["variance"].sel(view="left"),
         w["warped_variance"],

@@ -58,10 +58,10 @@ def intervention_job(
 
     from ..intervention.metrics import intervention_metrics
     from ..io.renders import LazyRenders, RenderStore
-    from ..io.store import open_dataset
+    from ..io.store import load_store
     from ..io.tables import write_tables
 
-    gt = open_dataset(ground_truth)
+    gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
     gl = {k: gt[k].sel(view="left").values for k in ("disparity", "valid", "glass")}
     largest = float(gl["disparity"][gl["valid"]].max()) if gl["valid"].any() else 0.0
     if max_disparity is None:

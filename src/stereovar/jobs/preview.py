@@ -30,11 +30,11 @@ def preview_job(
     matplotlib.use("Agg")
 
     from ..figures.preview import preview_figure
-    from ..io.store import open_dataset
+    from ..io.store import load_store
     from ..rig import VIEWS
     from ..seeding import render_seed
 
-    gt = open_dataset(ground_truth).load()
+    gt = load_store(ground_truth, "ground-truth store")
     prepared = prepare_scene(
         spec,
         renderer=renderer,

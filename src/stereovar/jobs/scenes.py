@@ -46,12 +46,12 @@ def generate_scene_job(out, *, seed: int) -> None:
 def scene_summary_job(ground_truths, outputs: dict) -> list[dict]:
     """Tabulate glass fraction and disparity range of each scene's left view."""
     from ..ground_truth import summarize_ground_truth
-    from ..io.store import open_dataset
+    from ..io.store import load_store
     from ..io.tables import write_tables
 
     rows = []
     for path in ground_truths:
-        ds = open_dataset(path).load()
+        ds = load_store(path, "ground-truth store")
         rows.append(
             {
                 "scene": ds.attrs["scene"],

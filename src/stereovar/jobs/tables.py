@@ -26,7 +26,7 @@ def cross_scene_job(correlations, outputs: dict, *, spp) -> list[dict]:
 def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: dict) -> dict:
     """Table 2: mean left variance by region and rho by region at each SPP, plus the
     log-log slope of mean variance against SPP."""
-    from ..io.store import open_dataset
+    from ..io.store import load_store
     from ..io.tables import read_rows, write_tables
     from ..statistics.regions import REGIONS
     from ..statistics.summary import (
@@ -38,8 +38,8 @@ def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: d
 
     entries, every = [], []
     for csv_path, var_path, warp_path in zip(correlations, variances, warped, strict=True):
-        v = open_dataset(var_path)
-        w = open_dataset(warp_path)
+        v = load_store(var_path, "variance store", ["variance"])
+        w = load_store(warp_path, "warped store", [f"region_{k}" for k in REGIONS])
         masks = {k: w[f"region_{k}"].values for k in REGIONS}
         means = mean_variance_by_region(v["variance"].sel(view="left").values, masks)
         rows = read_rows(csv_path)

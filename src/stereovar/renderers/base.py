@@ -119,6 +119,23 @@ class Renderer(ABC):
 
     name: str = ""
 
+    def backend(self, variant: str = "auto") -> dict:
+        """The back end a render with ``variant`` uses on this machine, found without
+        compiling a scene: part of every render's cache key and provenance.
+
+        Returns
+        -------
+        dict
+            ``renderer``, ``renderer_version`` and the resolved ``variant`` (never
+            ``auto``), plus any renderer-specific versions; strings.
+
+        Raises
+        ------
+        BackendError
+            ``variant`` is unknown or unavailable here (one line).
+        """
+        return {"renderer": self.name, "renderer_version": "", "variant": variant}
+
     @abstractmethod
     def prepare(
         self, spec: dict, *, rig: dict, variant: str = "auto", threads: int | None = None
@@ -137,3 +154,18 @@ class Renderer(ABC):
         threads : int, optional
             Worker threads.
         """
+
+
+def scene_provenance(spec: dict, backend: dict) -> dict:
+    """Store attributes of everything rendered or traced from ``spec`` with ``backend``
+    (:meth:`Renderer.backend`): ``scene``, ``scene_digest`` (the spec and every file it
+    reads), the back end and ``stereovar_version``."""
+    from .. import __version__
+    from ..scenes.spec import scene_digest
+
+    return {
+        "scene": spec["name"],
+        "scene_digest": scene_digest(spec),
+        **backend,
+        "stereovar_version": __version__,
+    }

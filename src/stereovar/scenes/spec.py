@@ -21,6 +21,7 @@ from pathlib import Path
 
 from ..errors import SceneError
 from ..schema import fill_defaults, plain, resolve
+from .references import xml_references
 
 SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "scene.schema.yaml"
 
@@ -334,7 +335,8 @@ def load_scene_spec(path) -> dict:
         referencing an unknown material, a diffuse or glossy material referencing an unknown
         texture, a sphere with non-uniform scale, a lathe without a profile of at least two
         points, duplicate object or light names, or a ``mitsuba_xml`` file that does not
-        exist.
+        exist, is not well-formed XML or names a file that does not exist
+        (:func:`~stereovar.scenes.references.xml_references`).
     """
     import yaml
 
@@ -367,6 +369,7 @@ def load_scene_spec(path) -> dict:
                 "the spec file's directory)"
             )
         spec["mitsuba_xml"] = str(xml)
+        xml_references(xml)  # well-formed, and every file it names exists
     return spec
 
 
@@ -404,10 +407,16 @@ _NAMED_MAPS = ("textures", "materials")
 
 
 def scene_digest(spec: dict) -> str:
-    """SHA-256 of a scene: its canonical spec plus, for XML scenes, the file's bytes."""
+    """SHA-256 of a scene: its canonical spec plus, for XML scenes, the bytes of the file and
+    of every file it reads (:func:`~stereovar.scenes.references.xml_references`), each with
+    its path relative to the XML file's directory."""
     h = hashlib.sha256(scene_spec_digest(spec).encode())
     if "mitsuba_xml" in spec:
-        h.update(Path(spec["mitsuba_xml"]).read_bytes())
+        xml = Path(spec["mitsuba_xml"])
+        h.update(xml.read_bytes())
+        for ref in xml_references(xml):
+            h.update(os.path.relpath(ref, xml.parent).encode())
+            h.update(hashlib.sha256(ref.read_bytes()).digest())
     return h.hexdigest()
 
 

@@ -68,15 +68,28 @@ class MitsubaRenderer(Renderer):
 
     name = "mitsuba"
 
+    def backend(self, variant: str = "auto") -> dict:
+        """Mitsuba's version, Dr.Jit's and the variant ``variant`` resolves to here
+        (:func:`.backend.select_variant`)."""
+        from .backend import describe_backend, load_mitsuba
+
+        load_mitsuba(variant)
+        info = describe_backend()
+        return {
+            "renderer": self.name,
+            "renderer_version": info["mitsuba_version"],
+            "drjit_version": info["drjit_version"],
+            "variant": info["variant"],
+        }
+
     def prepare(
         self, spec: dict, *, rig: dict, variant: str = "auto", threads: int | None = None
     ) -> MitsubaScene:
         """Load the back end, compile ``spec`` and build the rig (see
         :meth:`stereovar.renderers.base.Renderer.prepare`)."""
-        from ... import __version__
         from ...rig import make_rig
-        from ...scenes.spec import scene_digest
-        from .backend import describe_backend, load_mitsuba
+        from ..base import scene_provenance
+        from .backend import load_mitsuba
         from .scene import load_scene
 
         mi = load_mitsuba(variant)
@@ -86,21 +99,12 @@ class MitsubaRenderer(Renderer):
             dr.set_thread_count(int(threads))
         scene, camera = load_scene(mi, spec)
         stereo = make_rig(camera.to_world, camera.fov_deg, **rig)
-        backend = describe_backend()
-        provenance = {
-            "scene": spec["name"],
-            "scene_digest": scene_digest(spec),
-            "renderer": self.name,
-            "renderer_version": backend["mitsuba_version"],
-            "drjit_version": backend["drjit_version"],
-            "variant": backend["variant"],
-            "stereovar_version": __version__,
-        }
+        provenance = scene_provenance(spec, self.backend(variant))
         log.info(
             "scene %s: %s %s, %dx%d, baseline %.4f m, convention %s",
             spec["name"],
             self.name,
-            backend["variant"],
+            provenance["variant"],
             stereo.width,
             stereo.height,
             stereo.baseline_m,

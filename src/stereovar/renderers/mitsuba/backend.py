@@ -81,7 +81,7 @@ _NAME_PLAIN = re.compile(r"^libLLVM\.(?:so|dylib)$")
 # llvm-19, llvm@18, llvm-19.1, or a Homebrew Cellar version directory such as 19.1.7
 _DIR_VERSION = re.compile(r"^(?:llvm[-@])?(\d+(?:\.\d+)*)$")
 
-_state: dict = {"selected": {}, "warned": False}
+_state: dict = {"selected": {}, "warned": False, "user_libllvm": False, "configured": False}
 
 
 class BackendWarning(UserWarning):
@@ -218,6 +218,8 @@ def configure_llvm() -> Path | None:
     """
     current = os.environ.get(_DRJIT_ENV, "")
     if current and current != NO_LIBLLVM_SENTINEL:
+        if "drjit" not in sys.modules and not _state["configured"]:
+            _state["user_libllvm"] = True  # set before this process looked for one
         version = libllvm_version(current)
         if version is not None and version[0] < MIN_LLVM_MAJOR:
             raise BackendError(
@@ -229,6 +231,7 @@ def configure_llvm() -> Path | None:
         return None
     found = find_libllvm()
     os.environ[_DRJIT_ENV] = str(found) if found is not None else NO_LIBLLVM_SENTINEL
+    _state["configured"] = True
     return found
 
 
@@ -343,6 +346,12 @@ def select_variant(requested: str = "auto") -> str:
         if not available:
             raise BackendError("no Mitsuba variant is usable: mitsuba provides no *_rgb variant")
         if available[0] == "scalar_rgb":
+            if _state["user_libllvm"]:
+                # the user pointed Dr.Jit at a libLLVM that does not load: rendering with
+                # scalar_rgb instead would mix back ends with runs where it did load
+                raise BackendError(
+                    f"{_why_unavailable('llvm_ad_rgb')} (or unset it to search automatically)"
+                )
             _warn_scalar_fallback()
         return available[0]
     mi = _import_mitsuba()
