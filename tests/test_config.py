@@ -29,6 +29,8 @@ DEFAULTS = {
         "estimator": "seeds",
         "seed_policy": "independent",
         "variant": "auto",
+        "allow_mixed_backends": False,
+        "cache": "cache/renders",
         "integrator": "path",
         "max_depth": 8,
         "rfilter": "box",
@@ -312,6 +314,20 @@ def test_command_line_strings_become_the_scalars_the_schema_asks_for():
     # The same string in a config file (not given on the command line) stays an error.
     with pytest.raises(ConfigError, match="cluster.gpus_per_render"):
         validate_config({"cluster": {"gpus_per_render": "1"}}, SCHEMA)
+
+
+def test_command_line_list_items_become_the_schema_item_type():
+    # `snakemake --config 'render={spp: 16, spp_sweep: {spp: [4, 16]}}'` gives list items as
+    # strings (Snakemake parses --config values with YAML's BaseLoader).
+    given = {"render": {"spp": "16", "spp_sweep": {"spp": ["4", "16"]}}}
+    config = validate_config(copy.deepcopy(given), SCHEMA, command_line=given)
+    assert config["render"]["spp_sweep"]["spp"] == [4, 16]
+    bad = {"render": {"spp": "16", "spp_sweep": {"spp": ["4", "many"]}}}
+    with pytest.raises(ConfigError, match=r"render\.spp_sweep\.spp"):
+        validate_config(copy.deepcopy(bad), SCHEMA, command_line=bad)
+    # list items in a config file are not converted
+    with pytest.raises(ConfigError, match=r"render\.spp_sweep\.spp"):
+        validate_config({"render": {"spp": 16, "spp_sweep": {"spp": ["4", 16]}}}, SCHEMA)
 
 
 def test_a_bootstrap_tile_larger_than_the_image_is_a_one_line_error():

@@ -1,6 +1,7 @@
 """Tiny end-to-end Snakemake runs: outputs, no-op reruns, partial reruns, config errors."""
 
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -44,17 +45,25 @@ FIXTURE = REPO / "tests" / "fixtures" / "before_tiny"
 pytestmark = pytest.mark.workflow
 
 
-def snakemake(workdir, *args, check=True, config=None):
-    """Run snakemake on the tiny config, plus ``config`` overrides merged on top."""
+def snakemake(workdir, *args, check=True, config=None, env=None):
+    """Run snakemake on the tiny config, plus ``config`` overrides merged on top, with ``env``
+    changes (None removes a variable)."""
     files = ["tiny.yaml"]
     if config:
         (workdir / "override.yaml").write_text(yaml.safe_dump(config))
         files.append("override.yaml")
+    environ = dict(os.environ)
+    for key, value in (env or {}).items():
+        if value is None:
+            environ.pop(key, None)
+        else:
+            environ[key] = value
     proc = subprocess.run(
         [sys.executable, "-m", "snakemake", "--configfile", *files, *args],
         cwd=workdir,
         capture_output=True,
         text=True,
+        env=environ,
     )
     if check and proc.returncode != 0:
         raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout}\n{proc.stderr}")

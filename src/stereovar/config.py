@@ -44,14 +44,39 @@ def _load_schema(schema_path) -> dict:
     return schema
 
 
+def _coerced(value: str, subschema: Mapping):
+    """``value`` as the scalar type ``subschema`` allows (unchanged when none fits)."""
+    kinds = subschema.get("type", [])
+    kinds = [kinds] if isinstance(kinds, str) else list(kinds)
+    text = value.strip().lower()
+    if "null" in kinds and text in ("null", "~"):
+        return None
+    if "string" in kinds:
+        return value
+    if "boolean" in kinds and text in ("true", "false"):
+        return text == "true"
+    for kind in ("integer", "number"):
+        if kind in kinds:
+            try:
+                number = float(value)
+            except ValueError:
+                continue
+            if kind == "integer" and number.is_integer():
+                return int(number)
+            if kind == "number":
+                return number
+    return value
+
+
 def _coerce_strings(instance: dict, schema: Mapping, given: Mapping) -> None:
     """Turn the strings given on the command line into the numbers, booleans or nulls the
     schema asks for, in place.
 
     ``snakemake --config key={a: 1}`` (and a profile's ``config:``) passes nested values as
-    strings ("1"); a string there that parses as an allowed scalar type becomes that scalar.
-    Only keys present in ``given`` (the ``--config`` mapping) are touched: a quoted number in
-    a YAML config file stays an error.
+    strings ("1"), list items included (``render={spp: [4]}`` gives ``["4"]``); a string
+    there that parses as an allowed scalar type becomes that scalar. Only keys present in
+    ``given`` (the ``--config`` mapping) are touched: a quoted number in a YAML config file
+    stays an error.
     """
     for key, subschema in schema.get("properties", {}).items():
         if key not in given:
@@ -61,30 +86,12 @@ def _coerce_strings(instance: dict, schema: Mapping, given: Mapping) -> None:
             if isinstance(given[key], Mapping):
                 _coerce_strings(value, subschema, given[key])
             continue
-        if not isinstance(value, str) or given[key] != value:
+        if isinstance(value, list) and isinstance(given[key], list) and value == given[key]:
+            items = subschema.get("items", {})
+            instance[key] = [_coerced(v, items) if isinstance(v, str) else v for v in value]
             continue
-        kinds = subschema.get("type", [])
-        kinds = [kinds] if isinstance(kinds, str) else list(kinds)
-        if "null" in kinds and value.strip().lower() in ("null", "~"):
-            instance[key] = None
-            continue
-        if "string" in kinds:
-            continue
-        if "boolean" in kinds and value.strip().lower() in ("true", "false"):
-            instance[key] = value.strip().lower() == "true"
-            continue
-        for kind in ("integer", "number"):
-            if kind in kinds:
-                try:
-                    number = float(value)
-                except ValueError:
-                    continue
-                if kind == "integer" and number.is_integer():
-                    instance[key] = int(number)
-                    break
-                if kind == "number":
-                    instance[key] = number
-                    break
+        if isinstance(value, str) and given[key] == value:
+            instance[key] = _coerced(value, subschema)
 
 
 def _key(path) -> str:

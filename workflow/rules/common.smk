@@ -1,6 +1,5 @@
 # Configuration validation, wildcard constraints, input functions and target lists.
 import math
-import os
 import re
 import shlex
 import sys
@@ -18,6 +17,7 @@ from stereovar.preflight import (
     mark_run,
     stored_backends,
 )
+from stereovar.io.renders import set_rerun_arguments
 from stereovar.scenes.references import xml_references
 from stereovar.estimators import ESTIMATORS
 from stereovar.experiment import (
@@ -227,6 +227,9 @@ def all_targets():
     run = run_prefix(renderer, get_estimator())
     intervention = run_prefix(renderer, INTERVENTION_ESTIMATOR)
     return [
+        # The renders are targets too, so a render store lost after its analysis finished is
+        # rebuilt (from the render cache) instead of silently missing.
+        *render_stores(),
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
         *expand("results/{renderer}/previews/{scene}.png", renderer=renderer, scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
@@ -340,8 +343,8 @@ def snakemake_arguments():
     return " ".join(parts)
 
 
-# Read by stereovar.io.renders.rebuild_command in every job this run starts.
-os.environ["STEREOVAR_SNAKEMAKE_ARGS"] = snakemake_arguments()
+# Repeated by the rebuild command of any damaged-store message of this run's jobs.
+set_rerun_arguments(snakemake_arguments())
 
 # A run killed on this host leaves its lock behind; the same command then resumes instead
 # of asking for --unlock (stereovar.preflight.stale_lock: only a lock whose run is gone).

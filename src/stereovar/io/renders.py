@@ -109,6 +109,12 @@ RERUN_ARGS_ENV = "STEREOVAR_SNAKEMAKE_ARGS"
 Snakemake run a job belongs to (set by ``workflow/rules/common.smk``)."""
 
 
+def set_rerun_arguments(args: str) -> None:
+    """Record the ``--configfile`` and ``--config`` options of this Snakemake run for the
+    jobs it starts (they inherit the environment), so :func:`rebuild_command` repeats them."""
+    os.environ[RERUN_ARGS_ENV] = str(args)
+
+
 def rebuild_command(path) -> str:
     """The command that rebuilds the workflow output at ``path`` and nothing else.
 

@@ -151,20 +151,30 @@ def to_csv(rows: list[dict], columns: list[str]) -> str:
     return buf.getvalue()
 
 
-def read_rows(path) -> list[dict]:
+def read_rows(path, *, required=()) -> list[dict]:
     """Rows of a CSV written by :func:`write_tables`, with numbers parsed.
 
     Parameters
     ----------
     path : str or path-like
         The CSV; a path ending in ``.gz`` is read through gzip.
+    required : sequence of str, keyword-only
+        Columns the header must have.
 
     Returns
     -------
     list of dict
         One dict per row: integers as ``int``, other numbers (``NaN`` too) as ``float``,
         everything else (empty fields too) as ``str``.
+
+    Raises
+    ------
+    StoreError
+        The file is missing or unreadable, a row has more or fewer fields than the header
+        (a truncated or damaged file), or a required column is missing: one line with the
+        command that rebuilds it (:func:`stereovar.io.renders.store_error`).
     """
+    from .renders import store_error
 
     def parse(value: str):
         for kind in (int, float):
@@ -175,8 +185,23 @@ def read_rows(path) -> list[dict]:
         return value
 
     opener = gzip.open if str(path).endswith(".gz") else open
-    with opener(path, "rt", newline="", encoding="utf-8") as fh:
-        return [{k: parse(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+    rows = []
+    try:
+        with opener(path, "rt", newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            for row in reader:
+                if None in row or None in row.values():
+                    raise ValueError(
+                        f"line {reader.line_num} has a different number of fields than the header"
+                    )
+                rows.append({k: parse(v) for k, v in row.items()})
+            header = list(reader.fieldnames or [])
+    except (OSError, EOFError, UnicodeDecodeError, csv.Error, ValueError) as err:
+        raise store_error(path, f"{type(err).__name__}: {err}", what="table") from None
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise store_error(path, f"no column {', '.join(missing)}", what="table")
+    return rows
 
 
 def to_markdown(rows: list[dict], columns: list[str], *, digits: int = 4, caption: str = "") -> str:

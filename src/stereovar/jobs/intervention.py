@@ -162,7 +162,8 @@ def intervention_table_job(inputs, outputs: dict) -> list[dict]:
     from ..io.tables import read_rows, write_tables
     from ..statistics.summary import intervention_table
 
-    rows = [r for path in inputs for r in read_rows(path)]
+    required = ("scene", "cost", "metric", "region")
+    rows = [r for path in inputs for r in read_rows(path, required=required)]
     table = intervention_table(rows)
     columns = list(table[0]) if table else ["cost", "metric", "region"]
     write_tables(
