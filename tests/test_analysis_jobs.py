@@ -263,3 +263,26 @@ def test_intervention_job_and_table(tmp_path, caplog):
     assert row["relative_change"] == pytest.approx(
         (np.mean(v_n) - np.mean(v_d)) / abs(np.mean(v_d))
     )
+
+
+def test_renders_of_several_back_ends_stop_the_variance_job(tmp_path):
+    import json
+
+    from stereovar.errors import BackendError
+
+    paths = renders(tmp_path, 4)
+    for view, stores in paths.items():
+        for k, store in enumerate(stores):
+            variant = "scalar_rgb" if (view, k) == ("right", 2) else "llvm_ad_rgb"
+            attrs = {"renderer": "mitsuba", "renderer_version": "3.9.1", "variant": variant}
+            (store / ".zattrs").write_text(json.dumps(attrs))
+    with pytest.raises(BackendError) as err:
+        variance_job(paths["left"], paths["right"], tmp_path / "var.zarr")
+    message = str(err.value)
+    assert "\n" not in message and "would mix back ends" in message
+    assert (
+        "scalar_rgb" in message and "llvm_ad_rgb" in message and str(paths["right"][2]) in message
+    )
+    assert not (tmp_path / "var.zarr").exists()
+    variance_job(paths["left"], paths["right"], tmp_path / "var.zarr", allow_mixed_backends=True)
+    assert (tmp_path / "var.zarr").is_dir()

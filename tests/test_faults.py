@@ -291,3 +291,13 @@ def test_editing_a_mesh_an_xml_scene_reads_reruns_that_scene(tmp_path):
     mesh.write_text("v 0 0 1\nv 1 0 1\nv 1 1 1\nf 1 2 3\n")
     (root / "scenes/room.xml").write_text(xml.replace("</scene>", "<shape>"))
     stopped_with(snakemake(root, "-n", "all", check=False), "malformed XML")
+
+
+def test_report_warns_when_the_results_come_from_another_config(done, tmp_path):
+    same = snakemake(done, "--report", str(tmp_path / "same.html"))
+    assert "does not match this config" not in same.stderr
+    other = snakemake(
+        done, "--report", str(tmp_path / "other.html"), config={"analysis": {"min_pixels": 31}}
+    )
+    warning = [ln for ln in other.stderr.splitlines() if ln.startswith("stereovar: warning")]
+    assert len(warning) == 1 and "results/summary.json does not match this config" in warning[0]

@@ -109,3 +109,30 @@ def test_cache_round_trip_and_damaged_entries_are_misses(tmp_path):
     shutil.copytree(cache.path(other), cache.path(key))
     assert cache.get(key) is None
     np.testing.assert_array_equal(cache.get(other), image)
+
+
+def test_scenes_validate_checks_the_xml_files_and_the_back_end(xml_tree):
+    import subprocess
+    import sys
+
+    (xml_tree / "room.yaml").write_text("name: room\nmitsuba_xml: room.xml\n")
+
+    def validate(*args):
+        code = "from stereovar.cli import main; raise SystemExit(main())"
+        return subprocess.run(
+            [sys.executable, "-c", code, "scenes", "validate", str(xml_tree / "room.yaml"), *args],
+            capture_output=True,
+            text=True,
+            env={**__import__("os").environ, "CUDA_VISIBLE_DEVICES": ""},
+        )
+
+    ok = validate("--variant", "scalar_rgb")
+    assert ok.returncode == 0, ok.stderr
+    assert "room.yaml: ok" in ok.stdout and "variant scalar_rgb" in ok.stdout
+    bad = validate("--variant", "cuda_ad_rgb")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1
+    assert "'cuda_ad_rgb' is not available" in bad.stderr
+    (xml_tree / "wood.png").unlink()
+    missing = validate("--variant", "none")
+    assert missing.returncode == 2 and "'wood.png' not found" in missing.stderr
+    assert "back end" not in missing.stdout

@@ -44,6 +44,14 @@ def _cmd_scenes_validate(args: argparse.Namespace) -> int:
     for file in args.files:
         spec = load_scene_spec(file)
         print(f"{file}: ok ({scene_spec_digest(spec)[:12]})")
+    if args.variant != "none":
+        from .renderers import get_renderer
+
+        backend = get_renderer(args.renderer).backend(args.variant)
+        print(
+            f"back end: {backend['renderer']} {backend['renderer_version']}, "
+            f"variant {backend['variant']} (render.variant: {args.variant})"
+        )
     return 0
 
 
@@ -67,10 +75,21 @@ def _register_scenes(subparsers) -> None:
     val = sub.add_parser(
         "validate",
         help="check scene spec files",
-        description="Validate scene specs against the schema and cross references; prints "
-        "'FILE: ok (digest)' per file, or one error line and exit status 2.",
+        description="Validate scene specs against the schema and cross references (for an "
+        "XML scene, the file and every file it reads), then the render back end on this "
+        "machine; prints 'FILE: ok (digest)' per file and the back end, or one error line and "
+        "exit status 2.",
     )
     val.add_argument("files", nargs="+", metavar="FILE", help="scene spec YAML files")
+    val.add_argument(
+        "--renderer", default="mitsuba", help="renderer whose back end to check (default mitsuba)"
+    )
+    val.add_argument(
+        "--variant",
+        default="auto",
+        help="render.variant to resolve on this machine (default auto; 'none' skips the "
+        "back-end check)",
+    )
     val.set_defaults(func=_cmd_scenes_validate)
 
 

@@ -1,4 +1,5 @@
 # Configuration validation, wildcard constraints, input functions and target lists.
+import json
 import math
 import re
 import shlex
@@ -10,6 +11,7 @@ from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
 from stereovar.errors import StereovarError
+from stereovar.io.contracts import config_digest
 from stereovar.preflight import (
     check_backends,
     check_scene_specs,
@@ -391,6 +393,25 @@ def preflight():
         )
     except StereovarError as err:
         raise SystemExit(f"stereovar: {err}")
+
+
+def warn_if_report_is_stale(summary="results/summary.json"):
+    """With ``--report``: warn when the stored results were made with another config (the
+    report shows whatever tables exist, whichever config made them)."""
+    if not any(a == "--report" or a.startswith("--report=") for a in sys.argv):
+        return
+    path = Path(summary)
+    stored = json.loads(path.read_text()).get("config_digest") if path.is_file() else None
+    if stored != config_digest(dict(config)):
+        why = "there is none yet" if stored is None else "it was made with another config"
+        print(
+            f"stereovar: warning: {summary} does not match this config ({why}); the report "
+            "would show older tables: run `snakemake -j2 all` with the same options first",
+            file=sys.stderr,
+        )
+
+
+warn_if_report_is_stale()
 
 
 def print_claims(path):

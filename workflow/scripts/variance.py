@@ -9,5 +9,7 @@ run_job(
     left=snakemake.input.left,
     right=snakemake.input.right,
     out=snakemake.output[0],
+    # read here, not a param: switching it must not rerun finished jobs
+    allow_mixed_backends=snakemake.config["render"]["allow_mixed_backends"],
     **snakemake.params,
 )

@@ -5,19 +5,24 @@ from __future__ import annotations
 from .common import log
 
 
-def variance_job(left, right, out, *, estimator="seeds") -> None:
+def variance_job(left, right, out, *, estimator="seeds", allow_mixed_backends=False) -> None:
     """Run the estimator on one scene's render stores at one SPP and store its fields.
 
     Writes ``results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr``
-    (:func:`stereovar.io.contracts.variance_store`), with the renders' provenance.
+    (:func:`stereovar.io.contracts.variance_store`), with the renders' provenance. Renders
+    made with different back ends (renderer version or variant, e.g. by cluster nodes that
+    resolved ``auto`` differently) stop the job unless ``allow_mixed_backends``
+    (:func:`stereovar.preflight.check_backends`).
     """
     from ..estimators import get_estimator
     from ..io.contracts import render_provenance, variance_store
     from ..io.renders import RenderStore
     from ..io.store import write_dataset
+    from ..preflight import check_backends, stored_backends
     from ..rig import VIEWS
 
     left, right = list(left), list(right)
+    check_backends(stored_backends([*left, *right]), allow_mixed=allow_mixed_backends)
     ds = get_estimator(estimator).estimate(left, right)
     provenance = render_provenance(RenderStore(left[0]).attrs)
     ds = variance_store(ds, estimator=estimator, provenance=provenance)
