@@ -215,6 +215,14 @@ stop() {
         kill -KILL "$pid" 2>/dev/null || true
     done
     rm -f "$STATE/pids"
+    # The configless slurmd caches the fetched slurm.conf in /run/slurm/conf, where every
+    # later SLURM client (and so Snakemake's SLURM executor plugin at start-up) would find it
+    # and wait about 9 s for this stopped controller: remove the cached copy if it is ours.
+    local cached=/run/slurm/conf/slurm.conf
+    if [ -f "$cached" ] && grep -qx "ClusterName=$CLUSTER" "$cached" \
+        && grep -qx "SlurmctldPort=$CTLD_PORT" "$cached"; then
+        rm -rf /run/slurm/conf
+    fi
     say "stopped"
 }
 

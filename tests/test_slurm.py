@@ -49,6 +49,9 @@ def cluster(tmp_path_factory):
     assert not (state / "pids").exists(), "the stop left the pid file behind"
     alive = [name for name, pid in daemons.items() if running(int(pid))]
     assert not alive, f"still running after stop: {alive}"
+    # no copy of this cluster's config is left for later SLURM clients to wait on
+    cached = Path("/run/slurm/conf/slurm.conf")
+    assert not (cached.is_file() and "ClusterName=stereovar" in cached.read_text())
 
 
 def running(pid: int) -> bool:
