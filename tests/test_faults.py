@@ -63,6 +63,11 @@ def stopped_with(proc, needle: str) -> str:
     return lines[0]
 
 
+def rerender_all(root: Path, **kwargs):
+    """``snakemake -j2 all --forcerun render``, expected to fail."""
+    return snakemake(root, "-j2", "all", "--forcerun", "render", check=False, **kwargs)
+
+
 @pytest.fixture(scope="module")
 def done(tmp_path_factory):
     """A finished tiny run."""
@@ -73,15 +78,8 @@ def done(tmp_path_factory):
 
 def test_unavailable_variant_stops_before_any_job_and_keeps_every_result(done):
     before = listing(done)
-    proc = snakemake(
-        done,
-        "-j2",
-        "all",
-        "--forcerun",
-        "render",
-        config={"render": {"variant": "cuda_ad_rgb"}},
-        check=False,
-        env={"CUDA_VISIBLE_DEVICES": ""},
+    proc = rerender_all(
+        done, config={"render": {"variant": "cuda_ad_rgb"}}, env={"CUDA_VISIBLE_DEVICES": ""}
     )
     stopped_with(proc, "Mitsuba variant 'cuda_ad_rgb' is not available")
     assert listing(done) == before
@@ -89,15 +87,7 @@ def test_unavailable_variant_stops_before_any_job_and_keeps_every_result(done):
 
 def test_bad_libllvm_path_stops_before_any_job(done):
     before = listing(done)
-    proc = snakemake(
-        done,
-        "-j2",
-        "all",
-        "--forcerun",
-        "render",
-        check=False,
-        env={"DRJIT_LIBLLVM_PATH": "/nonexistent/libLLVM.so"},
-    )
+    proc = rerender_all(done, env={"DRJIT_LIBLLVM_PATH": "/nonexistent/libLLVM.so"})
     stopped_with(proc, "DRJIT_LIBLLVM_PATH=/nonexistent/libLLVM.so")
     assert listing(done) == before
 

@@ -66,8 +66,7 @@ def stored_backends(paths: Iterable) -> dict:
 
 
 def _describe(backend: tuple) -> str:
-    renderer, version, variant = backend
-    return f"{renderer} {version} {variant}".replace("  ", " ").strip()
+    return " ".join(part for part in backend if part)
 
 
 def check_backends(

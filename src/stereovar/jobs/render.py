@@ -69,7 +69,6 @@ def render_job(
     from ..rig import VIEWS
     from ..scenes.spec import load_scene_spec
     from ..seeding import render_seed
-    from .common import prepare_scene
 
     seeds = [int(s) for s in seeds]
     if sorted(outputs) != sorted(VIEWS):
@@ -107,39 +106,19 @@ def render_job(
             key = render_key({**key_base, "view": view, "sampler_seed": seed})
             image = store.get(key) if store is not None else None
             done += 1
-            if image is not None and image.shape[:2] == (rig["height"], rig["width"]):
-                log.info(
-                    "%s spp %d: %s seed %d (%d/%d) from the render cache %s",
-                    name,
-                    spp,
-                    view,
-                    index,
-                    done,
-                    total,
-                    store.path(key),
-                )
+            if image is not None:
+                how = f"from the render cache {store.path(key)}"
             else:
                 if prepared is None:
-                    prepared = prepare_scene(
-                        spec, renderer=renderer, variant=variant, threads=threads, **rig
-                    )
+                    prepared = engine.prepare(scene, rig=rig, variant=variant, threads=threads)
                 start = time.perf_counter()
                 image = prepared.render(view, spp=spp, seed=seed, settings=settings)
                 elapsed = time.perf_counter() - start
                 rendered += 1
                 n_bad = int((~np.isfinite(image)).any(axis=-1).sum())
                 rate = rig["width"] * rig["height"] * spp / max(elapsed, 1e-9) / 1e6
-                log.info(
-                    "%s spp %d: %s seed %d (%d/%d) rendered in %.2f s, %.2f Msamples/s%s",
-                    name,
-                    spp,
-                    view,
-                    index,
-                    done,
-                    total,
-                    elapsed,
-                    rate,
-                    f", {n_bad} non-finite pixels" if n_bad else "",
+                how = f"rendered in {elapsed:.2f} s, {rate:.2f} Msamples/s" + (
+                    f", {n_bad} non-finite pixels" if n_bad else ""
                 )
                 if store is not None:
                     store.put(
@@ -147,6 +126,7 @@ def render_job(
                         image,
                         {**attrs, "view": view, "seed_index": index, "sampler_seed": seed},
                     )
+            log.info("%s spp %d: %s seed %d (%d/%d) %s", name, spp, view, index, done, total, how)
             images.append(image)
             values.append(seed)
         ds = render_dataset(images, view=view, seeds=seeds, sampler_seeds=values, attrs=attrs)
