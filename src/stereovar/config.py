@@ -208,6 +208,42 @@ def _check_cross_fields(config: dict) -> None:
         )
     _check_intervention(config)
     _check_bootstrap(config)
+    _check_moments(config)
+
+
+MOMENTS_SAMPLER = "independent"
+MOMENTS_FILTER = "box"
+
+
+def _check_moments(config: dict) -> None:
+    """``render.estimator: moments`` needs the independent sampler, the box filter and at
+    least two samples per half render."""
+    render = config.get("render", {})
+    if render.get("estimator") != "moments":
+        return
+    why = (
+        "the moments estimator divides the per-sample variance by the SPP, which is the "
+        "pixel variance only for independent samples that each land in their own pixel"
+    )
+    if render.get("sampler", MOMENTS_SAMPLER) != MOMENTS_SAMPLER:
+        raise ConfigError(
+            f"config key 'render.sampler': {render['sampler']!r} with render.estimator "
+            f"moments; {why}: set render.sampler: {MOMENTS_SAMPLER} or render.estimator: seeds"
+        )
+    if render.get("rfilter", MOMENTS_FILTER) != MOMENTS_FILTER:
+        raise ConfigError(
+            f"config key 'render.rfilter': {render['rfilter']!r} with render.estimator "
+            f"moments; {why}: set render.rfilter: {MOMENTS_FILTER} or render.estimator: seeds"
+        )
+    sweep = render.get("spp_sweep", {}).get("spp") or []
+    low = sorted({s for s in [render.get("spp"), *sweep] if s is not None and s < 4})
+    if low:
+        key = "render.spp" if render.get("spp", 4) < 4 else "render.spp_sweep.spp"
+        raise ConfigError(
+            f"config key '{key}': SPP {', '.join(map(str, low))} with render.estimator "
+            "moments; it renders each SPP as two half renders of at least 2 samples each: "
+            "use an SPP of 4 or more"
+        )
 
 
 def _check_bootstrap(config: dict) -> None:

@@ -5,7 +5,11 @@ both enumerate exactly the same renders. The result paths name the renderer and 
 estimator that made them:
 
 ``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{first}-{last}.zarr``
-    one batch of renders of one view (:mod:`stereovar.io.renders`);
+    one batch of renders of one view (:mod:`stereovar.io.renders`), for the ``seeds``
+    estimator and the intervention;
+``results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr``
+    the two half renders' sample moments of one view (:mod:`stereovar.io.moments`), for the
+    ``moments`` estimator;
 ``results/{renderer}/{estimator}/...``
     everything computed from the renders: variance, warped, correlation, intervention,
     tables and figures.
@@ -18,6 +22,9 @@ from .rig import VIEWS
 __all__ = [
     "VIEWS",
     "batch_label",
+    "estimator_stores",
+    "intervention_renders",
+    "moment_store",
     "render_store",
     "render_stores",
     "run_prefix",
@@ -86,13 +93,56 @@ def run_prefix(renderer: str, estimator: str) -> str:
     return f"results/{renderer}/{estimator}"
 
 
-def render_stores(config: dict) -> list[str]:
-    """Every render store the config asks for."""
+def moment_store(renderer: str, scene: str, view: str, spp) -> str:
+    """Path of one view's moment store:
+    ``results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr``."""
+    return f"results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr"
+
+
+def seed_stores(config: dict, scene: str, spp, n_seeds: int | None = None) -> dict:
+    """View to the render stores of seed indices ``0..n_seeds-1`` (``render.n_seeds`` by
+    default) of one scene at ``spp``, in ``render.seeds_per_job`` batches."""
     render = config["render"]
-    batches = seed_batches(int(render["n_seeds"]), int(render["seeds_per_job"]))
-    return [
-        render_store(render["renderer"], scene, view, spp, batch_label(batch))
-        for scene, spp in scene_spp_pairs(config)
+    n = int(render["n_seeds"] if n_seeds is None else n_seeds)
+    batches = seed_batches(n, int(render["seeds_per_job"]))
+    return {
+        view: [
+            render_store(render["renderer"], scene, view, spp, batch_label(b)) for b in batches
+        ]
         for view in VIEWS
-        for batch in batches
+    }
+
+
+def estimator_stores(config: dict, scene: str, spp, estimator: str | None = None) -> dict:
+    """View to the stores ``estimator`` (``render.estimator`` by default) reads for one
+    scene at ``spp``: every seed batch (``seeds``) or the one moment store (``moments``)."""
+    estimator = estimator or config["render"]["estimator"]
+    if estimator == "moments":
+        renderer = config["render"]["renderer"]
+        return {view: [moment_store(renderer, scene, view, spp)] for view in VIEWS}
+    return seed_stores(config, scene, spp)
+
+
+def intervention_renders(config: dict) -> tuple[int, int]:
+    """``(N, SPP)`` of the intervention's seed renders: ``intervention.n_seeds`` and
+    ``intervention.spp``, each defaulting to the ``render`` value."""
+    render, iv = config["render"], config.get("intervention", {})
+    n = iv.get("n_seeds") or render["n_seeds"]
+    spp = iv.get("spp") or render["spp"]
+    return int(n), int(spp)
+
+
+def render_stores(config: dict) -> list[str]:
+    """Every render and moment store the config asks for: the estimator's at every (scene,
+    SPP) pair, then the intervention's seed renders of every scene."""
+    n, spp = intervention_renders(config)
+    stores = [
+        path
+        for scene, scene_spp in scene_spp_pairs(config)
+        for paths in estimator_stores(config, scene, scene_spp).values()
+        for path in paths
     ]
+    for scene in config["scenes"]:
+        for paths in seed_stores(config, scene, spp, n).values():
+            stores += [p for p in paths if p not in stores]
+    return stores

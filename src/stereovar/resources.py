@@ -63,6 +63,13 @@ def render_mem_mb(width: int, height: int, *, batch: int = 1, attempt=1) -> int:
     return int(attempt) * (RENDER_BASE_MB + math.ceil(per_pixel * width * height / MIB))
 
 
+def moments_mem_mb(width: int, height: int, *, attempt=1) -> int:
+    """Memory request (MB) of a ``moments`` render job (one view): the base process plus
+    200 bytes per pixel (the film's 11 float32 channels and its developed copy, the two
+    half renders' float32 moments and the store being written), times the attempt."""
+    return int(attempt) * (RENDER_BASE_MB + math.ceil(200 * width * height / MIB))
+
+
 def analysis_mem_mb(width: int, height: int, images: int, *, attempt=1) -> int:
     """Memory request (MB) of an analysis job that holds ``images`` float64 RGB images."""
     return int(attempt) * (ANALYSIS_BASE_MB + math.ceil(24 * images * width * height / MIB))

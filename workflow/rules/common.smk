@@ -23,12 +23,13 @@ from stereovar.io.renders import set_rerun_arguments
 from stereovar.scenes.references import xml_references
 from stereovar.estimators import ESTIMATORS
 from stereovar.experiment import (
-    batch_label,
     batch_seeds,
-    render_store,
+    estimator_stores,
+    intervention_renders,
+    render_stores as configured_stores,
     run_prefix,
     scene_spp_pairs,
-    seed_batches,
+    seed_stores,
 )
 from stereovar.renderers import RENDERERS
 from stereovar.rig import VIEWS
@@ -67,7 +68,9 @@ HEIGHT = config["resolution"]["height"]
 CLUSTER = config["cluster"]
 RENDER_THREADS = CLUSTER["render_threads"]
 N_SEEDS = config["render"]["n_seeds"]
-SEED_BATCHES = seed_batches(N_SEEDS, config["render"]["seeds_per_job"])
+INTERVENTION_N_SEEDS, INTERVENTION_SPP = intervention_renders(config)
+# renders read per view by the variance job: every seed, or one moment store
+ESTIMATOR_READS = 1 if config["render"]["estimator"] == "moments" else N_SEEDS
 MAIN_SPP = config["render"]["spp"]
 SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
 SWEEP_SPP = sorted(config["render"]["spp_sweep"]["spp"])
@@ -93,26 +96,29 @@ INTERVENTION_RUN = run_prefix(get_renderer(), INTERVENTION_ESTIMATOR)
 # seeds estimator, so its results sit under results/{renderer}/seeds/.
 
 
-def view_renders(renderer, scene, spp):
-    """The render stores of each view of one scene at one SPP: every seed batch."""
-    return {
-        view: [
-            render_store(renderer, scene, view, spp, batch_label(batch))
-            for batch in SEED_BATCHES
-        ]
-        for view in VIEWS
-    }
+def run_config(renderer):
+    """This config with ``renderer`` as ``render.renderer`` (for the path helpers)."""
+    return {**config, "render": {**config["render"], "renderer": renderer}}
 
 
 def estimator_inputs(wildcards):
-    """The renders the estimator reads for one scene at one SPP (``seeds``: all N seeds)."""
-    return view_renders(wildcards.renderer, wildcards.scene, wildcards.spp)
+    """The stores the estimator reads for one scene at one SPP: all N seeds' render
+    stores (``seeds``) or the moment store (``moments``) of each view."""
+    return estimator_stores(
+        run_config(wildcards.renderer), wildcards.scene, wildcards.spp, wildcards.estimator
+    )
 
 
 def intervention_inputs(wildcards):
-    """The N seeds of both views of one scene at the main SPP, and its ground truth."""
+    """The intervention's seeds (``intervention.n_seeds`` at ``intervention.spp``) of both
+    views of one scene, and its ground truth."""
     return {
-        **view_renders(wildcards.renderer, wildcards.scene, MAIN_SPP),
+        **seed_stores(
+            run_config(wildcards.renderer),
+            wildcards.scene,
+            INTERVENTION_SPP,
+            INTERVENTION_N_SEEDS,
+        ),
         "ground_truth": f"results/ground_truth/{wildcards.scene}.zarr",
     }
 
@@ -273,10 +279,11 @@ def batch_size(wildcards):
     return len(batch_seeds(batch)) if batch else 1
 
 
-def render_resources(n_views=2, spp=None, gpu=True, cpus=None):
+def render_resources(n_views=2, spp=None, gpu=True, cpus=None, moments=False):
     """Memory, runtime and (with ``gpu``) GPU requests of a job rendering ``n_views`` views
     of each seed of its ``{batch}`` (one seed without one) at ``spp`` (the job's ``spp``
-    wildcard when None)."""
+    wildcard when None); ``moments``: one view's two half renders (``spp`` samples in
+    all) for the moments estimator."""
 
     def runtime(wildcards, attempt):
         return sizing.render_runtime(
@@ -288,10 +295,13 @@ def render_resources(n_views=2, spp=None, gpu=True, cpus=None):
             attempt=attempt,
         )
 
+    def mem_mb(wildcards, attempt):
+        if moments:
+            return sizing.moments_mem_mb(WIDTH, HEIGHT, attempt=attempt)
+        return sizing.render_mem_mb(WIDTH, HEIGHT, batch=batch_size(wildcards), attempt=attempt)
+
     requests = {
-        "mem_mb": lambda wildcards, attempt: sizing.render_mem_mb(
-            WIDTH, HEIGHT, batch=batch_size(wildcards), attempt=attempt
-        ),
+        "mem_mb": mem_mb,
         "runtime": runtime,
         "cpus_per_task": RENDER_THREADS if cpus is None else cpus,
     }
@@ -325,7 +335,7 @@ def intervention_resources():
             WIDTH, HEIGHT, 24, attempt=attempt
         ),
         "runtime": lambda wildcards, attempt: sizing.intervention_runtime(
-            WIDTH, HEIGHT, N_SEEDS, d + 1, attempt=attempt
+            WIDTH, HEIGHT, INTERVENTION_N_SEEDS, d + 1, attempt=attempt
         ),
         "cpus_per_task": 2,
     }
@@ -356,14 +366,9 @@ if workflow.is_main_process and clear_stale_lock(STATE_DIR):
 
 
 def render_stores():
-    """Every render store the configured tables pool (all scenes, SPPs and batches)."""
-    renderer = get_renderer()
-    return [
-        path
-        for scene, spp in scene_spp_pairs(config)
-        for paths in view_renders(renderer, scene, spp).values()
-        for path in paths
-    ]
+    """Every render and moment store the configured tables pool (all scenes, SPPs and
+    batches, and the intervention's seeds)."""
+    return configured_stores(config)
 
 
 RENDERER_RULES = {"render", "ground_truth", "preview"}

@@ -9,7 +9,7 @@ rule intervention:
         metrics="results/{renderer}/seeds/intervention/{scene}.csv",
         margins="results/{renderer}/seeds/intervention/margins/{scene}.csv",
     params:
-        **config["intervention"],
+        **{k: v for k, v in config["intervention"].items() if k not in ("n_seeds", "spp")},
         sensor=config["controls"]["sensor"],
     log:
         "logs/{renderer}/seeds/intervention/{scene}.log",

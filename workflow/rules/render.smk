@@ -25,3 +25,30 @@ rule render:
         ENV
     script:
         "../scripts/render.py"
+
+
+# The moments estimator: one job per scene, view and SPP renders the view as two
+# independent half renders and stores their per-pixel sample moments.
+
+
+rule render_moments:
+    input:
+        unpack(scene_inputs),
+    output:
+        directory("results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr"),
+    params:
+        view=lambda wc: wc.view,
+        spp=lambda wc: int(wc.spp),
+        **rig_params(),
+        **{k: v for k, v in render_params().items() if k != "variant"},
+    log:
+        "logs/{renderer}/renders/{scene}/{view}/spp{spp}/moments.log",
+    benchmark:
+        "benchmarks/{renderer}/renders/{scene}/{view}/spp{spp}/moments.tsv"
+    threads: RENDER_THREADS
+    resources:
+        **render_resources(n_views=1, moments=True),
+    conda:
+        ENV
+    script:
+        "../scripts/render_moments.py"

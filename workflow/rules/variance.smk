@@ -14,7 +14,7 @@ rule variance:
         "benchmarks/{renderer}/{estimator}/variance/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
-        **analysis_resources(images=12, n_reads=2 * N_SEEDS),
+        **analysis_resources(images=12, n_reads=2 * ESTIMATOR_READS),
     group:
         "analysis"
     conda:

@@ -13,6 +13,7 @@ from ..registry import Registry, factory
 
 ESTIMATORS = Registry("estimator", config_key="render.estimator")
 ESTIMATORS.register("seeds", "stereovar.estimators.seeds:SeedEstimator")
+ESTIMATORS.register("moments", "stereovar.estimators.moments:MomentEstimator")
 
 get_estimator = factory(ESTIMATORS)
 """``get_estimator(name, **options)``: a

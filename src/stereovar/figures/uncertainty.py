@@ -64,8 +64,20 @@ def _seed_legend(fig, axes) -> None:
         )
 
 
+SEEDS_AXIS = r"seeds $N'$ per subset (largest: all $N$)"
+"""x label of :func:`rho_vs_seeds_figure` for the ``seeds`` estimator."""
+
+HALVES_AXIS = r"half renders $N'$ per estimate (2: both halves, all samples)"
+"""x label for the ``moments`` estimator, whose subsets are its two half renders."""
+
+
 def rho_vs_seeds_figure(
-    curve_rows, *, region_order=REGIONS, title: str = "", methods=("warp", "log")
+    curve_rows,
+    *,
+    region_order=REGIONS,
+    title: str = "",
+    methods=("warp", "log"),
+    xlabel: str = SEEDS_AXIS,
 ):
     """:math:`\\rho` against the number of seeds :math:`N'` in Eq. 1, per region.
 
@@ -96,6 +108,8 @@ def rho_vs_seeds_figure(
         Figure title.
     methods : sequence of str, keyword-only
         The statistics drawn.
+    xlabel : str, keyword-only
+        Label of the :math:`N'` axis (:data:`SEEDS_AXIS`, :data:`HALVES_AXIS`).
 
     Returns
     -------
@@ -174,7 +188,7 @@ def rho_vs_seeds_figure(
         if ticks:
             ax.set_xticks(sorted(ticks), labels=[f"{t:g}" for t in sorted(ticks)])
             ax.xaxis.set_minor_locator(NullLocator())
-        ax.set_xlabel(r"seeds $N'$ per subset (largest: all $N$)")
+        ax.set_xlabel(xlabel)
         heading = REGION_LABELS.get(region, region)
         if n_scenes:
             count = max(n_scenes)

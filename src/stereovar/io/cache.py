@@ -113,15 +113,19 @@ class RenderCache:
             return None
         return image
 
-    def put(self, key: str, image, attrs: Mapping) -> Path:
-        """Store one render (H, W, C) under ``key`` atomically, with ``attrs`` and the key."""
+    def put(self, key: str, image, attrs: Mapping, *, channels=None) -> Path:
+        """Store one render (H, W, C) under ``key`` atomically, with ``attrs`` and the key.
+
+        ``channels`` names the C channels (default R, G, B; e.g. the seven channels of
+        :meth:`stereovar.renderers.base.SampleMoments.stack`)."""
         import xarray as xr
 
         from .store import write_dataset
 
+        names = list(channels) if channels is not None else ["R", "G", "B"][: np.shape(image)[-1]]
         ds = xr.Dataset(
             {"radiance": (("y", "x", "channel"), np.asarray(image, dtype=np.float32))},
-            coords={"channel": ["R", "G", "B"][: np.shape(image)[-1]]},
+            coords={"channel": names},
             attrs={**{k: v for k, v in attrs.items() if v is not None}, "render_key": key},
         )
         return write_dataset(ds, self.path(key))

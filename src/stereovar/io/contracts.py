@@ -71,7 +71,9 @@ def variance_store(ds: xr.Dataset, *, estimator: str, provenance: dict) -> xr.Da
     -------
     xarray.Dataset
         ``ds`` with ``units`` on ``mean`` and ``variance``, ``y``/``x`` coordinates, and attrs
-        ``estimator`` (name), ``estimator_description``, ``n_seeds`` plus ``provenance``.
+        ``estimator`` (name), ``estimator_description``, ``n_seeds`` (renders per view),
+        ``n_draws`` (independent draws behind each pixel's variance: the :math:`N` seeds, or
+        the samples of the ``moments`` estimator) plus ``provenance``.
     """
     missing = {"mean", "variance", "finite", "n_nonfinite"} - set(ds.data_vars)
     if missing:
@@ -86,6 +88,7 @@ def variance_store(ds: xr.Dataset, *, estimator: str, provenance: dict) -> xr.Da
     out.attrs = {
         **provenance,
         "n_seeds": int(ds.attrs["n_seeds"]),
+        "n_draws": int(ds.attrs.get("n_draws", ds.attrs["n_seeds"])),
         "estimator": estimator,
         "estimator_description": description,
     }

@@ -116,7 +116,9 @@ def correlation_job(
         halves={k: v["half_variance"].sel(view=k).transpose("half", "y", "x").values for k in views}
         if "half_variance" in v
         else None,
-        n_seeds=n_seeds,
+        # the simulated sensor draws as many frames as the estimator drew samples per
+        # pixel: N seeds, or the SPP of the moments estimator
+        n_seeds=int(v.attrs.get("n_draws", n_seeds)),
         sensor=sensor,
         label=f"{scene}|spp{spp}",
     )

@@ -10,6 +10,13 @@ def _title(attrs, text: str) -> str:
     return f"{text} ({run_label(attrs.get('renderer', '?'), attrs.get('estimator'))})"
 
 
+def _estimate(attrs) -> str:
+    """How the variance was estimated: ``N = 8`` seeds, or one render (two halves)."""
+    if attrs.get("estimator") == "moments":
+        return "one render per view"
+    return f"N = {attrs['n_seeds']}"
+
+
 def teaser_figure_job(variance, warped, out) -> None:
     """Fig. 1: sigma_L^2, sigma_R^2, the warped field and their joint histogram over Omega."""
     from ..figures.paper import teaser_figure
@@ -18,7 +25,7 @@ def teaser_figure_job(variance, warped, out) -> None:
     v = load_store(variance, "variance store")
     w = load_store(warped, "warped store")
     sigma_l, sigma_r = left_right(v, "variance")
-    title = _title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}, N = {v.attrs['n_seeds']}")
+    title = _title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}, {_estimate(v.attrs)}")
     save_figure(teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out)
 
 
@@ -72,12 +79,18 @@ def margin_figure_job(margins, out) -> None:
 def rho_vs_seeds_figure_job(curve_table, out) -> None:
     """rho against the number of seeds N' per region, with the reliability-corrected
     asymptote (``tables/seed_curve.csv``)."""
-    from ..figures.uncertainty import rho_vs_seeds_figure
+    from ..figures.uncertainty import HALVES_AXIS, SEEDS_AXIS, rho_vs_seeds_figure
     from ..io.tables import read_rows
 
     rows = read_rows(curve_table)
     attrs = rows[0] if rows else {}
-    save_figure(rho_vs_seeds_figure(rows, title=_title(attrs, "rho against seeds N'")), out)
+    moments = attrs.get("estimator") == "moments"
+    fig = rho_vs_seeds_figure(
+        rows,
+        title=_title(attrs, "rho against half renders" if moments else "rho against seeds N'"),
+        xlabel=HALVES_AXIS if moments else SEEDS_AXIS,
+    )
+    save_figure(fig, out)
 
 
 def statistics_dot_figure_job(correlations, out, *, spp) -> None:

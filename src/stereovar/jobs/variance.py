@@ -16,20 +16,24 @@ def variance_job(left, right, out, *, estimator="seeds", allow_mixed_backends=Fa
     """
     from ..estimators import get_estimator
     from ..io.contracts import render_provenance, variance_store
-    from ..io.renders import RenderStore
-    from ..io.store import write_dataset
+    from ..io.renders import read_errors, store_error
+    from ..io.store import open_dataset, write_dataset
     from ..preflight import check_backends, stored_backends
     from ..rig import VIEWS
 
     left, right = list(left), list(right)
     check_backends(stored_backends([*left, *right]), allow_mixed=allow_mixed_backends)
     ds = get_estimator(estimator).estimate(left, right)
-    provenance = render_provenance(RenderStore(left[0]).attrs)
+    try:
+        provenance = render_provenance(open_dataset(left[0]).attrs)
+    except read_errors() as err:
+        raise store_error(left[0], f"{type(err).__name__}: {err}") from None
     ds = variance_store(ds, estimator=estimator, provenance=provenance)
     n_bad = {v: int((~ds["finite"].sel(view=v).values).sum()) for v in VIEWS}
     write_dataset(ds, out)
     log.info(
-        "%s variance over %d seeds; pixels with a non-finite render: left %d, right %d",
+        "%s variance over %d renders per view; pixels excluded for non-finite values: "
+        "left %d, right %d",
         estimator,
         ds.attrs["n_seeds"],
         n_bad["left"],

@@ -70,6 +70,45 @@ class FirstHits(NamedTuple):
     shape_index: Any
 
 
+class SampleMoments(NamedTuple):
+    """Per-pixel moments of one render's samples (the single-render estimator's input).
+
+    Attributes
+    ----------
+    mean : numpy.ndarray, shape (H, W, 3), float32
+        :math:`\\frac1n \\sum_k f_{k,c}` over the pixel's finite samples (0 where none).
+    mean_sq : numpy.ndarray, shape (H, W, 3), float32
+        :math:`\\frac1n \\sum_k f_{k,c}^2` over the same samples.
+    count : numpy.ndarray, shape (H, W), int32
+        :math:`n`, the samples with every channel finite.
+    """
+
+    mean: Any
+    mean_sq: Any
+    count: Any
+
+    CHANNELS = ("R", "G", "B", "R2", "G2", "B2", "n")
+    """Channel names of :meth:`stack`."""
+
+    def stack(self):
+        """The moments as one float32 (H, W, 7) array (channels :attr:`CHANNELS`)."""
+        import numpy as np
+
+        return np.concatenate(
+            [self.mean, self.mean_sq, np.asarray(self.count, np.float32)[..., None]], axis=-1
+        ).astype(np.float32)
+
+    @classmethod
+    def from_stack(cls, array) -> SampleMoments:
+        """Inverse of :meth:`stack`."""
+        import numpy as np
+
+        a = np.asarray(array, dtype=np.float32)
+        if a.ndim != 3 or a.shape[-1] != len(cls.CHANNELS):
+            raise ValueError(f"sample moments must have shape (H, W, 7), got {a.shape}")
+        return cls(a[..., 0:3], a[..., 3:6], np.rint(a[..., 6]).astype(np.int32))
+
+
 @dataclass
 class PreparedScene(ABC):
     """A scene compiled by one renderer for one stereo rig, ready to render and trace.
@@ -98,6 +137,24 @@ class PreparedScene(ABC):
         numpy.ndarray, shape (H, W, 3), float32
             Linear RGB radiance, with ``seed`` passed to the renderer's sampler unchanged.
         """
+
+    def render_moments(
+        self, view: str, *, spp: int, seed: int, settings: RenderSettings
+    ) -> SampleMoments:
+        """Render ``view`` once and return its per-pixel sample moments (the ``moments``
+        estimator, :mod:`stereovar.estimators.moments`) instead of its image.
+
+        Raises
+        ------
+        stereovar.errors.ConfigError
+            The renderer cannot return per-sample moments.
+        """
+        from ..errors import ConfigError
+
+        raise ConfigError(
+            f"renderer '{self.provenance.get('renderer', type(self).__name__)}' has no "
+            "per-sample moments; set render.estimator: seeds"
+        )
 
     @abstractmethod
     def trace(self, view: str) -> FirstHits:

@@ -48,6 +48,29 @@ class MitsubaScene(PreparedScene):
             sampler=settings.sampler,
         )
 
+    def render_moments(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+        """One render of ``view`` through :mod:`.moments`: its per-pixel sample moments."""
+        from .moments import film_moments, moment_integrator_dict, register
+        from .render import render_view
+        from .sensor import integrator_dict
+
+        register(self.mi)
+        image = render_view(
+            self.mi,
+            self.scene,
+            self.rig,
+            view,
+            spp=spp,
+            seed=seed,
+            integrator=moment_integrator_dict(
+                integrator_dict(settings.integrator, settings.max_depth)
+            ),
+            rfilter=settings.rfilter,
+            sampler=settings.sampler,
+            channels=None,
+        )
+        return film_moments(image, spp)
+
     def trace(self, view: str) -> FirstHits:
         from .sensor import sensor_dict
         from .trace import trace_pixel_centres

@@ -19,6 +19,7 @@ def render_view(
     integrator: dict | None = None,
     rfilter: str = "box",
     sampler: str = "independent",
+    channels: int | None = 3,
 ) -> np.ndarray:
     """Render one view of the rig.
 
@@ -37,13 +38,16 @@ def render_view(
         Mitsuba integrator dict; default :func:`integrator_dict`.
     rfilter, sampler : str
         Reconstruction filter and sampler plugin names.
+    channels : int or None
+        Leading channels returned (3: linear RGB); None returns every channel of the film
+        (RGB followed by the integrator's AOVs).
 
     Returns
     -------
-    numpy.ndarray, shape (height, width, 3), float32
-        Linear RGB radiance.
+    numpy.ndarray, shape (height, width, channels), float32
+        Linear RGB radiance (and AOVs).
     """
     sensor = mi.load_dict(sensor_dict(mi, rig, view, spp=spp, rfilter=rfilter, sampler=sampler))
     integ = mi.load_dict(integrator or integrator_dict())
     image = mi.render(scene, sensor=sensor, integrator=integ, seed=int(seed), spp=int(spp))
-    return np.asarray(image, dtype=np.float32)[..., :3]
+    return np.asarray(image, dtype=np.float32)[..., :channels]
