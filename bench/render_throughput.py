@@ -8,10 +8,22 @@ wall time of the paper preset's whole render stage (every scene, view, seed and 
 ``workflow/presets/paper.yaml``) from each rate. ``scalar_rgb`` runs at ``--scalar-spp``
 (it is about two orders of magnitude slower) unless ``--variants`` names it alone.
 
+With ``--options`` it instead measures render options on ``llvm_ad_rgb`` as interleaved
+ratios of samples per second against the named baseline (``path``: the configured
+integrator, bilinear textures, one job with every thread), each option and the baseline
+alternating ``--repeats`` times, each render in its own process:
+
+* ``moments``: the moments estimator's integrator (:mod:`stereovar.renderers.mitsuba.moments`);
+* ``nearest``: nearest-neighbour texture lookups instead of bilinear;
+* ``2 jobs x 2 threads``, ``2 jobs x 1 thread``: two renders at once, each with that many
+  threads (the machine's throughput when Snakemake runs two render jobs; the ratio is of
+  the two jobs' summed samples per second).
+
 Usage::
 
     .venv/bin/python bench/render_throughput.py                 # every available variant
     .venv/bin/python bench/render_throughput.py --spp 64        # a quicker CPU check
+    .venv/bin/python bench/render_throughput.py --options --width 320 --height 180 --spp 32
 """
 
 from __future__ import annotations
@@ -37,6 +49,12 @@ from stereovar.rig import make_rig
 from stereovar.scenes.spec import load_scene_spec
 import drjit as dr
 
+if args.get("texture_filter"):
+    import stereovar.renderers.mitsuba.scene as compile_scene
+    plain = compile_scene._texture_dict
+    def texture_dict(mi, spec, name):
+        return {**plain(mi, spec, name), "filter_type": args["texture_filter"]}
+    compile_scene._texture_dict = texture_dict
 mi = load_mitsuba(args["variant"])
 if args["threads"]:
     dr.set_thread_count(args["threads"])
@@ -45,10 +63,15 @@ scene, cam = load_scene(mi, spec)
 rig = make_rig(cam.to_world, cam.fov_deg, width=args["width"], height=args["height"],
                baseline_m=args["baseline_m"], convention="paper")
 integ = integrator_dict("path", args["max_depth"])
+if args.get("moments"):
+    from stereovar.renderers.mitsuba.moments import moment_integrator_dict, register
+    register(mi)
+    integ = moment_integrator_dict(integ)
 def render(spp, index):
     image = render_view(mi, scene, rig, "left", spp=spp, integrator=integ, rfilter="box",
-                        sampler="independent", seed=derive_seed("bench", "left", spp, index))
-    return image
+                        sampler="independent", seed=derive_seed("bench", "left", spp, index),
+                        channels=None)
+    return image[..., :3]
 t0 = time.perf_counter()
 render(1, 0)
 warm = time.perf_counter() - t0
@@ -76,6 +99,75 @@ def paper_samples() -> tuple[int, dict]:
     return total, config
 
 
+OPTIONS = {
+    "moments": ({"moments": True}, 1),
+    "nearest": ({"texture_filter": "nearest"}, 1),
+    "2 jobs x 2 threads": ({}, 2),
+    "2 jobs x 1 thread": ({"threads": 1}, 2),
+}
+"""Option name to (worker settings, renders at once)."""
+
+
+def _run_workers(job: dict, copies: int) -> tuple[float, list]:
+    """Samples per second summed over ``copies`` concurrent worker processes of ``job``."""
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", WORKER, json.dumps(job)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for _ in range(copies)
+    ]
+    outs = []
+    for proc in procs:
+        stdout, stderr = proc.communicate()
+        if proc.returncode != 0:
+            raise RuntimeError(stderr.strip().splitlines()[-1:])
+        outs.append(json.loads(stdout.strip().splitlines()[-1]))
+    samples = job["width"] * job["height"] * job["spp"]
+    return sum(samples / o["seconds"] for o in outs), outs
+
+
+def compare_options(args, config) -> int:
+    """Interleaved ratios of each option in :data:`OPTIONS` against the ``path`` baseline."""
+    import statistics
+
+    base_job = {
+        "variant": "llvm_ad_rgb",
+        "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
+        "width": args.width,
+        "height": args.height,
+        "spp": args.spp,
+        "threads": args.threads,
+        "baseline_m": config["rig"]["baseline_m"],
+        "max_depth": config["render"]["max_depth"],
+    }
+    print(
+        f"options on llvm_ad_rgb: {args.scene}, {args.width}x{args.height}, SPP {args.spp}, "
+        f"{args.repeats} interleaved repeats; baseline: path, bilinear textures, one job"
+    )
+    ratios = {name: [] for name in OPTIONS}
+    base_rates = []
+    for _ in range(args.repeats):
+        for name, (extra, copies) in OPTIONS.items():
+            base, _ = _run_workers(base_job, 1)
+            rate, _ = _run_workers({**base_job, **extra}, copies)
+            base_rates.append(base)
+            ratios[name].append(rate / base)
+    print(
+        f"{'path (baseline)':22s}: {statistics.median(base_rates) / 1e6:6.2f} M samples/s "
+        f"(median of {len(base_rates)}; range {min(base_rates) / 1e6:.2f}-"
+        f"{max(base_rates) / 1e6:.2f})"
+    )
+    for name, values in ratios.items():
+        print(
+            f"{name:22s}: ratio {statistics.median(values):5.2f} to path (median; range "
+            f"{min(values):.2f}-{max(values):.2f})"
+        )
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--width", type=int, default=1280)
@@ -85,7 +177,11 @@ def main(argv=None) -> int:
     parser.add_argument("--scene", default="scene_000")
     parser.add_argument("--threads", type=int, default=0, help="Dr.Jit CPU threads (0: all)")
     parser.add_argument("--variants", nargs="*", help="default: every available variant")
+    parser.add_argument("--options", action="store_true", help="compare render options")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
+    if args.options:
+        return compare_options(args, paper_samples()[1])
 
     from stereovar.renderers.mitsuba.backend import available_variants
 

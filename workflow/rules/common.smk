@@ -66,7 +66,11 @@ wildcard_constraints:
 WIDTH = config["resolution"]["width"]
 HEIGHT = config["resolution"]["height"]
 CLUSTER = config["cluster"]
-RENDER_THREADS = CLUSTER["render_threads"]
+# Render jobs run one thread each locally, so two jobs share a 2-core machine: two 1-thread
+# jobs at once render 1.09x the samples per second of one 2-thread job at a time, and two
+# 2-thread jobs at once 1.01x (bench/render_throughput.py --options). A job that renders
+# alone gets more with `--set-threads render=2`. Cluster jobs get cluster.render_threads.
+RENDER_THREADS = 1 if workflow.local_exec else CLUSTER["render_threads"]
 N_SEEDS = config["render"]["n_seeds"]
 INTERVENTION_N_SEEDS, INTERVENTION_SPP = intervention_renders(config)
 # renders read per view by the variance job: every seed, or one moment store
@@ -303,7 +307,7 @@ def render_resources(n_views=2, spp=None, gpu=True, cpus=None, moments=False):
     requests = {
         "mem_mb": mem_mb,
         "runtime": runtime,
-        "cpus_per_task": RENDER_THREADS if cpus is None else cpus,
+        "cpus_per_task": CLUSTER["render_threads"] if cpus is None else cpus,
     }
     if gpu and CLUSTER["gpus_per_render"]:
         requests["gpu"] = CLUSTER["gpus_per_render"]

@@ -5,6 +5,23 @@ from __future__ import annotations
 from .common import left_right, log
 
 
+def align(v, gt) -> dict:
+    """Eq. 2 on a variance dataset (the variance contract) with its ground truth:
+    :func:`stereovar.statistics.warp.align_variance` of the right field into the left."""
+    from ..statistics.warp import align_variance
+
+    sigma_l, sigma_r = left_right(v, "variance")
+    fin_l, fin_r = left_right(v, "finite")
+    return align_variance(
+        sigma_l,
+        sigma_r,
+        gt.sel(view="left"),
+        sign=int(gt.attrs["disparity_sign"]),
+        finite_left=fin_l,
+        finite_right=fin_r,
+    )
+
+
 def warp_job(variance, ground_truth, out) -> None:
     """Warp the right variance field into the left view (Eq. 2) and store Ω and the regions."""
     import numpy as np
@@ -12,21 +29,11 @@ def warp_job(variance, ground_truth, out) -> None:
     from ..io.contracts import warped_store
     from ..io.store import load_store, write_dataset
     from ..statistics.regions import region_masks
-    from ..statistics.warp import align_variance
 
     v = load_store(variance, "variance store", ["variance", "finite"])
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
     gl = gt.sel(view="left")
-    sigma_l, sigma_r = left_right(v, "variance")
-    fin_l, fin_r = left_right(v, "finite")
-    aligned = align_variance(
-        sigma_l,
-        sigma_r,
-        gl,
-        sign=int(gt.attrs["disparity_sign"]),
-        finite_left=fin_l,
-        finite_right=fin_r,
-    )
+    aligned = align(v, gt)
     masks = region_masks(gl, aligned["omega"])
     attrs = {
         **v.attrs,
@@ -71,6 +78,31 @@ def analysis_settings(analysis: dict | None = None, controls: dict | None = None
     return settings, model
 
 
+def scene_inputs(v, gt, sensor):
+    """:class:`~stereovar.statistics.rows.SceneInputs` of a variance dataset (the variance
+    contract) and its ground truth: the left ground truth, the seed mean, the split halves
+    and the sensor model."""
+    from ..statistics.rows import SceneInputs
+
+    gl = gt.sel(view="left")
+    views = ("left", "right")
+    return SceneInputs(
+        ground_truth_left={k: gl[k].values for k in ("disparity", "valid")},
+        sign=int(gt.attrs["disparity_sign"]),
+        mean={k: v["mean"].sel(view=k).transpose("y", "x", "channel").values for k in views}
+        if "mean" in v
+        else None,
+        halves={k: v["half_variance"].sel(view=k).transpose("half", "y", "x").values for k in views}
+        if "half_variance" in v
+        else None,
+        # the simulated sensor draws as many frames as the estimator drew samples per
+        # pixel: N seeds, or the SPP of the moments estimator
+        n_seeds=int(v.attrs.get("n_draws", v.attrs["n_seeds"])),
+        sensor=sensor,
+        label=f"{v.attrs['scene']}|spp{int(v.attrs['spp'])}",
+    )
+
+
 def correlation_job(
     variance,
     warped,
@@ -92,7 +124,6 @@ def correlation_job(
     from ..statistics.rows import (
         CORRELATION_COLUMNS,
         CURVE_COLUMNS,
-        SceneInputs,
         correlation_rows,
         seed_curve_rows,
         subset_rhos,
@@ -107,21 +138,7 @@ def correlation_job(
     n_seeds = int(v.attrs["n_seeds"])
     scene, spp = v.attrs["scene"], int(v.attrs["spp"])
     views = ("left", "right")
-    inputs = SceneInputs(
-        ground_truth_left={k: gl[k].values for k in ("disparity", "valid")},
-        sign=int(gt.attrs["disparity_sign"]),
-        mean={k: v["mean"].sel(view=k).transpose("y", "x", "channel").values for k in views}
-        if "mean" in v
-        else None,
-        halves={k: v["half_variance"].sel(view=k).transpose("half", "y", "x").values for k in views}
-        if "half_variance" in v
-        else None,
-        # the simulated sensor draws as many frames as the estimator drew samples per
-        # pixel: N seeds, or the SPP of the moments estimator
-        n_seeds=int(v.attrs.get("n_draws", n_seeds)),
-        sensor=sensor,
-        label=f"{scene}|spp{spp}",
-    )
+    inputs = scene_inputs(v, gt, sensor)
     aligned = read_alignment(load_store(warped, "warped store"))
     glass = gl["glass"].values
     subsets = None
