@@ -32,6 +32,7 @@ include: "workflow/rules/tables.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/intervention.smk"
 include: "workflow/rules/claims.smk"
+include: "workflow/rules/estimators.smk"
 
 
 onstart:

@@ -106,9 +106,7 @@ def seed_stores(config: dict, scene: str, spp, n_seeds: int | None = None) -> di
     n = int(render["n_seeds"] if n_seeds is None else n_seeds)
     batches = seed_batches(n, int(render["seeds_per_job"]))
     return {
-        view: [
-            render_store(render["renderer"], scene, view, spp, batch_label(b)) for b in batches
-        ]
+        view: [render_store(render["renderer"], scene, view, spp, batch_label(b)) for b in batches]
         for view in VIEWS
     }
 

@@ -76,6 +76,8 @@ INTERVENTION_N_SEEDS, INTERVENTION_SPP = intervention_renders(config)
 # renders read per view by the variance job: every seed, or one moment store
 ESTIMATOR_READS = 1 if config["render"]["estimator"] == "moments" else N_SEEDS
 MAIN_SPP = config["render"]["spp"]
+VALIDATION_N_SEEDS = config["validation"]["n_seeds"]
+VALIDATION_SPP = config["validation"]["spp"] or MAIN_SPP
 SWEEP_SCENE = config["render"]["spp_sweep"]["scene"]
 SWEEP_SPP = sorted(config["render"]["spp_sweep"]["spp"])
 INTERVENTION_ESTIMATOR = "seeds"  # the intervention splits seeds into mean and residuals
@@ -123,6 +125,19 @@ def intervention_inputs(wildcards):
             INTERVENTION_SPP,
             INTERVENTION_N_SEEDS,
         ),
+        "ground_truth": f"results/ground_truth/{wildcards.scene}.zarr",
+    }
+
+
+def estimator_check_inputs(wildcards):
+    """One scene's moment stores, its ``validation.n_seeds`` seed renders at the same SPP
+    and its ground truth (``estimator_check``)."""
+    run = run_config(wildcards.renderer)
+    moments = estimator_stores(run, wildcards.scene, wildcards.spp, "moments")
+    seeds = seed_stores(run, wildcards.scene, wildcards.spp, VALIDATION_N_SEEDS)
+    return {
+        **{f"moments_{view}": paths[0] for view, paths in moments.items()},
+        **{f"seeds_{view}": paths for view, paths in seeds.items()},
         "ground_truth": f"results/ground_truth/{wildcards.scene}.zarr",
     }
 

@@ -16,7 +16,12 @@ from .uncertainty import CONTROLS, STATISTICS
 FIELD_SERIES = (
     ("spearman", "moments vs seeds, Spearman", "#1f3b73", "o"),
     ("pearson", "moments vs seeds, Pearson", "#dd8452", "s"),
-    ("reference_reliability_spearman", "seeds' own split-half reliability, Spearman", "#55a868", "^"),
+    (
+        "reference_reliability_spearman",
+        "seeds' own split-half reliability, Spearman",
+        "#55a868",
+        "^",
+    ),
     ("reference_reliability_pearson", "seeds' own split-half reliability, Pearson", "#c44e52", "v"),
 )
 """Columns of the field-agreement panel: key, label, colour, marker."""

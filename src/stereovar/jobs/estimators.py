@@ -60,9 +60,10 @@ whether the two corrected intervals overlap."""
 
 
 def _corrected_interval(row: dict) -> tuple[float, float]:
-    """The bootstrap interval of ``row`` divided by :math:`\\sqrt{r_L r_R}`."""
+    """The bootstrap interval of ``row`` divided by :math:`\\sqrt{r_L r_R}` (NaN where the
+    row has no corrected :math:`\\rho`)."""
     r = row.get("reliability_left", math.nan) * row.get("reliability_right", math.nan)
-    if not r > 0:
+    if not r > 0 or not math.isfinite(row.get("rho_corrected", math.nan)):
         return math.nan, math.nan
     return row["boot_low"] / math.sqrt(r), row["boot_high"] / math.sqrt(r)
 

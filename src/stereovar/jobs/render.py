@@ -254,6 +254,19 @@ def moments_job(
         cache=cache,
         options=options,
     )
+    from ..config import MOMENTS_FILTER, MOMENTS_SAMPLER
+    from ..errors import ConfigError
+
+    for key, value, needed in (
+        ("sampler", job.settings.sampler, MOMENTS_SAMPLER),
+        ("rfilter", job.settings.rfilter, MOMENTS_FILTER),
+    ):
+        if value != needed:
+            raise ConfigError(
+                f"config key 'render.{key}': {value!r}; the moments estimator needs "
+                f"render.{key}: {needed} (the per-sample variance / SPP is the pixel variance "
+                "only for independent samples that each land in their own pixel)"
+            )
     counts = half_spp(job.spp)
     halves, seeds = [], []
     for h, n in enumerate(counts):

@@ -272,7 +272,9 @@ def claims_table(
             "tolerance",
             SPP_TOLERANCE,
             spread,
-            "relative change of rho from N/2 to N seeds",
+            "relative change of rho from one half render to both (moments)"
+            if any(r.get("estimator") == "moments" for r in rows)
+            else "relative change of rho from N/2 to N seeds",
             n_change,
         )
     )
