@@ -248,5 +248,5 @@ def test_a_registered_seed_policy_is_one_function():
 def test_unknown_names_are_one_line_config_errors():
     with pytest.raises(ConfigError, match=r"render.renderer.*'cycles'.*use one of: mitsuba"):
         get_renderer("cycles")
-    with pytest.raises(ConfigError, match=r"render.estimator.*'moments'.*use one of: seeds"):
-        get_estimator("moments")
+    with pytest.raises(ConfigError, match=r"render.estimator.*'jackknife'.*use one of: seeds"):
+        get_estimator("jackknife")

@@ -54,6 +54,8 @@ DEFAULTS = {
         "max_disparity": None,
         "disparity_margin": 4,
         "margin_samples": 2000,
+        "n_seeds": None,
+        "spp": None,
     },
     "cluster": {
         "render_samples_per_second": 1.0e6,
@@ -62,6 +64,7 @@ DEFAULTS = {
         "gpu_model": None,
     },
     "preview": {"spp": 32},
+    "validation": {"n_seeds": 64, "spp": None},
 }
 
 
@@ -100,8 +103,8 @@ BAD_CONFIGS = [
         [
             "'colour'",
             "not known",
-            "scenes, generator, resolution, rig, render, analysis, controls, intervention, "
-            "cluster, preview",
+            "scenes, generator, resolution, rig, render, analysis, controls, validation, "
+            "intervention, cluster, preview",
         ],
         id="unknown-top-level-key",
     ),
@@ -334,3 +337,21 @@ def test_a_bootstrap_tile_larger_than_the_image_is_a_one_line_error():
     config = {"resolution": {"width": 64, "height": 32}, "analysis": {"bootstrap": {"tile": 40}}}
     with pytest.raises(ConfigError, match=r"analysis\.bootstrap\.tile.*at most 32"):
         validate_config(config, SCHEMA)
+
+
+@pytest.mark.parametrize(
+    ("render", "message"),
+    [
+        ({"sampler": "multijitter"}, "'render.sampler': 'multijitter' with render.estimator moments"),
+        ({"rfilter": "tent"}, "'render.rfilter': 'tent' with render.estimator moments"),
+        (
+            {"spp": 8, "spp_sweep": {"scene": "scene_000", "spp": [2, 8]}},
+            "'render.spp_sweep.spp': SPP 2 with render.estimator moments",
+        ),
+    ],
+)
+def test_moments_needs_independent_samples_in_their_own_pixel(render, message):
+    config = {"render": {"estimator": "moments", **render}}
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        validate_config(config, SCHEMA)
+    assert validate_config({"render": {"estimator": "moments"}}, SCHEMA)["render"]["spp"] == 32

@@ -114,7 +114,7 @@ def seed_stores(config: dict, scene: str, spp, n_seeds: int | None = None) -> di
 def estimator_stores(config: dict, scene: str, spp, estimator: str | None = None) -> dict:
     """View to the stores ``estimator`` (``render.estimator`` by default) reads for one
     scene at ``spp``: every seed batch (``seeds``) or the one moment store (``moments``)."""
-    estimator = estimator or config["render"]["estimator"]
+    estimator = estimator or config["render"].get("estimator", "seeds")
     if estimator == "moments":
         renderer = config["render"]["renderer"]
         return {view: [moment_store(renderer, scene, view, spp)] for view in VIEWS}
