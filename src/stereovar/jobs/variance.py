@@ -25,7 +25,10 @@ def variance_job(left, right, out, *, estimator="seeds", allow_mixed_backends=Fa
     check_backends(stored_backends([*left, *right]), allow_mixed=allow_mixed_backends)
     ds = get_estimator(estimator).estimate(left, right)
     try:
-        provenance = render_provenance(open_dataset(left[0]).attrs)
+        first = open_dataset(left[0])
+        # a store written from a bare DataArray carries its provenance on the variable
+        own = next(iter(first.data_vars.values())).attrs if first.data_vars else {}
+        provenance = render_provenance({**own, **first.attrs})
     except read_errors() as err:
         raise store_error(left[0], f"{type(err).__name__}: {err}") from None
     ds = variance_store(ds, estimator=estimator, provenance=provenance)
