@@ -342,7 +342,10 @@ def test_a_bootstrap_tile_larger_than_the_image_is_a_one_line_error():
 @pytest.mark.parametrize(
     ("render", "message"),
     [
-        ({"sampler": "multijitter"}, "'render.sampler': 'multijitter' with render.estimator moments"),
+        (
+            {"sampler": "multijitter"},
+            "'render.sampler': 'multijitter' with render.estimator moments",
+        ),
         ({"rfilter": "tent"}, "'render.rfilter': 'tent' with render.estimator moments"),
         (
             {"spp": 8, "spp_sweep": {"scene": "scene_000", "spp": [2, 8]}},
