@@ -215,26 +215,36 @@ MOMENTS_SAMPLER = "independent"
 MOMENTS_FILTER = "box"
 
 
+def moments_settings_error(sampler: str, rfilter: str) -> str | None:
+    """Why ``render.estimator: moments`` cannot use ``sampler`` and ``rfilter`` (one line
+    naming the key and the fix), or None when it can."""
+    why = (
+        "the moments estimator divides the per-sample variance by the SPP, which is the "
+        "pixel variance only for independent samples that each land in their own pixel"
+    )
+    for key, value, needed in (
+        ("sampler", sampler, MOMENTS_SAMPLER),
+        ("rfilter", rfilter, MOMENTS_FILTER),
+    ):
+        if value != needed:
+            return (
+                f"config key 'render.{key}': {value!r} with render.estimator moments; {why}: "
+                f"set render.{key}: {needed} or render.estimator: seeds"
+            )
+    return None
+
+
 def _check_moments(config: dict) -> None:
     """``render.estimator: moments`` needs the independent sampler, the box filter and at
     least two samples per half render."""
     render = config.get("render", {})
     if render.get("estimator") != "moments":
         return
-    why = (
-        "the moments estimator divides the per-sample variance by the SPP, which is the "
-        "pixel variance only for independent samples that each land in their own pixel"
+    error = moments_settings_error(
+        render.get("sampler", MOMENTS_SAMPLER), render.get("rfilter", MOMENTS_FILTER)
     )
-    if render.get("sampler", MOMENTS_SAMPLER) != MOMENTS_SAMPLER:
-        raise ConfigError(
-            f"config key 'render.sampler': {render['sampler']!r} with render.estimator "
-            f"moments; {why}: set render.sampler: {MOMENTS_SAMPLER} or render.estimator: seeds"
-        )
-    if render.get("rfilter", MOMENTS_FILTER) != MOMENTS_FILTER:
-        raise ConfigError(
-            f"config key 'render.rfilter': {render['rfilter']!r} with render.estimator "
-            f"moments; {why}: set render.rfilter: {MOMENTS_FILTER} or render.estimator: seeds"
-        )
+    if error:
+        raise ConfigError(error)
     sweep = render.get("spp_sweep", {}).get("spp") or []
     low = sorted({s for s in [render.get("spp"), *sweep] if s is not None and s < 4})
     if low:

@@ -94,11 +94,10 @@ class _Job:
         """
         import numpy as np
 
-        seed = self.seed(view, index)
-        key_fields = {**self.key_base, **(extra or {}), "view": view, "sampler_seed": seed}
         from ..io.cache import render_key
 
-        key = render_key(key_fields)
+        seed = self.seed(view, index)
+        key = render_key({**self.key_base, **(extra or {}), "view": view, "sampler_seed": seed})
         array = self.cache.get(key) if self.cache is not None else None
         if array is not None:
             return array, seed, f"from the render cache {self.cache.path(key)}"
@@ -254,19 +253,12 @@ def moments_job(
         cache=cache,
         options=options,
     )
-    from ..config import MOMENTS_FILTER, MOMENTS_SAMPLER
+    from ..config import moments_settings_error
     from ..errors import ConfigError
 
-    for key, value, needed in (
-        ("sampler", job.settings.sampler, MOMENTS_SAMPLER),
-        ("rfilter", job.settings.rfilter, MOMENTS_FILTER),
-    ):
-        if value != needed:
-            raise ConfigError(
-                f"config key 'render.{key}': {value!r}; the moments estimator needs "
-                f"render.{key}: {needed} (the per-sample variance / SPP is the pixel variance "
-                "only for independent samples that each land in their own pixel)"
-            )
+    error = moments_settings_error(job.settings.sampler, job.settings.rfilter)
+    if error:
+        raise ConfigError(error)
     counts = half_spp(job.spp)
     halves, seeds = [], []
     for h, n in enumerate(counts):

@@ -32,10 +32,12 @@ class MitsubaScene(PreparedScene):
     mi: Any = None
     scene: Any = None
 
-    def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+    def _render(self, view, spp, seed, settings: RenderSettings, wrap=None, channels=3):
+        """``render_view`` with the settings' integrator (wrapped by ``wrap`` when given)."""
         from .render import render_view
         from .sensor import integrator_dict
 
+        integrator = integrator_dict(settings.integrator, settings.max_depth)
         return render_view(
             self.mi,
             self.scene,
@@ -43,32 +45,21 @@ class MitsubaScene(PreparedScene):
             view,
             spp=spp,
             seed=seed,
-            integrator=integrator_dict(settings.integrator, settings.max_depth),
+            integrator=wrap(integrator) if wrap else integrator,
             rfilter=settings.rfilter,
             sampler=settings.sampler,
+            channels=channels,
         )
+
+    def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+        return self._render(view, spp, seed, settings)
 
     def render_moments(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
         """One render of ``view`` through :mod:`.moments`: its per-pixel sample moments."""
         from .moments import film_moments, moment_integrator_dict, register
-        from .render import render_view
-        from .sensor import integrator_dict
 
         register(self.mi)
-        image = render_view(
-            self.mi,
-            self.scene,
-            self.rig,
-            view,
-            spp=spp,
-            seed=seed,
-            integrator=moment_integrator_dict(
-                integrator_dict(settings.integrator, settings.max_depth)
-            ),
-            rfilter=settings.rfilter,
-            sampler=settings.sampler,
-            channels=None,
-        )
+        image = self._render(view, spp, seed, settings, wrap=moment_integrator_dict, channels=None)
         return film_moments(image, spp)
 
     def trace(self, view: str) -> FirstHits:
