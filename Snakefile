@@ -33,6 +33,7 @@ include: "workflow/rules/figures.smk"
 include: "workflow/rules/intervention.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/estimators.smk"
+include: "workflow/rules/audit.smk"
 
 
 onstart:
@@ -40,4 +41,4 @@ onstart:
 
 
 onsuccess:
-    print_claims("results/tables/claims.md")
+    print_summary()

@@ -23,3 +23,12 @@ class BackendError(StereovarError):
 
 class StoreError(StereovarError):
     """A stored result (e.g. a render) is missing, damaged or incomplete and must be rerun."""
+
+
+class ImageError(StereovarError):
+    """An image, disparity, depth or mask file cannot be read or has the wrong shape."""
+
+
+class AuditError(StereovarError):
+    """An audit's files do not form N >= 2 renders per view of stereo frames with ground
+    truth, or their disparity convention is the wrong one."""

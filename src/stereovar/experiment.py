@@ -13,6 +13,12 @@ estimator that made them:
 ``results/{renderer}/{estimator}/...``
     everything computed from the renders: variance, warped, correlation, intervention,
     tables and figures.
+
+An audit of renders made elsewhere (:mod:`stereovar.audit`) is a source named
+``audit/{name}`` in place of the renderer: its imported renders sit under
+``results/audit/{name}/renders/``, its ground truth under
+``results/audit/{name}/ground_truth/{frame}.zarr`` (:func:`ground_truth_store`) and
+everything computed from them under ``results/audit/{name}/seeds/``.
 """
 
 from __future__ import annotations
@@ -20,9 +26,13 @@ from __future__ import annotations
 from .rig import VIEWS
 
 __all__ = [
+    "AUDIT_PREFIX",
     "VIEWS",
+    "audit_source",
     "batch_label",
     "estimator_stores",
+    "ground_truth_store",
+    "is_audit",
     "intervention_renders",
     "moment_store",
     "render_store",
@@ -86,6 +96,29 @@ def render_store(renderer: str, scene: str, view: str, spp, batch) -> str:
     """Path of one batch of renders:
     ``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr``."""
     return f"results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"
+
+
+AUDIT_PREFIX = "audit/"
+"""Source names of audits: ``audit/{name}``."""
+
+
+def audit_source(name: str) -> str:
+    """The source (renderer) name of the audit ``name``: ``audit/{name}``."""
+    return f"{AUDIT_PREFIX}{name}"
+
+
+def is_audit(renderer: str) -> bool:
+    """Whether a source name is an audit's (:func:`audit_source`)."""
+    return str(renderer).startswith(AUDIT_PREFIX)
+
+
+def ground_truth_store(renderer: str, scene: str) -> str:
+    """Path of a scene's ground truth: ``results/ground_truth/{scene}.zarr``, traced from the
+    scene for every renderer, or ``results/audit/{name}/ground_truth/{frame}.zarr``, imported
+    with an audit's renders."""
+    if is_audit(renderer):
+        return f"results/{renderer}/ground_truth/{scene}.zarr"
+    return f"results/ground_truth/{scene}.zarr"
 
 
 def run_prefix(renderer: str, estimator: str) -> str:

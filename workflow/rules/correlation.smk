@@ -5,7 +5,7 @@
 rule warp:
     input:
         variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
-        ground_truth="results/ground_truth/{scene}.zarr",
+        ground_truth=ground_truth_input,
     output:
         directory("results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr"),
     log:
@@ -27,7 +27,7 @@ rule correlation:
     input:
         variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
         warped="results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr",
-        ground_truth="results/ground_truth/{scene}.zarr",
+        ground_truth=ground_truth_input,
     output:
         rows="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}.csv",
         curve="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}_curve.csv",

@@ -56,7 +56,7 @@ rule material_scatter_figure:
     input:
         variance=main_scene_file("{run}/variance/{scene}/spp{spp}.zarr"),
         warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
-        ground_truth=f"results/ground_truth/{SWEEP_SCENE}.zarr",
+        ground_truth=lambda wc: ground_truth_store(wc.renderer, SWEEP_SCENE),
     output:
         report(
             "results/{renderer}/{estimator}/figures/fig3_material_scatter.png",

@@ -2,6 +2,8 @@
 
 
 rule preview:
+    wildcard_constraints:
+        renderer=RENDERER_NAMES,
     input:
         unpack(scene_inputs),
         ground_truth="results/ground_truth/{scene}.zarr",

@@ -4,6 +4,8 @@
 
 
 rule render:
+    wildcard_constraints:
+        renderer=RENDERER_NAMES,
     input:
         unpack(scene_inputs),
     output:
@@ -32,6 +34,8 @@ rule render:
 
 
 rule render_moments:
+    wildcard_constraints:
+        renderer=RENDERER_NAMES,
     input:
         unpack(scene_inputs),
     output:

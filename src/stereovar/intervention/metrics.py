@@ -151,6 +151,7 @@ def intervention_metrics(
     seed: int = 0,
     margin_samples: int = 2000,
     workers: int = 1,
+    regions: Sequence[str] = REGIONS,
 ) -> InterventionResult:
     """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4).
 
@@ -190,6 +191,8 @@ def intervention_metrics(
         Size of the margin sample per (cost, region, condition).
     workers : int, keyword-only
         Threads for the cost-volume scans.
+    regions : sequence of str, keyword-only
+        Regions scored (:data:`REGIONS` by default; ``("all",)`` without a glass mask).
 
     Returns
     -------
@@ -212,7 +215,7 @@ def intervention_metrics(
     perm = block_permutation(height, width, block=block, seed=seed)
     d_gt = np.asarray(ground_truth_left["disparity"], dtype=np.float64)
     omega = valid_set(d_gt, sign=sign, valid=ground_truth_left["valid"])
-    masks = region_masks(ground_truth_left, omega, regions=REGIONS)
+    masks = region_masks(ground_truth_left, omega, regions=tuple(regions))
     scan = {
         "max_disparity": max_disparity,
         "sign": sign,
@@ -256,7 +259,7 @@ def intervention_metrics(
         for metric in metrics:
             for condition in CONDITIONS:
                 a = acc[(cost, condition)]
-                for region in REGIONS:
+                for region in masks:
                     if metric == "gt_margin":
                         runs = n if cost == "residual_sad" else 1
                         value, chance, n_pix = a.margin_entry(region, runs)

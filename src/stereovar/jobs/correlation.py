@@ -103,6 +103,19 @@ def scene_inputs(v, gt, sensor):
     )
 
 
+def blank_material_regions(rows: list[dict]) -> None:
+    """Make the glass and non_glass rows of a scene without a material mask NaN, with the
+    reason (an audit without ``audit.glass_mask``: every pixel would count as non-glass)."""
+    from ..audit.ground_truth import NO_MATERIAL_MASK
+    from ..statistics.correlation import undefined_result
+    from ..statistics.rows import RELIABILITY_KEYS
+
+    for row in rows:
+        if row["region"] != "all":
+            row.update(undefined_result(0, row.get("n_nonfinite", 0), NO_MATERIAL_MASK))
+            row.update(dict.fromkeys(RELIABILITY_KEYS, float("nan")))
+
+
 def correlation_job(
     variance,
     warped,
@@ -170,6 +183,8 @@ def correlation_job(
         "renderer": v.attrs.get("renderer", ""),
         "estimator": v.attrs.get("estimator", ""),
     }
+    if gt.attrs.get("material_mask") == "none":
+        blank_material_regions(rows)
     for row in rows:
         row.update(scene=scene, spp=spp, n_seeds=n_seeds, **run)
         log.info(
@@ -196,6 +211,8 @@ def correlation_job(
             inputs=inputs,
             values=values,
         )
+        if gt.attrs.get("material_mask") == "none":
+            curve_rows = [r for r in curve_rows if r["region"] == "all"]
         for row in curve_rows:
             row.update(scene=scene, spp=spp, **run)
         write_tables(curve_rows, CURVE_COLUMNS, {"csv": curve})

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from ..statistics.reliability import corrected_interval
 from .common import log
 
 FIELD_COLUMNS = [
@@ -59,15 +60,6 @@ bootstrap interval divided by :math:`\\sqrt{r_L r_R}`, the reliabilities held fi
 whether the two corrected intervals overlap."""
 
 
-def _corrected_interval(row: dict) -> tuple[float, float]:
-    """The bootstrap interval of ``row`` divided by :math:`\\sqrt{r_L r_R}` (NaN where the
-    row has no corrected :math:`\\rho`)."""
-    r = row.get("reliability_left", math.nan) * row.get("reliability_right", math.nan)
-    if not r > 0 or not math.isfinite(row.get("rho_corrected", math.nan)):
-        return math.nan, math.nan
-    return row["boot_low"] / math.sqrt(r), row["boot_high"] / math.sqrt(r)
-
-
 def side_by_side(seeds_rows: list[dict], moments_rows: list[dict]) -> list[dict]:
     """:data:`ESTIMATOR_COLUMNS` rows from the correlation rows of each estimator
     (:func:`stereovar.statistics.rows.correlation_rows`), matched by region and method."""
@@ -79,7 +71,7 @@ def side_by_side(seeds_rows: list[dict], moments_rows: list[dict]) -> list[dict]
             continue
         row = {"region": s["region"], "method": s["method"]}
         for name, source in (("seeds", s), ("moments", m)):
-            low, high = _corrected_interval(source)
+            low, high = corrected_interval(source)
             row.update(
                 {
                     f"{name}_rho": source["rho"],

@@ -56,7 +56,7 @@ def intervention_job(
     beside the renders' ``render`` rows, Table 3's sensor column."""
     import math
 
-    from ..intervention.metrics import intervention_metrics
+    from ..intervention.metrics import REGIONS, intervention_metrics
     from ..io.renders import LazyRenders, RenderStore
     from ..io.store import load_store
     from ..io.tables import write_tables
@@ -76,6 +76,7 @@ def intervention_job(
             n_lost,
         )
     renders_l, renders_r = LazyRenders(left), LazyRenders(right)
+    no_mask = gt.attrs.get("material_mask") == "none"
     options = {
         "sign": int(gt.attrs["disparity_sign"]),
         "max_disparity": int(max_disparity),
@@ -83,6 +84,7 @@ def intervention_job(
         "block": block,
         "seed": seed,
         "workers": workers,
+        "regions": ("all",) if no_mask else REGIONS,
     }
     result = intervention_metrics(
         renders_l, renders_r, gl, margin_samples=margin_samples, **options
@@ -95,6 +97,8 @@ def intervention_job(
         result.rows.extend(
             sensor_rows(renders_l, renders_r, gl, sensor, label=str(scene), **options)
         )
+    if no_mask:
+        result.rows.extend(blank_region_rows(result.rows))
     for row in result.rows:
         row.update(
             scene=scene,
@@ -122,6 +126,20 @@ def intervention_job(
     write_tables(result.margins, MARGIN_COLUMNS, {"csv": margins}, constants=run)
     write_tables(result.rows, INTERVENTION_COLUMNS, {"csv": out}, constants=run)
     return result.rows
+
+
+def blank_region_rows(rows: list[dict]) -> list[dict]:
+    """NaN copies, for the glass and non_glass regions, of the ``all`` rows of a frame
+    without a material mask, with the reason."""
+    from ..audit.ground_truth import NO_MATERIAL_MASK
+    from ..statistics.regions import REGIONS
+
+    return [
+        {**row, "region": region, "value": float("nan"), "n_pixels": 0, "reason": NO_MATERIAL_MASK}
+        for row in rows
+        if row["region"] == "all"
+        for region in REGIONS[1:]
+    ]
 
 
 def sensor_rows(renders_l, renders_r, ground_truth_left, sensor: dict, *, label, **options):

@@ -67,3 +67,12 @@ def curve_summary(values) -> dict:
         "std_rho": float(v.std(ddof=1)) if v.size > 1 else float("nan"),
         "n_subsets": int(v.size),
     }
+
+
+def corrected_interval(row: dict) -> tuple[float, float]:
+    """The bootstrap interval of a correlation row divided by :math:`\\sqrt{r_L r_R}`, the
+    interval of its attenuation-corrected :math:`\\rho` (NaN where the row has none)."""
+    r = row.get("reliability_left", math.nan) * row.get("reliability_right", math.nan)
+    if not r > 0 or not math.isfinite(row.get("rho_corrected", math.nan)):
+        return math.nan, math.nan
+    return row["boot_low"] / math.sqrt(r), row["boot_high"] / math.sqrt(r)

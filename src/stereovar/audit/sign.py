@@ -1,0 +1,107 @@
+"""The photometric check that settles an audit's disparity convention (paper Eq. 2).
+
+A surface looks nearly the same from both cameras, so the right view's seed mean warped into
+the left with the right disparity sign reproduces the left seed mean up to noise,
+interpolation and view-dependent shading; with the opposite sign it does not. The audit
+warps with the declared convention and with the opposite one and stops when the opposite
+one matches clearly better (:func:`sign_check`), before any statistic is computed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..statistics.warp import warp_right_to_left
+
+CLEARLY_BETTER = 0.5
+"""The opposite sign wins when its error is below this fraction of the declared one's."""
+
+MIN_PIXELS = 100
+"""Fewer compared pixels than this leave the check inconclusive."""
+
+
+def median_relative_error(left, warped, mask) -> float:
+    r"""Median relative luminance error of a warped right image against the left one.
+
+    .. math::
+
+        e = \operatorname{median}_{x \in M}
+            \frac{|\bar I_{R\to L}(x) - \bar I_L(x)|}{\max(\bar I_L(x), 10^{-6})}
+
+    with :math:`\bar I` the channel mean and :math:`M` the compared pixels; NaN when
+    :math:`M` is empty.
+    """
+    lum_l = np.asarray(left, dtype=np.float64).mean(axis=-1)[mask]
+    lum_w = np.asarray(warped, dtype=np.float64).mean(axis=-1)[mask]
+    if lum_l.size == 0:
+        return math.nan
+    return float(np.median(np.abs(lum_w - lum_l) / np.maximum(lum_l, 1e-6)))
+
+
+@dataclass(frozen=True)
+class SignCheck:
+    """Photometric errors of the declared sign and of the opposite one."""
+
+    declared: int
+    error: float
+    opposite_error: float
+    n_pixels: int
+    opposite_n_pixels: int
+
+    @property
+    def opposite_wins(self) -> bool:
+        """Whether the opposite sign matches clearly better (:data:`CLEARLY_BETTER`)."""
+        if self.opposite_n_pixels < MIN_PIXELS or not math.isfinite(self.opposite_error):
+            return False
+        if self.n_pixels < MIN_PIXELS or not math.isfinite(self.error):
+            return True
+        return self.opposite_error < CLEARLY_BETTER * self.error
+
+    @property
+    def conclusive(self) -> bool:
+        """Whether one sign matches clearly better than the other."""
+        if self.opposite_wins:
+            return True
+        return (
+            self.n_pixels >= MIN_PIXELS
+            and math.isfinite(self.error)
+            and not self.error > CLEARLY_BETTER * self.opposite_error
+        )
+
+    def attrs(self) -> dict:
+        """The check as store attributes."""
+        return {
+            "sign_check_error": self.error,
+            "sign_check_opposite_error": self.opposite_error,
+            "sign_check_pixels": self.n_pixels,
+        }
+
+
+def sign_check(mean_left, mean_right, disparity, *, sign: int, valid=None) -> SignCheck:
+    """Warp the right seed mean into the left with ``sign`` and with ``-sign`` and compare
+    each with the left seed mean (:func:`median_relative_error` over each warp's valid set).
+
+    Parameters
+    ----------
+    mean_left, mean_right : array_like (H, W, 3)
+        The views' seed means.
+    disparity : array_like (H, W)
+        Left-view disparity magnitude in px.
+    sign : {1, -1}, keyword-only
+        The declared convention's sign.
+    valid : array_like of bool (H, W), optional
+        Pixels to compare (e.g. valid and not glass).
+    """
+    results = []
+    for s in (sign, -sign):
+        warped, omega = warp_right_to_left(mean_right, disparity, sign=s, valid=valid)
+        finite = np.isfinite(np.asarray(mean_left)).all(axis=-1) & np.isfinite(warped).all(
+            axis=-1
+        )
+        mask = omega & finite
+        results.append((median_relative_error(mean_left, warped, mask), int(mask.sum())))
+    (err, n), (err_opp, n_opp) = results
+    return SignCheck(int(sign), err, err_opp, n, n_opp)

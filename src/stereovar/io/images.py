@@ -1,0 +1,411 @@
+"""Image files other tools write and read: OpenEXR, PFM, PNG (8 and 16 bit), NPY and NPZ.
+
+The audit (:mod:`stereovar.audit`) reads renders, disparity, depth and masks made elsewhere
+through :func:`read_image` and :func:`read_field`; the export writes ours through
+:func:`write_image` and :func:`write_field`. Every reader returns float32 (images: ``(H, W,
+3)`` linear RGB; fields: ``(H, W)``) and raises :class:`~stereovar.errors.ImageError`, one
+line naming the file and the fix, for anything it cannot read.
+
+Libraries: OpenEXR through the ASWF ``OpenEXR`` bindings (the reference implementation: half
+and float channels, Blender's multilayer channel names, header-only reads, multithreaded
+decoding; ``imageio`` needs the FreeImage plugin, a separate binary download, for EXR);
+PNG through OpenCV (the only maintained reader and writer of 16-bit RGB PNG on PyPI; Pillow
+reduces 48-bit RGB to 8 bit); PFM, a plain header and raw float32 rows stored bottom to top,
+by hand; NPY and NPZ through numpy.
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ImageError
+
+FORMATS = ("exr", "pfm", "png", "npy", "npz")
+"""File formats by extension (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``)."""
+
+TRANSFERS = ("linear", "srgb")
+"""Transfer functions of integer images: stored values are linear, or sRGB-encoded."""
+
+_EXR_FIELD_CHANNELS = ("Z", "depth", "disparity", "Y", "R", "V")
+
+
+def image_format(path) -> str:
+    """The format of ``path`` from its extension (one of :data:`FORMATS`)."""
+    ext = Path(path).suffix.lower().lstrip(".")
+    if ext not in FORMATS:
+        raise ImageError(
+            f"{path}: unknown image format '.{ext}'; use one of "
+            f"{', '.join('.' + f for f in FORMATS)}"
+        )
+    return ext
+
+
+def srgb_to_linear(v):
+    r"""The sRGB decoding function (IEC 61966-2-1) on values in [0, 1].
+
+    .. math::
+
+        L = \begin{cases} V / 12.92 & V \le 0.04045 \\
+            \left(\frac{V + 0.055}{1.055}\right)^{2.4} & \text{otherwise} \end{cases}
+    """
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v):
+    r"""The sRGB encoding function (IEC 61966-2-1), the inverse of :func:`srgb_to_linear`.
+
+    .. math::
+
+        V = \begin{cases} 12.92\,L & L \le 0.0031308 \\
+            1.055\,L^{1/2.4} - 0.055 & \text{otherwise} \end{cases}
+    """
+    v = np.clip(np.asarray(v, dtype=np.float64), 0.0, None)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+# --------------------------------------------------------------------------------------------
+# headers
+# --------------------------------------------------------------------------------------------
+
+
+def _unreadable(path, err, what="file") -> ImageError:
+    detail = " ".join(str(err).split())[:160]
+    return ImageError(
+        f"{path}: cannot read the {what} ({detail}); it is truncated or not a valid "
+        f"{image_format(path).upper()} file: write it again"
+    )
+
+
+def image_size(path) -> tuple[int, int]:
+    """``(height, width)`` of an image file from its header alone (no pixel is decoded).
+
+    Raises
+    ------
+    ImageError
+        The file is missing or its header is unreadable.
+    """
+    fmt = image_format(path)
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such file; check the audit path template")
+    try:
+        if fmt == "exr":
+            import OpenEXR
+
+            with OpenEXR.File(str(path), header_only=True) as f:
+                lo, hi = f.header()["dataWindow"]
+            return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
+        if fmt == "pfm":
+            with open(path, "rb") as f:
+                _, width, height, _, _ = _pfm_header(f)
+            return height, width
+        if fmt == "png":
+            head = _head(path, 26)
+            if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+                raise ValueError("no PNG signature")
+            width, height = struct.unpack(">II", head[16:24])
+            return int(height), int(width)
+        if fmt == "npy":
+            return tuple(np.load(path, mmap_mode="r").shape[:2])
+        with np.load(path) as z:
+            return tuple(z[_npz_key(z, path)].shape[:2])
+    except ImageError:
+        raise
+    except Exception as err:  # each library raises its own exception types
+        raise _unreadable(path, err, "header") from None
+
+
+def _head(path, n) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(n)
+
+
+# --------------------------------------------------------------------------------------------
+# PFM
+# --------------------------------------------------------------------------------------------
+
+
+def _pfm_header(f):
+    tokens = []
+    while len(tokens) < 4:
+        line = f.readline()
+        if not line:
+            raise ValueError("header ends early")
+        tokens += line.split()
+    kind, width, height, scale = tokens[0], int(tokens[1]), int(tokens[2]), float(tokens[3])
+    if kind not in (b"PF", b"Pf"):
+        raise ValueError(f"magic {kind!r} is neither PF nor Pf")
+    return kind == b"PF", width, height, scale, f.tell()
+
+
+def read_pfm(path) -> np.ndarray:
+    """A PFM file as float32, top row first: ``(H, W)`` (``Pf``) or ``(H, W, 3)`` (``PF``).
+
+    PFM stores rows bottom to top; a negative scale means little-endian floats.
+    """
+    with open(path, "rb") as f:
+        color, width, height, scale, _ = _pfm_header(f)
+        data = f.read()
+    dtype = np.dtype("<f4" if scale < 0 else ">f4")
+    shape = (height, width, 3) if color else (height, width)
+    count = int(np.prod(shape))
+    if len(data) < count * 4:
+        raise ValueError(f"{len(data)} bytes of pixel data, {count * 4} expected")
+    a = np.frombuffer(data, dtype=dtype, count=count).reshape(shape)
+    return np.ascontiguousarray(a[::-1]).astype(np.float32)
+
+
+def write_pfm(path, array) -> None:
+    """Write ``(H, W)`` or ``(H, W, 3)`` values as little-endian PFM (rows bottom to top)."""
+    a = np.asarray(array, dtype="<f4")
+    if a.ndim == 3 and a.shape[-1] == 3:
+        kind = b"PF"
+    elif a.ndim == 2:
+        kind = b"Pf"
+    else:
+        raise ValueError(f"PFM holds (H, W) or (H, W, 3) arrays, got {a.shape}")
+    with open(path, "wb") as f:
+        f.write(kind + b"\n%d %d\n-1.0\n" % (a.shape[1], a.shape[0]))
+        f.write(np.ascontiguousarray(a[::-1]).tobytes())
+
+
+# --------------------------------------------------------------------------------------------
+# EXR, PNG, NPY
+# --------------------------------------------------------------------------------------------
+
+
+def _exr_channels(path) -> dict:
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {name: ch.pixels for name, ch in f.channels().items()}
+
+
+def _exr_rgb(channels: dict, path) -> np.ndarray:
+    """R, G and B (or one grey channel) of an EXR, from plain or layered channel names
+    (Blender's multilayer files: ``ViewLayer.Combined.R``)."""
+    layers: dict = {}
+    for name in channels:
+        layer, _, last = name.rpartition(".")
+        layers.setdefault(layer, {})[last] = name
+    rgb = {k: v for k, v in layers.items() if {"R", "G", "B"} <= set(v)}
+    if len(rgb) > 1:
+        combined = [k for k in rgb if k.split(".")[-1] in ("Combined", "rgba", "")]
+        if len(combined) != 1:
+            raise ImageError(
+                f"{path}: several RGB layers ({', '.join(sorted(rgb))}); export one layer "
+                "per file (the combined pass)"
+            )
+        rgb = {combined[0]: rgb[combined[0]]}
+    if rgb:
+        names = next(iter(rgb.values()))
+        return np.stack([channels[names[c]] for c in "RGB"], axis=-1)
+    if len(channels) == 1:
+        grey = next(iter(channels.values()))
+        return np.repeat(grey[..., None], 3, axis=-1)
+    raise ImageError(
+        f"{path}: no R, G, B channels (has {', '.join(sorted(channels))}); write an RGB image"
+    )
+
+
+def _exr_field(channels: dict, path) -> np.ndarray:
+    if len(channels) == 1:
+        return next(iter(channels.values()))
+    by_last = {name.rpartition(".")[2]: name for name in channels}
+    for name in _EXR_FIELD_CHANNELS:
+        if name in by_last:
+            return channels[by_last[name]]
+    raise ImageError(
+        f"{path}: {len(channels)} channels ({', '.join(sorted(channels))}) and none of "
+        f"{', '.join(_EXR_FIELD_CHANNELS)}; write the field as one channel"
+    )
+
+
+def _png(path) -> tuple[np.ndarray, int]:
+    """Pixels (RGB order, or grey) and bit depth of a PNG."""
+    import cv2
+
+    a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if a is None:
+        raise ValueError("OpenCV could not decode it")
+    if a.dtype not in (np.uint8, np.uint16):
+        raise ValueError(f"unsupported sample type {a.dtype}")
+    if a.ndim == 3:
+        a = a[..., 2::-1] if a.shape[-1] >= 3 else a[..., :1]
+    return a, 8 * a.dtype.itemsize
+
+
+def _npz_key(z, path) -> str:
+    keys = list(z.keys())
+    if len(keys) != 1:
+        raise ImageError(
+            f"{path}: {len(keys)} arrays ({', '.join(keys) or 'none'}); store one array per "
+            ".npz file"
+        )
+    return keys[0]
+
+
+def _array(path, fmt) -> np.ndarray:
+    if fmt == "npy":
+        return np.load(path, allow_pickle=False)
+    with np.load(path, allow_pickle=False) as z:
+        return z[_npz_key(z, path)]
+
+
+def _decode_png(a: np.ndarray, depth: int, transfer: str, scale: float) -> np.ndarray:
+    v = a.astype(np.float64) / (2**depth - 1)
+    if transfer == "srgb":
+        v = srgb_to_linear(v)
+    return (v * scale).astype(np.float32)
+
+
+def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.ndarray:
+    """One render as float32 linear RGB, shape ``(H, W, 3)``.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.exr`` (half or float, RGB(A) or one grey channel), ``.pfm``, ``.png`` (8 or 16
+        bit), ``.npy`` or ``.npz`` (``(H, W, 3)``, ``(H, W, 4)`` or ``(H, W)``).
+    transfer : {"linear", "srgb"}, optional, keyword-only
+        How PNG values encode radiance (default ``srgb``); float formats are linear.
+    scale : float, keyword-only
+        Radiance of a PNG value of 1 (full scale) after the transfer function.
+
+    Returns
+    -------
+    numpy.ndarray, float32, shape (H, W, 3)
+        Alpha is dropped; NaN and Inf are kept (the estimators count and exclude them).
+    """
+    fmt = image_format(path)
+    try:
+        if fmt == "exr":
+            a = _exr_rgb(_exr_channels(path), path)
+        elif fmt == "pfm":
+            a = read_pfm(path)
+        elif fmt == "png":
+            a, depth = _png(path)
+            a = _decode_png(a, depth, transfer or "srgb", scale)
+        else:
+            a = _array(path, fmt)
+    except ImageError:
+        raise
+    except Exception as err:  # each library raises its own exception types
+        raise _unreadable(path, err) from None
+    a = np.asarray(a)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[-1] not in (1, 3, 4):
+        raise ImageError(
+            f"{path}: an image has shape (H, W), (H, W, 3) or (H, W, 4), got {a.shape}; "
+            "store one render per file"
+        )
+    a = a[..., :3] if a.shape[-1] >= 3 else np.repeat(a, 3, axis=-1)
+    return np.asarray(a, dtype=np.float32)
+
+
+def read_field(path, *, png_scale: float | None = None) -> np.ndarray:
+    """One scalar field (disparity, depth, a mask or a segmentation map) as float32 (H, W).
+
+    Parameters
+    ----------
+    path : path-like
+        ``.exr`` (one channel, or ``Z``/``depth``/``disparity``/``Y``/``R``), ``.pfm``
+        (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, first channel),
+        ``.npy`` or ``.npz``.
+    png_scale : float, optional, keyword-only
+        Divide PNG values by this (KITTI disparity: 256); default 1 (raw integer values).
+    """
+    fmt = image_format(path)
+    try:
+        if fmt == "exr":
+            a = _exr_field(_exr_channels(path), path)
+        elif fmt == "pfm":
+            a = read_pfm(path)
+        elif fmt == "png":
+            a, _ = _png(path)
+            a = a.astype(np.float64) / float(png_scale or 1.0)
+        else:
+            a = _array(path, fmt)
+    except ImageError:
+        raise
+    except Exception as err:  # each library raises its own exception types
+        raise _unreadable(path, err) from None
+    a = np.asarray(a)
+    if a.ndim == 3:
+        a = a[..., 0]
+    if a.ndim != 2:
+        raise ImageError(f"{path}: a field has shape (H, W), got {a.shape}; store one per file")
+    return np.asarray(a, dtype=np.float32)
+
+
+def write_image(
+    path, image, *, transfer: str = "linear", scale: float = 1.0, half: bool = False
+) -> None:
+    """Write one ``(H, W, 3)`` linear RGB image in the format of ``path``'s extension.
+
+    EXR is float (``half``: 16-bit float) with ZIP compression; PNG is 16 bit, ``image /
+    scale`` encoded with ``transfer`` and clipped to [0, 1]; PFM, NPY and NPZ are float32.
+    """
+    fmt = image_format(path)
+    a = np.asarray(image, dtype=np.float32)
+    if a.ndim != 3 or a.shape[-1] != 3:
+        raise ValueError(f"an image is (H, W, 3), got {a.shape}")
+    if fmt == "exr":
+        _write_exr(path, {c: a[..., k] for k, c in enumerate("RGB")}, half=half)
+    elif fmt == "png":
+        import cv2
+
+        v = np.clip(a.astype(np.float64) / scale, 0.0, 1.0)
+        if transfer == "srgb":
+            v = linear_to_srgb(v)
+        q = np.round(v * 65535.0).astype(np.uint16)
+        if not cv2.imwrite(str(path), np.ascontiguousarray(q[..., ::-1])):
+            raise OSError(f"{path}: OpenCV could not write it")
+    else:
+        _write_plain(path, a, fmt)
+
+
+def write_field(path, field, *, png_scale: float = 256.0) -> None:
+    """Write one ``(H, W)`` field: EXR (one float channel ``Z``), PFM (``Pf``), NPY, NPZ, or
+    PNG as uint16 ``round(field * png_scale)`` (the KITTI disparity encoding, 0 = invalid)."""
+    fmt = image_format(path)
+    a = np.asarray(field, dtype=np.float32)
+    if a.ndim != 2:
+        raise ValueError(f"a field is (H, W), got {a.shape}")
+    if fmt == "exr":
+        _write_exr(path, {"Z": a})
+    elif fmt == "png":
+        import cv2
+
+        with np.errstate(invalid="ignore"):
+            q = np.where(np.isfinite(a) & (a > 0), np.round(a * png_scale), 0)
+        if not cv2.imwrite(str(path), np.clip(q, 0, 65535).astype(np.uint16)):
+            raise OSError(f"{path}: OpenCV could not write it")
+    else:
+        _write_plain(path, a, fmt)
+
+
+def _write_exr(path, channels: dict, *, half: bool = False) -> None:
+    import OpenEXR
+
+    dtype = np.float16 if half else np.float32
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    pixels = {k: np.ascontiguousarray(v, dtype=dtype) for k, v in channels.items()}
+    with OpenEXR.File(header, pixels) as f:
+        f.write(str(path))
+
+
+def _write_plain(path, a, fmt) -> None:
+    if fmt == "pfm":
+        write_pfm(path, a)
+    elif fmt == "npy":
+        with open(path, "wb") as f:
+            np.save(f, a)
+    else:
+        with open(path, "wb") as f:
+            np.savez_compressed(f, a)

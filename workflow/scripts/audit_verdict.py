@@ -1,0 +1,14 @@
+"""Snakemake adapter: stereovar.jobs.audit.verdict_job."""
+
+from stereovar.jobs.audit import verdict_job
+from stereovar.jobs.common import run_job
+
+run_job(
+    snakemake.log[0],
+    verdict_job,
+    correlations=list(snakemake.input.correlations),
+    interventions=list(snakemake.input.interventions),
+    teasers=list(snakemake.input.teasers),
+    outputs=dict(snakemake.output.items()),
+    **snakemake.params,
+)
