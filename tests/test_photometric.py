@@ -5,9 +5,9 @@ render into the left view with the ground-truth disparity must reproduce the lef
 to Monte Carlo noise and interpolation. Warping with the opposite sign must not.
 """
 
-import numpy as np
 import pytest
 
+from stereovar.audit.sign import median_relative_error
 from stereovar.ground_truth import compute_ground_truth
 from stereovar.renderers.mitsuba import MitsubaScene
 from stereovar.renderers.mitsuba.render import render_view
@@ -87,12 +87,6 @@ def lambertian_spec():
             }
         ],
     }
-
-
-def median_relative_error(left, warped, mask):
-    lum_l = left.mean(axis=-1)[mask]
-    lum_w = warped.mean(axis=-1)[mask]
-    return float(np.median(np.abs(lum_w - lum_l) / np.maximum(lum_l, 1e-6)))
 
 
 @pytest.fixture(scope="module")

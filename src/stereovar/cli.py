@@ -94,6 +94,106 @@ def _register_scenes(subparsers) -> None:
 
 
 # --------------------------------------------------------------------------------------------
+# stereovar audit / export
+# --------------------------------------------------------------------------------------------
+
+
+def _project_root():
+    """The checkout whose workflow the command runs: the current directory, which must hold
+    the Snakefile (relative paths in configs are relative to it, as for ``snakemake``)."""
+    from pathlib import Path
+
+    root = Path.cwd()
+    if not (root / "Snakefile").is_file() or not (root / "workflow").is_dir():
+        raise StereovarError(
+            f"{root} has no stereovar Snakefile; run this command from the stereovar checkout "
+            "(the directory with the Snakefile)"
+        )
+    return root
+
+
+def _snakemake(args: list, root) -> int:
+    import subprocess
+
+    cmd = [sys.executable, "-m", "snakemake", *args]
+    print("stereovar: running " + " ".join(cmd[1:]), file=sys.stderr)
+    return subprocess.run(cmd, cwd=root, check=False).returncode
+
+
+def _cmd_audit(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    import yaml
+
+    from .audit.run import audit_paths, prepare_audit
+
+    root = _project_root()
+    config = Path(args.config)
+    if not config.is_file():
+        raise StereovarError(f"{config}: no such config file; give the audit's YAML config")
+    try:
+        data = yaml.safe_load(config.read_text()) or {}
+    except yaml.YAMLError as err:
+        raise StereovarError(f"{config}: not valid YAML ({' '.join(str(err).split())})") from None
+    settings = data.get("audit") if isinstance(data, dict) else None
+    if not isinstance(settings, dict):
+        raise StereovarError(
+            f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
+            "convention; see the README's 'Audit your own renders')"
+        )
+    prepare_audit(settings, stream=sys.stdout)
+    if args.import_only:
+        return 0
+    rc = _snakemake(["-j", str(args.cores), "all", "--configfile", str(config.resolve())], root)
+    if rc != 0:
+        return rc
+    summary = root / audit_paths(settings["name"])["summary"]
+    print("\n".join(json.loads(summary.read_text())["summary"]))
+    print(f"verdict page: {summary.parent / 'verdict.html'}")
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    root = _project_root()
+    options = ["-j", str(args.cores), "export", "--config", f"export={{formats: [{args.format}]}}"]
+    for f in args.configfile or []:
+        options[3:3] = ["--configfile", f]
+    rc = _snakemake(options, root)
+    if rc == 0:
+        print(f"exported to results/export/*/*/{args.format}/; each scene directory has an "
+              "audit.yaml that audits it")
+    return rc
+
+
+def _register_audit(subparsers) -> None:
+    audit = subparsers.add_parser(
+        "audit",
+        help="audit renders made elsewhere for the cross-view variance cue",
+        description="Import N >= 2 renders per view of stereo frames and their ground truth "
+        "(the audit: section of CONFIG), run every statistic, control and the intervention on "
+        "them, and print the verdict's summary; the page is results/audit/<name>/verdict.html.",
+    )
+    audit.add_argument("config", metavar="CONFIG", help="YAML config with an audit: section")
+    audit.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    audit.add_argument(
+        "--import-only", action="store_true", help="import (and sign-check) the files only"
+    )
+    audit.set_defaults(func=_cmd_audit)
+    export = subparsers.add_parser(
+        "export",
+        help="export renders, variance fields and disparity as EXR, PFM, NPY or PNG files",
+        description="Write every scene's renders, variance fields, disparity and glass mask "
+        "to results/export/<renderer>/<estimator>/<format>/<scene>/ (the workflow's export "
+        "target), with an audit.yaml that audits the export.",
+    )
+    export.add_argument("--format", required=True, choices=["exr", "pfm", "npy", "png"])
+    export.add_argument("--configfile", action="append", help="workflow config(s) to export")
+    export.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    export.set_defaults(func=_cmd_export)
+
+
+# --------------------------------------------------------------------------------------------
 # entry point
 # --------------------------------------------------------------------------------------------
 
@@ -106,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="GROUP", required=True)
     _register_scenes(subparsers)
+    _register_audit(subparsers)
     return parser
 
 

@@ -231,6 +231,15 @@ def _glass(settings: dict, frame: Frame):
     return None, None
 
 
+def _seed_mean(stack: np.ndarray) -> np.ndarray:
+    """Mean over seeds, skipping NaN/Inf (a plain float64 mean when every value is finite)."""
+    if np.isfinite(stack).all():
+        return stack.mean(axis=0, dtype=np.float64)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pixels stay NaN
+        return np.nanmean(np.where(np.isfinite(stack), stack, np.nan), axis=0)
+
+
 def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     """Fraction of ``valid`` pixels whose N renders are identical in every channel (their
     estimated variance is 0: quantisation floored it)."""
@@ -278,12 +287,7 @@ def _import_frame(settings, frame: Frame, records: dict, pool, report: ImportRep
         )
     left_gt = gt.sel(view="left")
     compare = left_gt["valid"].values & ~left_gt["glass"].values & ~left_gt["occluded"].values
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pixels stay NaN
-        means = {
-            v: np.nanmean(np.where(np.isfinite(images[v]), images[v], np.nan), axis=0)
-            for v in VIEWS
-        }
+    means = {v: _seed_mean(images[v]) for v in VIEWS}
     check = sign_check(
         means["left"], means["right"], left_gt["disparity"].values, sign=sign, valid=compare
     )
