@@ -3,7 +3,7 @@
 One scene goes to one directory (written atomically)::
 
     {out}/renders/{L,R}/seed_{k:03d}.{ext}   every render of each view
-    {out}/disparity/{left,right}.{ext}        disparity magnitude in px (0 = invalid)
+    {out}/disparity/{L,R}.{ext}               disparity magnitude in px (0 = invalid)
     {out}/glass/left.{ext}                    the left view's glass mask (1 = glass)
     {out}/variance/{left,right}.{ext}         Eq. 1's variance fields (.npy for PNG)
     {out}/audit.yaml                          an ``audit:`` section that reads the export
@@ -11,7 +11,7 @@ One scene goes to one directory (written atomically)::
 with ``ext`` one of ``exr`` (float32), ``pfm``, ``npy`` or ``png`` (renders 16-bit sRGB with
 a full scale just above the brightest value; disparity in KITTI's encoding, value / 256).
 The ``audit.yaml`` templates have ``{frame}`` in place of the scene's directory, so it audits
-every scene exported to the same format.
+every scene exported to the same format (PNG: this scene only, whose full scale it names).
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ def export_scene(
                 write_image(folder / f"seed_{k:03d}.{fmt}", image, **image_options)
             (tmp / "disparity").mkdir(exist_ok=True)
             write_field(
-                tmp / "disparity" / f"{view}.{fmt}", gt["disparity"].sel(view=view).values
+                tmp / "disparity" / f"{LETTERS[view]}.{fmt}", gt["disparity"].sel(view=view).values
             )
             if variance is not None:
                 v = load_store(variance, "variance store", ["variance"])
@@ -114,7 +114,17 @@ def export_scene(
         }
         if spp:
             settings["spp"] = int(spp)
-        if fmt == "png":
-            settings.update(transfer="srgb", scale=scale, disparity_scale=256.0)
+        if fmt == "png":  # the full scale is this scene's: the config reads this scene only
+            settings = {
+                key: value.replace("{frame}", out.name) if isinstance(value, str) else value
+                for key, value in settings.items()
+            }
+            settings.update(
+                name=f"{settings['name']}-{scene}".replace("_", "-"),
+                frame=scene,
+                transfer="srgb",
+                scale=scale,
+                disparity_scale=256.0,
+            )
         (tmp / "audit.yaml").write_text(yaml.safe_dump({"audit": settings}, sort_keys=False))
     return settings

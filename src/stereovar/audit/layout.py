@@ -26,7 +26,7 @@ NAME = re.compile(r"[A-Za-z0-9_-]+")
 """What an audit or frame name may contain (it becomes a path component and a wildcard)."""
 
 SINGLE_FRAME = "frame"
-"""The frame name of a renders template without ``{frame}``."""
+"""The frame name of a renders template without ``{frame}`` (unless ``audit.frame``)."""
 
 GROUND_TRUTH_KEYS = ("disparity", "depth", "glass_mask", "segmentation")
 """Ground-truth templates of ``audit:``."""
@@ -169,7 +169,7 @@ def discover(settings: dict) -> Discovery:
         )
     frames: dict = {}
     for values, path in matched:
-        name = values.get("frame", SINGLE_FRAME)
+        name = values.get("frame", settings.get("frame") or SINGLE_FRAME)
         if not NAME.fullmatch(name):
             raise AuditError(
                 f"{path}: frame name {name!r} may only contain letters, digits, _ and -; "
