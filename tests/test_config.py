@@ -65,6 +65,7 @@ DEFAULTS = {
     },
     "preview": {"spp": 32},
     "validation": {"n_seeds": 64, "spp": None},
+    "export": {"formats": ["exr"]},
 }
 
 
@@ -104,7 +105,7 @@ BAD_CONFIGS = [
             "'colour'",
             "not known",
             "scenes, generator, resolution, rig, render, analysis, controls, validation, "
-            "intervention, cluster, preview",
+            "export, audit, intervention, cluster, preview",
         ],
         id="unknown-top-level-key",
     ),
