@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import AuditError, ImageError
+from ..errors import AuditError
 from ..experiment import audit_source, batch_label, ground_truth_store, render_store
 from ..io.contracts import config_digest
 from ..io.images import image_format, image_size, read_field, read_image
@@ -422,8 +422,6 @@ def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
             else:
                 try:
                     report.frames.append(_import_frame(settings, frame, records, pool, report))
-                except ImageError:
-                    raise
                 except MemoryError:
                     raise AuditError(
                         f"frame {frame.name}: its renders do not fit in memory; import fewer "

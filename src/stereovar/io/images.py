@@ -263,6 +263,16 @@ def _decode_png(a: np.ndarray, depth: int, transfer: str, scale: float) -> np.nd
     return (v * scale).astype(np.float32)
 
 
+def _decoded(path, decode):
+    """``decode()``, with any library's failure as one :class:`ImageError` line."""
+    try:
+        return np.asarray(decode())
+    except ImageError:
+        raise
+    except Exception as err:  # each library raises its own exception types
+        raise _unreadable(path, err) from None
+
+
 def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.ndarray:
     """One render as float32 linear RGB, shape ``(H, W, 3)``.
 
@@ -282,21 +292,17 @@ def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.n
         Alpha is dropped; NaN and Inf are kept (the estimators count and exclude them).
     """
     fmt = image_format(path)
-    try:
+
+    def decode():
         if fmt == "exr":
-            a = _exr_rgb(_exr_channels(path), path)
-        elif fmt == "pfm":
-            a = read_pfm(path)
-        elif fmt == "png":
-            a, depth = _png(path)
-            a = _decode_png(a, depth, transfer or "srgb", scale)
-        else:
-            a = _array(path, fmt)
-    except ImageError:
-        raise
-    except Exception as err:  # each library raises its own exception types
-        raise _unreadable(path, err) from None
-    a = np.asarray(a)
+            return _exr_rgb(_exr_channels(path), path)
+        if fmt == "pfm":
+            return read_pfm(path)
+        if fmt == "png":
+            return _decode_png(*_png(path), transfer or "srgb", scale)
+        return _array(path, fmt)
+
+    a = _decoded(path, decode)
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3 or a.shape[-1] not in (1, 3, 4):
@@ -321,21 +327,17 @@ def read_field(path, *, png_scale: float | None = None) -> np.ndarray:
         Divide PNG values by this (KITTI disparity: 256); default 1 (raw integer values).
     """
     fmt = image_format(path)
-    try:
+
+    def decode():
         if fmt == "exr":
-            a = _exr_field(_exr_channels(path), path)
-        elif fmt == "pfm":
-            a = read_pfm(path)
-        elif fmt == "png":
-            a, _ = _png(path)
-            a = a.astype(np.float64) / float(png_scale or 1.0)
-        else:
-            a = _array(path, fmt)
-    except ImageError:
-        raise
-    except Exception as err:  # each library raises its own exception types
-        raise _unreadable(path, err) from None
-    a = np.asarray(a)
+            return _exr_field(_exr_channels(path), path)
+        if fmt == "pfm":
+            return read_pfm(path)
+        if fmt == "png":
+            return _png(path)[0].astype(np.float64) / float(png_scale or 1.0)
+        return _array(path, fmt)
+
+    a = _decoded(path, decode)
     if a.ndim == 3:
         a = a[..., 0]
     if a.ndim != 2:
