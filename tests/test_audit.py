@@ -15,6 +15,7 @@ from stereovar.audit.ground_truth import (
 )
 from stereovar.audit.importer import import_audit, manifest_path, sha256
 from stereovar.audit.layout import discover
+from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import shift_rows, synthetic_frame, write_synthetic_audit
 from stereovar.audit.verdict import verdict, verdict_rows
 from stereovar.errors import AuditError, ImageError
@@ -68,8 +69,13 @@ def test_stores_hold_the_files_with_their_sha256(audit):
 
 def test_reimport_does_nothing_until_a_file_changes(audit):
     settings, frames, _ = audit
-    before = {p: os.stat(p).st_mtime_ns for p in ("results/audit/synthetic/ground_truth/f00.zarr",
-                                                  "results/audit/synthetic/ground_truth/f01.zarr")}
+    before = {
+        p: os.stat(p).st_mtime_ns
+        for p in (
+            "results/audit/synthetic/ground_truth/f00.zarr",
+            "results/audit/synthetic/ground_truth/f01.zarr",
+        )
+    }
     again = import_audit(settings)
     assert not any(f.imported for f in again.frames)
     # touched but unchanged: hashed again, not imported
@@ -81,9 +87,10 @@ def test_reimport_does_nothing_until_a_file_changes(audit):
     write_image(path, image * 2)
     third = import_audit(settings)
     assert [f.name for f in third.frames if f.imported] == ["f01"]
-    assert os.stat("results/audit/synthetic/ground_truth/f00.zarr").st_mtime_ns == before[
-        "results/audit/synthetic/ground_truth/f00.zarr"
-    ]
+    assert (
+        os.stat("results/audit/synthetic/ground_truth/f00.zarr").st_mtime_ns
+        == before["results/audit/synthetic/ground_truth/f00.zarr"]
+    )
     ds = open_dataset("results/audit/synthetic/renders/f01/right/spp0/seeds0-3.zarr")
     np.testing.assert_array_equal(ds["radiance"].values[1], image * 2)
     record = json.loads(open(manifest_path("synthetic")).read())
@@ -98,9 +105,10 @@ def test_sign_check_stops_the_wrong_convention_with_one_line(audit):
     message = str(err.value)
     assert "\n" not in message and message.endswith("set audit.convention: conventional")
     # nothing already imported was touched
-    assert open_dataset("results/audit/synthetic/ground_truth/f00.zarr").attrs[
-        "scene_digest"
-    ] == before
+    assert (
+        open_dataset("results/audit/synthetic/ground_truth/f00.zarr").attrs["scene_digest"]
+        == before
+    )
 
 
 def test_paper_convention_data_passes_with_paper(tmp_path, monkeypatch):
@@ -123,9 +131,10 @@ def test_bad_input_is_one_line_naming_the_file_and_the_fix(audit, tmp_path):
     with pytest.raises(ImageError, match=r"seed_003\.exr: cannot read"):
         import_audit(settings)
     open(seed3, "wb").write(data)
-    assert open_dataset("results/audit/synthetic/ground_truth/f01.zarr").attrs[
-        "scene_digest"
-    ] == digest
+    assert (
+        open_dataset("results/audit/synthetic/ground_truth/f01.zarr").attrs["scene_digest"]
+        == digest
+    )
     # a size that differs
     write_image(seed3, np.zeros((10, 10, 3), np.float32))
     with pytest.raises(AuditError, match=r"seed_003\.exr is 10x10 px but .* same size"):
@@ -231,6 +240,35 @@ def test_disparity_from_depth_and_forward_warp_against_brute_force():
         np.testing.assert_array_equal(lr, occluded)
 
 
+def test_sign_check_errors_against_a_brute_force_warp():
+    rng = np.random.default_rng(5)
+    height, width = 6, 40
+    left = rng.uniform(0.5, 2.0, (height, width, 3))
+    right = rng.uniform(0.5, 2.0, (height, width, 3))
+    right[2, 7, 1] = np.nan  # a NaN right pixel spoils the left pixels that sample it
+    d = rng.uniform(1.0, 6.0, (height, width))
+    valid = rng.random((height, width)) > 0.2
+    check = sign_check(left, right, d, sign=-1, valid=valid)
+    for s, error, n in (
+        (-1, check.error, check.n_pixels),
+        (1, check.opposite_error, check.opposite_n_pixels),
+    ):
+        ratios = []
+        for y in range(height):
+            for x in range(width):
+                xs = x + s * d[y, x]
+                if not (valid[y, x] and 0 <= xs <= width - 1):
+                    continue
+                x0 = min(int(np.floor(xs)), width - 2)
+                t = xs - x0
+                warped = (1 - t) * right[y, x0] + t * right[y, x0 + 1]
+                if np.isfinite(warped).all():
+                    lum = left[y, x].mean()
+                    ratios.append(abs(warped.mean() - lum) / max(lum, 1e-6))
+        assert n == len(ratios)
+        assert error == pytest.approx(np.median(ratios), rel=1e-12)
+
+
 def test_ground_truth_without_a_mask_has_no_glass_and_says_so():
     d = np.full((4, 12), 2.0)
     gt, counts = imported_ground_truth(d, sign=1)
@@ -286,12 +324,26 @@ def lift(source, value, chance, scene):
 
 
 def test_verdict_rules_on_known_rows():
-    methods = ["warp", "spearman", "log", "trimmed", "relative", "sensor_sim", "sensor",
-               "no_warp", "null_shift", "null_flip"]
+    methods = [
+        "warp",
+        "spearman",
+        "log",
+        "trimmed",
+        "relative",
+        "sensor_sim",
+        "sensor",
+        "no_warp",
+        "null_shift",
+        "null_flip",
+    ]
     corr = [row(m, 0.5, 0.4, 0.6) for m in methods]
     strong = corr + [row("partial", 0.55, 0.52, 0.58)]
-    iv = [lift("render", 0.5, 0.2, "a"), lift("render", 0.52, 0.2, "b"),
-          lift("sensor", 0.22, 0.2, "a"), lift("sensor", 0.21, 0.2, "b")]
+    iv = [
+        lift("render", 0.5, 0.2, "a"),
+        lift("render", 0.52, 0.2, "b"),
+        lift("sensor", 0.22, 0.2, "a"),
+        lift("sensor", 0.21, 0.2, "b"),
+    ]
     rows = verdict_rows(strong, iv)
     corrected = next(r for r in rows if r["quantity"] == "attenuation-corrected rho")
     assert corrected["value"] == pytest.approx(0.5 / 0.81)

@@ -54,6 +54,35 @@ def test_exr_half_and_blender_layer_names(tmp_path):
     with OpenEXR.File(header, channels) as f:
         f.write(str(path))
     np.testing.assert_array_equal(read_image(path), half.astype(np.float32))
+    # decoding into a slice of a stack gives the same pixels
+    stack = np.full((2, 7, 9, 3), np.nan, np.float32)
+    read_image(path, out=stack[1])
+    np.testing.assert_array_equal(stack[1], half.astype(np.float32))
+    assert np.isnan(stack[0]).all()
+    with pytest.raises(ImageError, match="one resolution"):
+        read_image(path, out=np.empty((7, 8, 3), np.float32))
+
+
+def test_exr_with_several_rgb_layers_takes_the_combined_pass(tmp_path):
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    layers = {"ViewLayer.Combined": IMAGE, "ViewLayer.DiffCol": 2 * IMAGE}
+    channels = {
+        f"{layer}.{c}": np.ascontiguousarray(a[..., k])
+        for layer, a in layers.items()
+        for k, c in enumerate("RGB")
+    }
+    path = tmp_path / "passes.exr"
+    with OpenEXR.File(header, dict(channels)) as f:
+        f.write(str(path))
+    np.testing.assert_array_equal(read_image(path), IMAGE)
+    del channels["ViewLayer.Combined.R"], channels["ViewLayer.Combined.G"]
+    channels.update({f"ViewLayer.Gloss.{c}": channels[f"ViewLayer.DiffCol.{c}"] for c in "RGB"})
+    del channels["ViewLayer.Combined.B"]
+    ambiguous = tmp_path / "ambiguous.exr"
+    with OpenEXR.File(header, channels) as f:
+        f.write(str(ambiguous))
+    with pytest.raises(ImageError, match="several RGB layers"):
+        read_image(ambiguous)
 
 
 def test_srgb_transfer_matches_the_standard():

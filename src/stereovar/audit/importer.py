@@ -14,8 +14,10 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,7 +28,7 @@ from ..experiment import audit_source, batch_label, ground_truth_store, render_s
 from ..io.contracts import config_digest
 from ..io.images import image_format, image_size, read_field, read_image
 from ..io.renders import render_dataset
-from ..io.store import write_dataset, write_file
+from ..io.store import atomic_path, write_file, write_zarr
 from ..rig import VIEWS
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
@@ -47,8 +49,6 @@ IMPORT_KEYS = (
 
 DEFAULT_DISPARITY_SCALE = 256.0
 """PNG disparity is value / 256 (KITTI); 0 is invalid."""
-
-HASH_BLOCK = 1 << 22
 
 
 def manifest_path(name: str) -> str:
@@ -74,11 +74,8 @@ def frame_stores(settings: dict, frame: str, n_seeds: int) -> dict:
 
 def sha256(path) -> str:
     """SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
     with open(path, "rb") as f:
-        while block := f.read(HASH_BLOCK):
-            h.update(block)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 @dataclass
@@ -103,6 +100,19 @@ class ImportReport:
     discovery: Discovery
     frames: list
     warnings: list = field(default_factory=list)
+    seconds: dict = field(default_factory=dict)
+    """Wall-clock seconds per phase (``hash``, ``ground truth``, ``decode``, ``sign check``,
+    ``write``), summed over the frames."""
+
+    @contextmanager
+    def timed(self, phase: str):
+        """Add the time spent in the block to :attr:`seconds` ``[phase]``."""
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            elapsed = time.perf_counter() - start
+            self.seconds[phase] = self.seconds.get(phase, 0.0) + elapsed
 
     def lines(self) -> list[str]:
         """Human-readable summary lines."""
@@ -231,9 +241,9 @@ def _glass(settings: dict, frame: Frame):
     return None, None
 
 
-def _seed_mean(stack: np.ndarray) -> np.ndarray:
+def _seed_mean(stack: np.ndarray, n_nonfinite) -> np.ndarray:
     """Mean over seeds, skipping NaN/Inf (a plain float64 mean when every value is finite)."""
-    if np.isfinite(stack).all():
+    if not np.any(n_nonfinite):
         return stack.mean(axis=0, dtype=np.float64)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pixels stay NaN
@@ -247,20 +257,88 @@ def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     return float((same & valid).sum() / max(int(valid.sum()), 1))
 
 
-def _import_frame(settings, frame: Frame, records: dict, pool, report: ImportReport):
+def _decode_view(paths: list, size: tuple, pool, transfer, scale) -> tuple:
+    """Decode one view's renders into one ``(n, H, W, 3)`` float32 stack, each file straight
+    into its slice by a worker thread, which also counts its NaN/Inf pixels."""
+    stack = np.empty((len(paths), *size, 3), dtype=np.float32)
+
+    def one(k):
+        image = read_image(paths[k], transfer=transfer, scale=scale, out=stack[k])
+        if np.isfinite(image.sum(dtype=np.float64)):  # one pass when every value is finite
+            return 0
+        return int((~np.isfinite(image)).any(axis=-1).sum())
+
+    return stack, np.asarray(list(pool.map(one, range(len(paths)))), dtype=np.int64)
+
+
+def _import_frame(settings, frame: Frame, size, records: dict, pool, report: ImportReport):
+    """Import one frame: its ground truth, then its renders, the sign check and the stores.
+
+    Every store is written to a temporary path and renamed into place only once every file
+    of the frame decoded and the sign check passed, so a failure leaves the frame's old
+    stores as they were.
+    """
     transfer, scale = settings.get("transfer"), float(settings.get("scale") or 1.0)
     sign = CONVENTIONS[settings.get("convention") or "conventional"]
-    images = {}
-    for view in VIEWS:
-        paths = list(frame.renders[view].values())
-        images[view] = np.stack(
-            list(pool.map(lambda p: read_image(p, transfer=transfer, scale=scale), paths))
-        )
-    disparity = _disparity(settings, frame)
-    glass, glass_source = _glass(settings, frame)
     files = {str(p): records[str(p)]["sha256"] for p in frame.files()}
     digest = config_digest({"files": files, "settings": _settings_digest(settings)})
     source = audit_source(settings["name"])
+    fr = FrameReport(frame.name, True)
+    with report.timed("ground truth"):
+        gt = _frame_ground_truth(settings, frame, sign, digest, source, files, fr)
+    datasets, means = {}, {}
+    for view in VIEWS:
+        labels = list(frame.renders[view])
+        paths = [str(p) for p in frame.renders[view].values()]
+        with report.timed("decode"):
+            images, n_bad = _decode_view(paths, size, pool, transfer, scale)
+        fr.nonfinite_pixels[view] = int(n_bad.sum())
+        means[view] = _seed_mean(images, n_bad)
+        if any(_is_png8(p) for p in paths):
+            fr.floored[view] = _floored_fraction(images, gt["valid"].sel(view=view).values)
+        datasets[view] = render_dataset(
+            images,
+            view=view,
+            seeds=list(range(len(paths))),
+            sampler_seeds=[int(s) if s.isdigit() else k for k, s in enumerate(labels)],
+            n_nonfinite=n_bad,
+            attrs={
+                "scene": frame.name,
+                "scene_digest": digest,
+                "renderer": source,
+                "renderer_version": "",
+                "variant": "imported",
+                "spp": audit_spp(settings),
+                "seed_policy": "unknown",
+                "width": int(size[1]),
+                "height": int(size[0]),
+                "seed_labels": labels,
+                "source_files": paths,
+                "source_sha256": [files[p] for p in paths],
+                "transfer": transfer or "",
+            },
+        )
+    with report.timed("sign check"):
+        _check_sign(settings, frame, gt, means, sign, fr, report)
+    datasets["ground_truth"] = gt
+    stores = frame_stores(settings, frame.name, frame.n_seeds)
+    with report.timed("write"), ExitStack() as staged:  # renamed into place together
+        for key, ds in datasets.items():
+            tmp = staged.enter_context(atomic_path(stores[key]))
+            write_zarr(ds, tmp, chunk_dims={"seed": 1} if key in VIEWS else None)
+    for view, fraction in fr.floored.items():
+        report.warnings.append(
+            f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "
+            f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
+            "identical); export 16-bit PNG or EXR for an audit that can see small variance"
+        )
+    return fr
+
+
+def _frame_ground_truth(settings, frame: Frame, sign, digest, source, files, fr: FrameReport):
+    """The frame's ground-truth dataset; fills the disparity counts of ``fr``."""
+    disparity = _disparity(settings, frame)
+    glass, glass_source = _glass(settings, frame)
     gt_files = [str(p) for paths in frame.ground_truth.values() for p in paths.values()]
     gt, counts = imported_ground_truth(
         disparity[VIEWS[0]],
@@ -285,9 +363,19 @@ def _import_frame(settings, frame: Frame, records: dict, pool, report: ImportRep
             f"{path}: no valid disparity (NaN, zero or negative everywhere, or every match "
             "outside the right image); give positive disparity magnitudes in px"
         )
+    fr.invalid_disparity, fr.outside, fr.valid = (
+        counts["invalid_disparity"],
+        counts["outside"],
+        counts["valid"],
+    )
+    return gt
+
+
+def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report) -> None:
+    """The photometric sign check (:func:`stereovar.audit.sign.sign_check`) of one frame:
+    one line naming the convention to set when the opposite one matches clearly better."""
     left_gt = gt.sel(view="left")
     compare = left_gt["valid"].values & ~left_gt["glass"].values & ~left_gt["occluded"].values
-    means = {v: _seed_mean(images[v]) for v in VIEWS}
     check = sign_check(
         means["left"], means["right"], left_gt["disparity"].values, sign=sign, valid=compare
     )
@@ -308,50 +396,7 @@ def _import_frame(settings, frame: Frame, records: dict, pool, report: ImportRep
             f"audit.convention: {settings.get('convention') or 'conventional'} is taken as given"
         )
     gt.attrs.update(check.attrs())
-    fr = FrameReport(
-        frame.name,
-        True,
-        **counts,
-        sign={"error": check.error, "opposite_error": check.opposite_error},
-    )
-    stores = frame_stores(settings, frame.name, frame.n_seeds)
-    valid = {v: gt["valid"].sel(view=v).values for v in VIEWS}
-    for view in VIEWS:
-        paths = list(frame.renders[view])
-        files_v = [str(p) for p in frame.renders[view].values()]
-        ds = render_dataset(
-            images[view],
-            view=view,
-            seeds=list(range(len(paths))),
-            sampler_seeds=[int(s) if s.isdigit() else k for k, s in enumerate(paths)],
-            attrs={
-                "scene": frame.name,
-                "scene_digest": digest,
-                "renderer": source,
-                "renderer_version": "",
-                "variant": "imported",
-                "spp": audit_spp(settings),
-                "seed_policy": "unknown",
-                "width": int(images[view].shape[2]),
-                "height": int(images[view].shape[1]),
-                "seed_labels": list(paths),
-                "source_files": files_v,
-                "source_sha256": [files[p] for p in files_v],
-                "transfer": transfer or "",
-            },
-        )
-        fr.nonfinite_pixels[view] = int(ds["n_nonfinite_pixels"].sum())
-        if any(_is_png8(p) for p in files_v):
-            fr.floored[view] = _floored_fraction(images[view], valid[view])
-        write_dataset(ds, stores[view], chunk_dims={"seed": 1})
-    write_dataset(gt, stores["ground_truth"])
-    for view, fraction in fr.floored.items():
-        report.warnings.append(
-            f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "
-            f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
-            "identical); export 16-bit PNG or EXR for an audit that can see small variance"
-        )
-    return fr
+    fr.sign = {"error": check.error, "opposite_error": check.opposite_error}
 
 
 def check_settings(settings: dict) -> None:
@@ -403,13 +448,13 @@ def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
             "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
             "linear or srgb to say how they were written"
         )
-    for frame in found.frames:
-        _check_sizes(frame)
+    sizes = [_check_sizes(frame) for frame in found.frames]
     manifest = {"settings": digest, "frames": {}}
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        for frame in found.frames:
+        for frame, size in zip(found.frames, sizes, strict=True):
             prev = old.get("frames", {}).get(frame.name, {})
-            records = _file_records(frame, prev.get("files", {}), pool)
+            with report.timed("hash"):
+                records = _file_records(frame, prev.get("files", {}), pool)
             stores = frame_stores(settings, frame.name, frame.n_seeds)
             unchanged = (
                 old.get("settings") == digest
@@ -421,7 +466,8 @@ def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
                 report.frames.append(FrameReport(frame.name, False))
             else:
                 try:
-                    report.frames.append(_import_frame(settings, frame, records, pool, report))
+                    fr = _import_frame(settings, frame, size, records, pool, report)
+                    report.frames.append(fr)
                 except MemoryError:
                     raise AuditError(
                         f"frame {frame.name}: its renders do not fit in memory; import fewer "

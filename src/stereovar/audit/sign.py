@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..statistics.warp import warp_right_to_left
+from ..statistics.warp import WarpPlan
 
 CLEARLY_BETTER = 0.5
 """The opposite sign wins when its error is below this fraction of the declared one's."""
@@ -32,7 +32,8 @@ def median_relative_error(left, warped, mask) -> float:
             \frac{|\bar I_{R\to L}(x) - \bar I_L(x)|}{\max(\bar I_L(x), 10^{-6})}
 
     with :math:`\bar I` the channel mean and :math:`M` the compared pixels; NaN when
-    :math:`M` is empty.
+    :math:`M` is empty. ``left`` and ``warped`` are ``(..., C)`` arrays (images, or pixels
+    by channel) and ``mask`` selects along their leading dims.
     """
     lum_l = np.asarray(left, dtype=np.float64).mean(axis=-1)[mask]
     lum_w = np.asarray(warped, dtype=np.float64).mean(axis=-1)[mask]
@@ -95,13 +96,16 @@ def sign_check(mean_left, mean_right, disparity, *, sign: int, valid=None) -> Si
     valid : array_like of bool (H, W), optional
         Pixels to compare (e.g. valid and not glass).
     """
+    # Eq. 2 is linear, so the channel mean of the warp is the warp of the channel mean: warp
+    # the right luminance only, at the valid pixels only.
+    lum_left = np.asarray(mean_left, dtype=np.float64).mean(axis=-1).reshape(-1)
+    lum_right = np.asarray(mean_right, dtype=np.float64).mean(axis=-1)
     results = []
     for s in (sign, -sign):
-        warped, omega = warp_right_to_left(mean_right, disparity, sign=s, valid=valid)
-        finite = np.isfinite(np.asarray(mean_left)).all(axis=-1) & np.isfinite(warped).all(
-            axis=-1
-        )
-        mask = omega & finite
-        results.append((median_relative_error(mean_left, warped, mask), int(mask.sum())))
+        plan = WarpPlan(disparity, sign=s, valid=valid)
+        left, warped = lum_left[plan.index], plan.sample(lum_right)
+        mask = np.isfinite(left) & np.isfinite(warped)
+        error = median_relative_error(left[:, None], warped[:, None], mask)
+        results.append((error, int(mask.sum())))
     (err, n), (err_opp, n_opp) = results
     return SignCheck(int(sign), err, err_opp, n, n_opp)

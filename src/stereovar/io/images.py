@@ -185,14 +185,23 @@ def _exr_channels(path) -> dict:
         return {name: ch.pixels for name, ch in f.channels().items()}
 
 
-def _exr_rgb(channels: dict, path) -> np.ndarray:
+def _exr_rgb(path) -> np.ndarray:
     """R, G and B (or one grey channel) of an EXR, from plain or layered channel names
-    (Blender's multilayer files: ``ViewLayer.Combined.R``)."""
-    layers: dict = {}
-    for name in channels:
-        layer, _, last = name.rpartition(".")
-        layers.setdefault(layer, {})[last] = name
-    rgb = {k: v for k, v in layers.items() if {"R", "G", "B"} <= set(v)}
+    (Blender's multilayer files: ``ViewLayer.Combined.R``).
+
+    The file is read with the bindings' channel grouping, so an RGB(A) layer is decoded
+    straight into one interleaved ``(H, W, 3|4)`` array.
+    """
+    import OpenEXR
+
+    with OpenEXR.File(str(path)) as f:
+        channels = {name: ch.pixels for name, ch in f.channels().items()}
+    # grouped names: "RGB"/"RGBA" (no layer) or "<layer>" ("ViewLayer.Combined")
+    rgb = {
+        ("" if name in ("RGB", "RGBA") else name): a
+        for name, a in channels.items()
+        if a.ndim == 3 and a.shape[-1] in (3, 4)
+    }
     if len(rgb) > 1:
         combined = [k for k in rgb if k.split(".")[-1] in ("Combined", "rgba", "")]
         if len(combined) != 1:
@@ -202,11 +211,11 @@ def _exr_rgb(channels: dict, path) -> np.ndarray:
             )
         rgb = {combined[0]: rgb[combined[0]]}
     if rgb:
-        names = next(iter(rgb.values()))
-        return np.stack([channels[names[c]] for c in "RGB"], axis=-1)
+        return next(iter(rgb.values()))[..., :3]
     if len(channels) == 1:
         grey = next(iter(channels.values()))
-        return np.repeat(grey[..., None], 3, axis=-1)
+        if grey.ndim == 2:
+            return grey
     raise ImageError(
         f"{path}: no R, G, B channels (has {', '.join(sorted(channels))}); write an RGB image"
     )
@@ -273,7 +282,9 @@ def _decoded(path, decode):
         raise _unreadable(path, err) from None
 
 
-def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.ndarray:
+def read_image(
+    path, *, transfer: str | None = None, scale: float = 1.0, out: np.ndarray | None = None
+) -> np.ndarray:
     """One render as float32 linear RGB, shape ``(H, W, 3)``.
 
     Parameters
@@ -285,17 +296,20 @@ def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.n
         How PNG values encode radiance (default ``srgb``); float formats are linear.
     scale : float, keyword-only
         Radiance of a PNG value of 1 (full scale) after the transfer function.
+    out : numpy.ndarray, float32, shape (H, W, 3), optional, keyword-only
+        Decode into this array (e.g. one slice of a stack of renders) instead of a new one.
 
     Returns
     -------
     numpy.ndarray, float32, shape (H, W, 3)
-        Alpha is dropped; NaN and Inf are kept (the estimators count and exclude them).
+        ``out`` when given. Alpha is dropped; NaN and Inf are kept (the estimators count and
+        exclude them).
     """
     fmt = image_format(path)
 
     def decode():
         if fmt == "exr":
-            return _exr_rgb(_exr_channels(path), path)
+            return _exr_rgb(path)
         if fmt == "pfm":
             return read_pfm(path)
         if fmt == "png":
@@ -310,8 +324,16 @@ def read_image(path, *, transfer: str | None = None, scale: float = 1.0) -> np.n
             f"{path}: an image has shape (H, W), (H, W, 3) or (H, W, 4), got {a.shape}; "
             "store one render per file"
         )
-    a = a[..., :3] if a.shape[-1] >= 3 else np.repeat(a, 3, axis=-1)
-    return np.asarray(a, dtype=np.float32)
+    a = a[..., :3] if a.shape[-1] >= 3 else np.broadcast_to(a, (*a.shape[:2], 3))
+    if out is None:
+        return np.ascontiguousarray(a, dtype=np.float32)
+    if out.shape != a.shape:
+        raise ImageError(
+            f"{path}: {a.shape[1]}x{a.shape[0]} px but the other renders are "
+            f"{out.shape[1]}x{out.shape[0]}; export every render at one resolution"
+        )
+    out[...] = a
+    return out
 
 
 def read_field(path, *, png_scale: float | None = None) -> np.ndarray:

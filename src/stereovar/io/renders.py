@@ -46,7 +46,9 @@ def pixel_coords(height: int, width: int) -> dict:
     }
 
 
-def render_dataset(images, *, view: str, seeds, sampler_seeds, attrs: dict) -> xr.Dataset:
+def render_dataset(
+    images, *, view: str, seeds, sampler_seeds, attrs: dict, n_nonfinite=None
+) -> xr.Dataset:
     """The render-store dataset of a batch of renders of one view.
 
     Parameters
@@ -58,6 +60,9 @@ def render_dataset(images, *, view: str, seeds, sampler_seeds, attrs: dict) -> x
         Seed indices and the sampler seeds passed to the renderer.
     attrs : dict
         Provenance (dataset attrs).
+    n_nonfinite : array_like of int, optional
+        Pixels with a NaN or Inf in any channel, per render, when the caller has counted
+        them already (they are counted here otherwise).
 
     Returns
     -------
@@ -70,7 +75,10 @@ def render_dataset(images, *, view: str, seeds, sampler_seeds, attrs: dict) -> x
         raise ValueError(
             f"{stack.shape[0]} images for {len(seeds)} seeds and {len(sampler_seeds)} sampler seeds"
         )
-    n_bad = (~np.isfinite(stack)).any(axis=-1).sum(axis=(1, 2)).astype(np.int64)
+    if n_nonfinite is None:
+        n_bad = (~np.isfinite(stack)).any(axis=-1).sum(axis=(1, 2)).astype(np.int64)
+    else:
+        n_bad = np.asarray(n_nonfinite, dtype=np.int64)
     return xr.Dataset(
         {
             "radiance": (

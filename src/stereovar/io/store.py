@@ -83,11 +83,27 @@ def write_dataset(ds: xr.Dataset | xr.DataArray, path, *, chunk_dims: dict | Non
     """
     if isinstance(ds, xr.DataArray):
         ds = ds.to_dataset(name=ds.name or "data", promote_attrs=False)
+    with atomic_path(path) as tmp:
+        write_zarr(ds, tmp, chunk_dims=chunk_dims)
+    return Path(path)
+
+
+def write_zarr(ds: xr.Dataset, path, *, chunk_dims: dict | None = None) -> None:
+    """Write a dataset to a Zarr store at ``path`` as :func:`write_dataset` does, but in
+    place: ``path`` is one the caller owns until it is complete (a temporary path of
+    :func:`atomic_path`)."""
     fixed = dict(chunk_dims or {})
     encoding = {name: {"chunks": _chunks(v, fixed)} for name, v in ds.data_vars.items() if v.ndim}
-    with atomic_path(path) as tmp:
-        ds.to_zarr(tmp, mode="w", zarr_format=ZARR_FORMAT, consolidated=True, encoding=encoding)
-    return Path(path)
+    # Every chunk is written, even one that holds only the fill value, so a missing chunk
+    # file always means damage (what the completeness checks of the readers count).
+    ds.to_zarr(
+        path,
+        mode="w",
+        zarr_format=ZARR_FORMAT,
+        consolidated=True,
+        encoding=encoding,
+        write_empty_chunks=True,
+    )
 
 
 def open_dataset(path) -> xr.Dataset:
