@@ -32,12 +32,15 @@ class RenderSettings:
         Reconstruction filter (``box``: a pixel's variance is its own estimator's).
     sampler : str
         Sampler (``independent``).
+    renderer_options : dict
+        Options only one renderer reads (``render.cycles`` for Cycles).
     """
 
     integrator: str = "path"
     max_depth: int = 8
     rfilter: str = "box"
     sampler: str = "independent"
+    renderer_options: dict = field(default_factory=dict)
 
     def as_attrs(self) -> dict:
         """The settings as store attributes."""

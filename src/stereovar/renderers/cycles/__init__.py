@@ -1,0 +1,139 @@
+"""Blender Cycles behind the renderer protocol (:mod:`stereovar.renderers.base`).
+
+:mod:`.backend` loads ``bpy`` (the optional ``cycles`` extra), :mod:`.scene` compiles specs
+into a Blender scene with the same geometry as the Mitsuba compiler, :mod:`.settings` sets
+and records the render settings that keep the experiment honest, and :mod:`.render` renders
+a view. The ground truth stays renderer-neutral: :meth:`CyclesScene.trace` and
+:meth:`CyclesScene.shape_materials` trace the Mitsuba-compiled geometry of the same spec, so
+one ground truth serves both renderers (the geometry checks in the tests compare Cycles' own
+Depth and IndexOB passes with it).
+
+Importing this package pulls in no third-party module; ``bpy`` loads in
+:meth:`CyclesRenderer.prepare`.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+from ..base import FirstHits, PreparedScene, Renderer, RenderSettings
+
+log = logging.getLogger("stereovar")
+
+__all__ = ["CyclesRenderer", "CyclesScene"]
+
+
+@dataclass
+class CyclesScene(PreparedScene):
+    """A spec compiled into Blender's data, its camera and rig.
+
+    Build one with :meth:`CyclesRenderer.prepare`.
+    """
+
+    bpy: Any = None
+    camera: Any = None
+    threads: int | None = None
+    rig_options: dict | None = None
+    _mitsuba: Any = None
+
+    def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
+        return self.render_with_attrs(view, spp=spp, seed=seed, settings=settings)[0]
+
+    def render_with_attrs(self, view, *, spp, seed, settings: RenderSettings, passes=False):
+        """:meth:`render` plus the Cycles settings used (store attributes) and, with
+        ``passes``, the Depth and IndexOB passes (:func:`.render.render_view`)."""
+        from .render import render_view
+
+        return render_view(
+            self.bpy,
+            self.camera,
+            self.rig,
+            view,
+            spp=spp,
+            seed=seed,
+            max_depth=settings.max_depth,
+            threads=self.threads,
+            options=settings.renderer_options,
+            passes=passes,
+        )
+
+    def _geometry(self):
+        """The same spec compiled by Mitsuba: the renderer-neutral ground truth's geometry."""
+        if self._mitsuba is None:
+            from ..mitsuba import MitsubaRenderer
+
+            self._mitsuba = MitsubaRenderer().prepare(
+                self.spec, rig=self.rig_options, threads=self.threads
+            )
+        return self._mitsuba
+
+    def trace(self, view: str) -> FirstHits:
+        return self._geometry().trace(view)
+
+    def shape_materials(self):
+        return self._geometry().shape_materials()
+
+
+class CyclesRenderer(Renderer):
+    """Blender Cycles on the CPU (``render.renderer: cycles``), through ``bpy``."""
+
+    name = "cycles"
+
+    def backend(self, variant: str = "auto") -> dict:
+        """Blender's version and build; the device is always the CPU."""
+        from .backend import describe_backend
+
+        return describe_backend()
+
+    def prepare(
+        self, spec: dict, *, rig: dict, variant: str = "auto", threads: int | None = None
+    ) -> CyclesScene:
+        """Load ``bpy``, compile ``spec`` and build the rig (see
+        :meth:`stereovar.renderers.base.Renderer.prepare`). ``variant`` is ignored: Cycles
+        renders on the CPU."""
+        from ...rig import make_rig
+        from ..base import scene_provenance
+        from ..mitsuba import MitsubaRenderer
+        from .backend import load_bpy
+        from .scene import build_scene, spec_camera
+
+        bpy = load_bpy()
+        camera = spec_camera(spec)
+        stereo = make_rig(camera.to_world, camera.fov_deg, **rig)
+        geometry = MitsubaRenderer().prepare(spec, rig=rig, threads=threads)
+        _, shape_ids = geometry.shape_materials()
+        cam = build_scene(
+            bpy,
+            spec,
+            width=stereo.width,
+            height=stereo.height,
+            fov_deg=stereo.fov_deg,
+            shape_ids=shape_ids,
+        )
+        provenance = scene_provenance(spec, self.backend(variant))
+        log.info(
+            "scene %s: %s %s, %dx%d, baseline %.4f m, convention %s",
+            spec["name"],
+            self.name,
+            provenance["renderer_version"],
+            stereo.width,
+            stereo.height,
+            stereo.baseline_m,
+            stereo.convention,
+        )
+        return CyclesScene(
+            stereo,
+            spec=spec,
+            provenance=provenance,
+            bpy=bpy,
+            camera=cam,
+            threads=threads,
+            rig_options=dict(rig),
+            _mitsuba=geometry,
+        )
+
+
+RENDERER = CyclesRenderer
+"""The class :data:`stereovar.renderers.RENDERERS` builds for ``render.renderer: cycles``."""
