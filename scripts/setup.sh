@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
-# `pip install -e ".[test]"` (skipped while pyproject.toml is unchanged).
+# `pip install -e ".[test,cycles]"` (skipped while pyproject.toml is unchanged; the cycles
+# extra, Blender's bpy, installs on CPython 3.11 only).
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
 # Environment:
@@ -123,12 +124,17 @@ want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("py
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else
-    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test]\")"
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test]" \
-        || die "pip install -e \".[test]\" failed (see the pip output above)"
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles]\")"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles]" \
+        || die "pip install -e \".[test,cycles]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
 fi
 
 variant="$("$VENV/bin/python" -c 'import stereovar.renderers.mitsuba.backend as b; print(b.select_variant())')" \
     || die "Mitsuba could not start in $VENV (see the error above)"
-say "ready; Mitsuba variant: $variant"
+if cycles="$("$VENV/bin/python" -c 'import bpy; print(bpy.app.version_string)' 2>/dev/null)"; then
+    cycles="Blender $cycles (render.renderer: cycles)"
+else
+    cycles="unavailable: bpy wheels exist for CPython 3.11 only, this is $("$VENV/bin/python" -c 'import platform; print(platform.python_version())')"
+fi
+say "ready; Mitsuba variant: $variant; Cycles: $cycles"

@@ -209,6 +209,19 @@ def _check_cross_fields(config: dict) -> None:
     _check_intervention(config)
     _check_bootstrap(config)
     _check_moments(config)
+    _check_cycles(config)
+
+
+def _check_cycles(config: dict) -> None:
+    """``render.renderer: cycles`` refuses settings that would bias the measurement."""
+    render = config.get("render", {})
+    if render.get("renderer") != "cycles":
+        return
+    from .renderers.cycles.settings import cycles_options_error
+
+    error = cycles_options_error(render.get("cycles"), rfilter=render.get("rfilter", "box"))
+    if error:
+        raise ConfigError(error)
 
 
 MOMENTS_SAMPLER = "independent"

@@ -264,7 +264,18 @@ def render_params():
         "rfilter": r["rfilter"],
         "sampler": r["sampler"],
         "seed_policy": r["seed_policy"],
+        **renderer_options(),
     }
+
+
+def renderer_options():
+    """The options only the configured renderer reads (``render.cycles`` for Cycles, with
+    every default filled in, so each render records them)."""
+    if get_renderer() != "cycles":
+        return {}
+    from stereovar.renderers.cycles.settings import cycles_options
+
+    return {"renderer_options": cycles_options(config["render"].get("cycles"))}
 
 
 def missing_scene_specs():

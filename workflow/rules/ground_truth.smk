@@ -7,7 +7,9 @@ rule ground_truth:
     output:
         directory("results/ground_truth/{scene}.zarr"),
     params:
-        **rig_params(),
+        # one ground truth per scene, traced on the Mitsuba-compiled geometry for every
+        # renderer (the Cycles compiler builds the same geometry; tests/test_cycles.py)
+        **{**rig_params(), "renderer": "mitsuba"},
     log:
         "logs/ground_truth/{scene}.log",
     benchmark:

@@ -44,12 +44,17 @@ class RenderSettings:
 
     def as_attrs(self) -> dict:
         """The settings as store attributes."""
-        return {
+        attrs = {
             "integrator": self.integrator,
             "max_depth": int(self.max_depth),
             "rfilter": self.rfilter,
             "sampler": self.sampler,
         }
+        if self.renderer_options:
+            import json
+
+            attrs["renderer_options"] = json.dumps(self.renderer_options, sort_keys=True)
+        return attrs
 
 
 class FirstHits(NamedTuple):

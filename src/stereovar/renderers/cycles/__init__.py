@@ -38,14 +38,35 @@ class CyclesScene(PreparedScene):
     rig_options: dict | None = None
     _mitsuba: Any = None
 
+    _current = None
+    """The scene whose data Blender holds: ``bpy`` has one scene per process, so preparing
+    another replaces this one's, which is then rebuilt on its next render."""
+
+    def _ensure_built(self) -> None:
+        if CyclesScene._current is self:
+            return
+        from .scene import build_scene
+
+        _, shape_ids = self._geometry().shape_materials()
+        self.camera = build_scene(
+            self.bpy,
+            self.spec,
+            width=self.rig.width,
+            height=self.rig.height,
+            fov_deg=self.rig.fov_deg,
+            shape_ids=shape_ids,
+        )
+        CyclesScene._current = self
+
     def render(self, view: str, *, spp: int, seed: int, settings: RenderSettings):
         return self.render_with_attrs(view, spp=spp, seed=seed, settings=settings)[0]
 
-    def render_with_attrs(self, view, *, spp, seed, settings: RenderSettings, passes=False):
-        """:meth:`render` plus the Cycles settings used (store attributes) and, with
-        ``passes``, the Depth and IndexOB passes (:func:`.render.render_view`)."""
+    def render_with_attrs(self, view, *, spp, seed, settings: RenderSettings):
+        """:meth:`render` plus the Cycles settings used, as store attributes
+        (:func:`.render.render_view`)."""
         from .render import render_view
 
+        self._ensure_built()
         return render_view(
             self.bpy,
             self.camera,
@@ -56,8 +77,15 @@ class CyclesScene(PreparedScene):
             max_depth=settings.max_depth,
             threads=self.threads,
             options=settings.renderer_options,
-            passes=passes,
         )
+
+    def geometry(self, view: str) -> dict:
+        """Cycles' own planar depth and pass index (shape index + 1) at the pixel centres of
+        ``view`` (:func:`.render.render_geometry`), to check against the ground truth."""
+        from .render import render_geometry
+
+        self._ensure_built()
+        return render_geometry(self.bpy, self.camera, self.rig, view, threads=self.threads)
 
     def _geometry(self):
         """The same spec compiled by Mitsuba: the renderer-neutral ground truth's geometry."""
@@ -97,21 +125,12 @@ class CyclesRenderer(Renderer):
         from ..base import scene_provenance
         from ..mitsuba import MitsubaRenderer
         from .backend import load_bpy
-        from .scene import build_scene, spec_camera
+        from .scene import spec_camera
 
         bpy = load_bpy()
         camera = spec_camera(spec)
         stereo = make_rig(camera.to_world, camera.fov_deg, **rig)
         geometry = MitsubaRenderer().prepare(spec, rig=rig, threads=threads)
-        _, shape_ids = geometry.shape_materials()
-        cam = build_scene(
-            bpy,
-            spec,
-            width=stereo.width,
-            height=stereo.height,
-            fov_deg=stereo.fov_deg,
-            shape_ids=shape_ids,
-        )
         provenance = scene_provenance(spec, self.backend(variant))
         log.info(
             "scene %s: %s %s, %dx%d, baseline %.4f m, convention %s",
@@ -123,16 +142,17 @@ class CyclesRenderer(Renderer):
             stereo.baseline_m,
             stereo.convention,
         )
-        return CyclesScene(
+        prepared = CyclesScene(
             stereo,
             spec=spec,
             provenance=provenance,
             bpy=bpy,
-            camera=cam,
             threads=threads,
             rig_options=dict(rig),
             _mitsuba=geometry,
         )
+        prepared._ensure_built()  # a spec Cycles cannot compile stops here
+        return prepared
 
 
 RENDERER = CyclesRenderer

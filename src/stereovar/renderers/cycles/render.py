@@ -1,5 +1,6 @@
 """Path-traced Cycles renders of one view of the rig, with an explicit seed, read back as
-linear float radiance (and, for the geometry checks, the Depth and IndexOB passes)."""
+linear float radiance; and Cycles' own first hits of the pixel-centre rays (planar depth and
+object index), which the geometry checks compare with the renderer-neutral ground truth."""
 
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ def render_view(
     max_depth: int,
     threads=None,
     options=None,
-    passes: bool = False,
+    filter_px: float = 1.0,
 ):
     """Render one view of the rig with Cycles.
 
@@ -73,8 +74,8 @@ def render_view(
     threads : int, optional
     options : dict, optional
         ``render.cycles`` (:data:`.settings.CYCLES_DEFAULTS`).
-    passes : bool
-        Also return the Depth (planar, m) and IndexOB passes.
+    filter_px : float
+        Box pixel filter width (1: a pixel's variance is its own estimator's).
 
     Returns
     -------
@@ -82,20 +83,20 @@ def render_view(
         Linear RGB radiance.
     attrs : dict
         The settings used (:func:`.settings.apply_settings`).
-    extra : dict
-        ``depth`` and ``object_index`` (H, W) when ``passes``.
     """
     import mathutils
 
     scene = bpy.context.scene
     camera.matrix_world = mathutils.Matrix(camera_matrix(rig.to_world[view]).tolist())
     attrs = apply_settings(
-        scene, spp=spp, seed=seed, max_depth=max_depth, threads=threads, options=options
+        scene,
+        spp=spp,
+        seed=seed,
+        max_depth=max_depth,
+        threads=threads,
+        options=options,
+        filter_px=filter_px,
     )
-    layer = scene.view_layers[0]
-    layer.use_pass_combined = True
-    layer.use_pass_z = passes
-    layer.use_pass_object_index = passes
     settings = scene.render.image_settings
     settings.media_type = "MULTI_LAYER_IMAGE"
     settings.file_format = "OPEN_EXR_MULTILAYER"
@@ -108,8 +109,62 @@ def render_view(
             bpy.ops.render.render(write_still=True)
         channels = _read_layers(path)
     image = np.stack([_channel(channels, f"Combined.{c}") for c in "RGB"], axis=-1)
-    extra = {}
-    if passes:
-        extra["depth"] = _channel(channels, "Depth.Z").astype(np.float64)
-        extra["object_index"] = np.rint(_channel(channels, "IndexOB.X")).astype(np.int32)
-    return image.astype(np.float32), attrs, extra
+    return image.astype(np.float32), attrs
+
+
+GEOMETRY_FILTER_PX = 0.01
+"""Pixel filter width of :func:`render_geometry`: every sample at the pixel centre."""
+
+
+def _geometry_material(bpy):
+    """Emission of (planar depth, pass index, 0) at the first hit: Cycles' own geometry."""
+    mat = bpy.data.materials.get("stereovar_geometry")
+    if mat is not None:
+        return mat
+    mat = bpy.data.materials.new("stereovar_geometry")
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    output = nodes.new("ShaderNodeOutputMaterial")
+    emission = nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 1.0
+    camera = nodes.new("ShaderNodeCameraData")
+    info = nodes.new("ShaderNodeObjectInfo")
+    combine = nodes.new("ShaderNodeCombineXYZ")
+    links.new(camera.outputs["View Z Depth"], combine.inputs["X"])
+    links.new(info.outputs["Object Index"], combine.inputs["Y"])
+    links.new(combine.outputs["Vector"], emission.inputs["Color"])
+    links.new(emission.outputs["Emission"], output.inputs["Surface"])
+    return mat
+
+
+def render_geometry(bpy, camera, rig: StereoRig, view: str, *, threads=None) -> dict:
+    """Cycles' own first hits of the pixel-centre rays of ``view``: ``depth`` (planar, m; 0
+    where nothing is hit) and ``object_index`` (the pass index, 0 for the background).
+
+    Every object is rendered with one emission material whose colour is (View Z Depth,
+    Object Index, 0), with no bounce, one sample per pixel and a
+    :data:`GEOMETRY_FILTER_PX`-wide pixel filter, so each pixel holds the values at the
+    first hit of its centre ray. The scene's materials and filter are restored afterwards.
+    """
+    scene = bpy.context.scene
+    layer = scene.view_layers[0]
+    saved = layer.material_override
+    layer.material_override = _geometry_material(bpy)
+    try:
+        image, _ = render_view(
+            bpy,
+            camera,
+            rig,
+            view,
+            spp=1,
+            seed=0,
+            max_depth=2,
+            threads=threads,
+            filter_px=GEOMETRY_FILTER_PX,
+        )
+    finally:
+        layer.material_override = saved
+    return {
+        "depth": image[..., 0].astype(np.float64),
+        "object_index": np.rint(image[..., 1]).astype(np.int32),
+    }

@@ -221,7 +221,6 @@ def material(bpy, spec: dict, name: str):
     kind = mat["type"]
     rough = math.sqrt(max(float(mat.get("roughness", 0.0)), 0.0))
     out = bpy.data.materials.new(f"mat_{name}")
-    out.use_nodes = True
     nodes, links = out.node_tree.nodes, out.node_tree.links
     nodes.clear()
     output = nodes.new("ShaderNodeOutputMaterial")
@@ -256,7 +255,6 @@ def light_material(bpy, name: str, radiance):
     """One-sided emitter: radiance ``radiance`` (W m^-2 sr^-1) from the front face, black
     diffuse behind (Mitsuba's ``area`` emitter on a rectangle with a black BSDF)."""
     out = bpy.data.materials.new(f"light_{name}")
-    out.use_nodes = True
     nodes, links = out.node_tree.nodes, out.node_tree.links
     nodes.clear()
     output = nodes.new("ShaderNodeOutputMaterial")
@@ -332,7 +330,6 @@ def build_scene(bpy, spec: dict, *, width: int, height: int, fov_deg: float, sha
         )
         ob.pass_index = index.get(f"light_{light['name']}", 0)
     world = bpy.data.worlds.new("black")
-    world.use_nodes = True
     background = world.node_tree.nodes.get("Background")
     if background is not None:
         background.inputs["Strength"].default_value = 0.0

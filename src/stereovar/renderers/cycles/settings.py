@@ -94,9 +94,12 @@ def cycles_seed(seed: int) -> int:
     return int(seed) % SEED_MODULUS
 
 
-def apply_settings(scene, *, spp: int, seed: int, max_depth: int, threads, options) -> dict:
+def apply_settings(
+    scene, *, spp: int, seed: int, max_depth: int, threads, options, filter_px: float = 1.0
+) -> dict:
     """Set every Cycles setting of one render on a ``bpy`` scene and return them as store
-    attributes (``cycles_*``)."""
+    attributes (``cycles_*``); ``filter_px`` narrows the box filter for the geometry render
+    only (:func:`.render.render_geometry`)."""
     opts = cycles_options(options)
     error = cycles_options_error(opts)
     if error:
@@ -129,8 +132,8 @@ def apply_settings(scene, *, spp: int, seed: int, max_depth: int, threads, optio
     c.blur_glossy = 0.0
     c.use_guiding = False
     c.pixel_filter_type = "BOX"
-    c.filter_width = 1.0
-    scene.render.filter_size = 1.0
+    c.filter_width = float(filter_px)
+    scene.render.filter_size = float(filter_px)
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
