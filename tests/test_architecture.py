@@ -246,7 +246,7 @@ def test_a_registered_seed_policy_is_one_function():
 
 
 def test_unknown_names_are_one_line_config_errors():
-    with pytest.raises(ConfigError, match=r"render.renderer.*'cycles'.*use one of: mitsuba"):
-        get_renderer("cycles")
+    with pytest.raises(ConfigError, match=r"render.renderer.*'povray'.*one of: cycles, mitsuba"):
+        get_renderer("povray")
     with pytest.raises(ConfigError, match=r"render.estimator.*'jackknife'.*use one of: seeds"):
         get_estimator("jackknife")

@@ -26,6 +26,15 @@ DEFAULTS = {
     "rig": {"baseline_m": 0.026, "convention": "paper"},
     "render": {
         "renderer": "mitsuba",
+        "cycles": {
+            "denoise": False,
+            "adaptive_sampling": False,
+            "view_transform": "Standard",
+            "light_tree": False,
+            "clamp_direct": 0,
+            "clamp_indirect": 0,
+            "sampling_pattern": "TABULATED_SOBOL",
+        },
         "estimator": "seeds",
         "seed_policy": "independent",
         "variant": "auto",
@@ -104,8 +113,8 @@ BAD_CONFIGS = [
         [
             "'colour'",
             "not known",
-            "scenes, generator, resolution, rig, render, analysis, controls, validation, "
-            "export, audit, intervention, cluster, preview",
+            "scenes, generator, resolution, rig, renderers, render, analysis, controls, "
+            "validation, export, audit, intervention, cluster, preview",
         ],
         id="unknown-top-level-key",
     ),
@@ -277,7 +286,9 @@ def test_conda_env_pins_match_pyproject():
     project = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"]
     env = yaml.safe_load((REPO_ROOT / "envs" / "stereovar.yaml").read_text())
     pip = next(item["pip"] for item in env["dependencies"] if isinstance(item, dict))
-    assert sorted(pip) == sorted(project["dependencies"])
+    # the env is Python 3.11, so it carries the cycles extra too (without its marker)
+    cycles = [r.split(";")[0].strip() for r in project["optional-dependencies"]["cycles"]]
+    assert sorted(pip) == sorted(project["dependencies"] + cycles)
     assert "python=3.11" in env["dependencies"]
 
 

@@ -213,9 +213,17 @@ def _check_cross_fields(config: dict) -> None:
 
 
 def _check_cycles(config: dict) -> None:
-    """``render.renderer: cycles`` refuses settings that would bias the measurement."""
+    """``render.renderer: cycles`` (or cycles in ``renderers``) refuses settings that would
+    bias the measurement; ``renderers`` includes ``render.renderer``."""
     render = config.get("render", {})
-    if render.get("renderer") != "cycles":
+    runs = config.get("renderers")
+    if runs and render.get("renderer", "mitsuba") not in runs:
+        raise ConfigError(
+            f"config key 'renderers': {runs} does not include render.renderer "
+            f"{render.get('renderer', 'mitsuba')!r}, the primary renderer; add it or set "
+            f"render.renderer to one of: {', '.join(runs)}"
+        )
+    if "cycles" not in {render.get("renderer"), *(runs or [])}:
         return
     from .renderers.cycles.settings import cycles_options_error
 

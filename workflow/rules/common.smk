@@ -111,6 +111,33 @@ def get_estimator():
 RUN = run_prefix(get_renderer(), get_estimator())
 INTERVENTION_RUN = run_prefix(get_renderer(), INTERVENTION_ESTIMATOR)
 
+# `renderers: [mitsuba, cycles]` runs the experiment for each renderer (render.renderer is
+# the primary one: the claims table and summary.json); the cross-renderer table and figure
+# compare them.
+RENDERER_RUNS = list(dict.fromkeys(config.get("renderers") or [get_renderer()]))
+
+
+def renderer_config(renderer):
+    """This config with ``render.renderer`` set to ``renderer``."""
+    return {**config, "render": {**config["render"], "renderer": renderer}}
+
+
+def cross_renderer_inputs(pattern, scenes):
+    """``pattern`` (with ``{run}``, ``{scene}`` and ``{spp}``) per renderer run, as named
+    input lists."""
+    return {
+        r: [
+            pattern.format(run=run_prefix(r, get_estimator()), scene=s, spp=MAIN_SPP)
+            for s in scenes
+        ]
+        for r in RENDERER_RUNS
+    }
+
+
+def wildcard_renderer(wildcards):
+    """A job's renderer: its ``{renderer}`` wildcard, else ``render.renderer``."""
+    return getattr(wildcards, "renderer", None) or get_renderer()
+
 
 # The wildcard constraint of rules that render: a renderer, never an audit's imported source.
 RENDERER_NAMES = "|".join(RENDERERS)
@@ -245,7 +272,7 @@ def scene_inputs(wildcards):
 def rig_params():
     """Renderer, resolution and rig settings shared by every job that builds the stereo rig."""
     return {
-        "renderer": get_renderer(),
+        "renderer": wildcard_renderer,
         "width": config["resolution"]["width"],
         "height": config["resolution"]["height"],
         "baseline_m": config["rig"]["baseline_m"],
@@ -269,13 +296,18 @@ def render_params():
 
 
 def renderer_options():
-    """The options only the configured renderer reads (``render.cycles`` for Cycles, with
-    every default filled in, so each render records them)."""
-    if get_renderer() != "cycles":
-        return {}
-    from stereovar.renderers.cycles.settings import cycles_options
+    """The options only a job's renderer reads (``render.cycles`` for Cycles, with every
+    default filled in, so each render records them); a param function of the wildcards."""
 
-    return {"renderer_options": cycles_options(config["render"].get("cycles"))}
+    def options(wildcards):
+        if wildcard_renderer(wildcards) != "cycles":
+            return {}
+        from stereovar.renderers.cycles.settings import cycles_options
+
+        return cycles_options(config["render"].get("cycles"))
+
+    # a run without Cycles keeps the params (and so the DAG) it always had
+    return {"renderer_options": options} if "cycles" in RENDERER_RUNS else {}
 
 
 def missing_scene_specs():
@@ -316,16 +348,30 @@ def all_targets():
     audit: its verdict page and everything behind it, :func:`stereovar.audit.run.audit_targets`)."""
     if AUDIT:
         return [*render_stores(), *audit_targets(config)]
-    renderer = get_renderer()
+    shared = [
+        *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
+        *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
+        *expand("results/tables/claims.{ext}", ext=["csv", "md", "tex", "html"]),
+        "results/summary.json",
+    ]
+    if len(RENDERER_RUNS) > 1:
+        shared += [
+            *expand("results/tables/cross_renderer.{ext}", ext=["csv", "md", "tex", "html"]),
+            "results/figures/cross_renderer.png",
+        ]
+    per_renderer = [p for r in RENDERER_RUNS for p in renderer_targets(r)]
+    return list(dict.fromkeys([*per_renderer, *shared]))
+
+
+def renderer_targets(renderer):
+    """Everything `snakemake all` builds for one renderer."""
     run = run_prefix(renderer, get_estimator())
     intervention = run_prefix(renderer, INTERVENTION_ESTIMATOR)
     return [
         # The renders are targets too, so a render store lost after its analysis finished is
         # rebuilt (from the render cache) instead of silently missing.
-        *render_stores(),
-        *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
+        *render_stores(renderer),
         *expand("results/{renderer}/previews/{scene}.png", renderer=renderer, scene=SCENES),
-        *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
         *[f"{run}/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
         *expand(
             "{run}/tables/{name}.{ext}",
@@ -349,8 +395,6 @@ def all_targets():
             name=["statistics", "seed_curve"],
             ext=["csv", "md", "tex", "html"],
         ),
-        *expand("results/tables/claims.{ext}", ext=["csv", "md", "tex", "html"]),
-        "results/summary.json",
     ]
 
 
@@ -450,10 +494,14 @@ if workflow.is_main_process and clear_stale_lock(STATE_DIR):
     print("stereovar: removed the lock of an earlier run that was killed", file=sys.stderr)
 
 
-def render_stores():
+def render_stores(renderer=None):
     """Every render and moment store the configured tables pool (all scenes, SPPs and
-    batches, and the intervention's seeds)."""
-    return configured_stores(config)
+    batches, and the intervention's seeds) of ``renderer`` (default: every renderer run)."""
+    if renderer is not None:
+        return configured_stores(renderer_config(renderer))
+    if AUDIT:
+        return configured_stores(config)
+    return [p for r in RENDERER_RUNS for p in configured_stores(renderer_config(r))]
 
 
 RENDERER_RULES = {"render", "ground_truth", "preview"}
@@ -470,17 +518,23 @@ def preflight():
     mark_run(STATE_DIR)
     jobs = list(workflow.dag.needrun_jobs())
     outputs = {str(f) for job in jobs for f in job.output}
-    kept = stored_backends(p for p in render_stores() if p not in outputs)
     rules = {job.rule.name for job in jobs}
-    planned = None
     try:
-        if workflow.local_exec and rules & RENDERER_RULES:
-            planned = renderer_named(get_renderer()).backend(config["render"]["variant"])
-        check_backends(
-            kept,
-            planned if "render" in rules else None,
-            allow_mixed=config["render"]["allow_mixed_backends"],
-        )
+        for renderer in [get_renderer()] if AUDIT else RENDERER_RUNS:
+            kept = stored_backends(p for p in render_stores(renderer) if p not in outputs)
+            renders = {
+                job.rule.name
+                for job in jobs
+                if job.wildcards.get("renderer", renderer) == renderer
+            }
+            planned = None
+            if workflow.local_exec and renders & RENDERER_RULES:
+                planned = renderer_named(renderer).backend(config["render"]["variant"])
+            check_backends(
+                kept,
+                planned if "render" in renders else None,
+                allow_mixed=config["render"]["allow_mixed_backends"],
+            )
     except StereovarError as err:
         raise SystemExit(f"stereovar: {err}")
 

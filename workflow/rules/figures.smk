@@ -77,3 +77,37 @@ rule material_scatter_figure:
         ENV
     script:
         "../scripts/material_scatter_figure.py"
+
+
+rule cross_renderer_figure:
+    input:
+        **{
+            f"variance_{r}": paths[0]
+            for r, paths in cross_renderer_inputs(
+                "{run}/variance/{scene}/spp{spp}.zarr", [SWEEP_SCENE]
+            ).items()
+        },
+        **{
+            f"correlation_{r}": paths[0]
+            for r, paths in cross_renderer_inputs(
+                "{run}/correlation/{scene}/spp{spp}.csv", [SWEEP_SCENE]
+            ).items()
+        },
+    output:
+        report(
+            "results/figures/cross_renderer.png",
+            caption="../report/fig_cross_renderer.rst",
+            category="Figures",
+            labels={"figure": "variance fields by renderer"},
+        ),
+    params:
+        renderers=RENDERER_RUNS,
+    log:
+        "logs/figures/cross_renderer.log",
+    benchmark:
+        "benchmarks/figures/cross_renderer.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/cross_renderer_figure.py"

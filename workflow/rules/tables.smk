@@ -73,3 +73,34 @@ rule spp_sweep_table:
         ENV
     script:
         "../scripts/spp_sweep_table.py"
+
+
+# The renderers of `renderers:` side by side (one scene list, the main SPP, the configured
+# estimator).
+
+
+rule cross_renderer_table:
+    input:
+        **cross_renderer_inputs("{run}/correlation/{scene}/spp{spp}.csv", SCENES),
+    output:
+        csv="results/tables/cross_renderer.csv",
+        md="results/tables/cross_renderer.md",
+        tex="results/tables/cross_renderer.tex",
+        html=report(
+            "results/tables/cross_renderer.html",
+            caption="../report/cross_renderer.rst",
+            category="Tables",
+            labels={"table": "cross-renderer comparison"},
+        ),
+    params:
+        spp=MAIN_SPP,
+        renderers=RENDERER_RUNS,
+    log:
+        "logs/tables/cross_renderer.log",
+    benchmark:
+        "benchmarks/tables/cross_renderer.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/cross_renderer_table.py"

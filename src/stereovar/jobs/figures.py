@@ -103,3 +103,23 @@ def statistics_dot_figure_job(correlations, out, *, spp) -> None:
     n_scenes = len({r["scene"] for r in rows})
     title = _title(attrs, f"every statistic and control, {n_scenes} scenes, SPP {spp}")
     save_figure(statistics_dot_figure(rows, spp=spp, title=title), out)
+
+
+def cross_renderer_figure_job(variances: dict, correlations: dict, out) -> None:
+    """Each renderer's left and right sigma^2 fields of one scene side by side, with its
+    warped rho and interval."""
+    from ..figures.cross_renderer import cross_renderer_figure
+    from ..io.store import load_store
+    from ..io.tables import read_rows
+    from ..statistics.registry import PRIMARY_METHOD
+
+    fields, rho, attrs = {}, {}, {}
+    for renderer, path in variances.items():
+        v = load_store(path, "variance store")
+        fields[renderer] = left_right(v, "variance")
+        attrs = v.attrs
+        for row in read_rows(correlations[renderer]):
+            if row["region"] == "all" and row["method"] == PRIMARY_METHOD:
+                rho[renderer] = (row["rho"], row["boot_low"], row["boot_high"])
+    title = f"{attrs.get('scene', '')}, SPP {attrs.get('spp', '')}: sigma^2 by renderer"
+    save_figure(cross_renderer_figure(fields, rho=rho, title=title), out)

@@ -59,3 +59,38 @@ def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: d
     for row in fit_rows:
         log.info("log-log slope of mean variance vs SPP, %s: %.4f", row["region"], row["slope"])
     return fit
+
+
+def cross_renderer_job(correlations: dict, outputs: dict, *, spp) -> list[dict]:
+    """The cross-renderer table: per scene and their mean, each renderer's rho with its
+    bootstrap interval, the robust statistics, the intensity-controlled rho, the no-warp
+    control and the sensor baseline (:func:`stereovar.statistics.cross_renderer.
+    cross_renderer_table`)."""
+    from ..io.tables import read_rows, write_tables
+    from ..statistics.cross_renderer import cross_renderer_columns, cross_renderer_table
+
+    rows = {r: [row for p in paths for row in read_rows(p)] for r, paths in correlations.items()}
+    table = cross_renderer_table(rows, spp=int(spp))
+    estimators = sorted({row.get("estimator", "") for rs in rows.values() for row in rs})
+    write_tables(
+        table,
+        cross_renderer_columns(list(rows)),
+        outputs,
+        caption=(
+            f"Cross-renderer comparison at SPP={spp} ({', '.join(rows)}; estimator "
+            f"{', '.join(estimators)}): rho with 95% block-bootstrap intervals per scene, the "
+            "mean over scenes with its interval, and the controls"
+        ),
+    )
+    for r in rows:
+        mean = [t for t in table if t["scene"] == "mean" and t["method"] == "warp"]
+        for t in mean:
+            log.info(
+                "%s, %s: mean rho %.4f [%.4f, %.4f]",
+                r,
+                t["region"],
+                t[f"rho_{r}"],
+                t[f"boot_low_{r}"],
+                t[f"boot_high_{r}"],
+            )
+    return table
