@@ -175,3 +175,37 @@ def test_variance_falls_with_spp_at_least_as_fast_as_one_over_spp(cycles_scene, 
     slope = np.polyfit(np.log(spps), np.log(means), 1)[0]
     print(f"{pattern}: variance {np.round(means, 6)} at SPP {spps}: slope {slope:.3f}")
     assert -1.5 <= slope <= -0.95
+
+
+@pytest.mark.workflow
+def test_two_renderers_run_end_to_end_and_are_compared(tmp_path):
+    """`renderers: [mitsuba, cycles]` on the tiny config: each renderer's whole experiment,
+    one shared ground truth, the cross-renderer table (whose rows are the renderers' own
+    correlation rows) and figure; a rerun does nothing."""
+    from stereovar.io.tables import read_rows
+
+    from .test_workflow import TINY, copy_workflow, planned_jobs, snakemake
+
+    root = copy_workflow(tmp_path / "wf", {**TINY, "renderers": ["mitsuba", "cycles"]})
+    snakemake(root, "-j2", "all")
+    table = read_rows(root / "results/tables/cross_renderer.csv")
+    assert (root / "results/figures/cross_renderer.png").stat().st_size > 0
+    spp = TINY["render"]["spp"]
+    for renderer in ("mitsuba", "cycles"):
+        stores = list((root / f"results/{renderer}/renders").rglob("seeds*.zarr"))
+        assert stores
+        for scene in TINY["scenes"]:
+            own = {
+                (r["region"], r["method"]): r
+                for r in read_rows(
+                    root / f"results/{renderer}/seeds/correlation/{scene}/spp{spp}.csv"
+                )
+            }
+            for row in (t for t in table if t["scene"] == scene):
+                expected = own[(row["region"], row["method"])]["rho"]
+                assert row[f"rho_{renderer}"] == pytest.approx(expected, nan_ok=True)
+    from stereovar.io.store import open_dataset
+
+    attrs = open_dataset(next((root / "results/cycles/renders").rglob("seeds*.zarr"))).attrs
+    assert attrs["renderer"] == "cycles" and '"denoise": false' in attrs["renderer_options"]
+    assert planned_jobs(root, "all") == {}

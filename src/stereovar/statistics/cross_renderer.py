@@ -6,15 +6,15 @@ file per scene) give, per scene, region and method, :math:`\\rho` with its block
 interval. The table keeps the methods that tell a shortcut from a camera: Pearson's
 :math:`\\rho` after the warp, the robust statistics (Spearman, log-variance, trimmed), the
 intensity-controlled (partial) :math:`\\rho`, the no-warp control and the sensor baseline;
-and adds, per region, the mean over scenes (:func:`~stereovar.statistics.summary.
-cross_scene_table`, with its interval for the warped :math:`\\rho`).
+and adds, per region and method, the mean over scenes with its interval
+(:func:`~stereovar.statistics.across.statistics_table`).
 """
 
 from __future__ import annotations
 
 import math
 
-from .summary import cross_scene_table
+from .across import statistics_table
 
 METHODS = ("warp", "spearman", "log", "trimmed", "partial", "no_warp", "sensor")
 """Methods (correlation-row ``method`` values) shown side by side."""
@@ -34,15 +34,12 @@ def cross_renderer_columns(renderers) -> list[str]:
 
 
 def _mean_rows(rows: list[dict], spp: int) -> dict:
-    """(region, method) to (mean rho, low, high, n scenes) over the scenes of one renderer."""
-    nan = math.nan
-    out = {}
-    for t in cross_scene_table(rows, spp=spp):
-        region = t["region"]
-        out[(region, "warp")] = (t["mean_rho"], t["boot_low"], t["boot_high"], t["n_scenes"])
-        for method in METHODS[1:]:
-            out[(region, method)] = (t.get(f"mean_rho_{method}", nan), nan, nan, t["n_scenes"])
-    return out
+    """(region, method) to (mean rho, low, high, n scenes) over the scenes of one renderer
+    (:func:`~stereovar.statistics.across.statistics_table`)."""
+    return {
+        (t["region"], t["method"]): (t["mean_rho"], t["boot_low"], t["boot_high"], t["n_scenes"])
+        for t in statistics_table(rows, spp=spp)
+    }
 
 
 def cross_renderer_table(rows_by_renderer: dict, *, spp: int) -> list[dict]:
