@@ -8,6 +8,13 @@ wall time of the paper preset's whole render stage (every scene, view, seed and 
 ``workflow/presets/paper.yaml``) from each rate. ``scalar_rgb`` runs at ``--scalar-spp``
 (it is about two orders of magnitude slower) unless ``--variants`` names it alone.
 
+Then, when Blender's ``bpy`` is installed (the ``cycles`` extra), the same view with Cycles
+(:mod:`stereovar.renderers.cycles`, the CPU device, every thread, the same SPP): samples per
+second and the ratio to ``llvm_ad_rgb``, plus what a render job pays once before its first
+render (importing ``bpy``, compiling the spec into Blender and Mitsuba, the first 1-SPP
+render) and that cost's share of a job that renders ``render.seeds_per_job`` seeds of both
+views (the workflow batches seeds per job so that start-up is paid once).
+
 With ``--options`` it instead measures render options on ``llvm_ad_rgb`` as interleaved
 ratios of samples per second against the named baseline (``path``: the configured
 integrator, bilinear textures, one job with every thread), each option and the baseline
@@ -83,6 +90,81 @@ finite = float(np.isfinite(np.asarray(image)).mean())
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(json.dumps({"seconds": seconds, "warmup": warm, "rss_mb": rss, "finite": finite}))
 """
+
+
+CYCLES_WORKER = r"""
+import json, resource, sys, time
+t0 = time.perf_counter()
+args = json.loads(sys.argv[1])
+from stereovar.renderers.cycles.backend import load_bpy
+load_bpy()
+imported = time.perf_counter() - t0
+from stereovar.renderers import get_renderer
+from stereovar.renderers.base import RenderSettings
+from stereovar.scenes.spec import load_scene_spec
+from stereovar.seeding import derive_seed
+spec = load_scene_spec(args["scene_path"])
+t1 = time.perf_counter()
+scene = get_renderer("cycles").prepare(
+    spec,
+    rig={"width": args["width"], "height": args["height"], "baseline_m": args["baseline_m"],
+         "convention": "paper"},
+    threads=args["threads"] or None,
+)
+built = time.perf_counter() - t1
+settings = RenderSettings(max_depth=args["max_depth"])
+t1 = time.perf_counter()
+scene.render("left", spp=1, seed=derive_seed("bench", "left", 1, 0), settings=settings)
+warm = time.perf_counter() - t1
+t1 = time.perf_counter()
+image = scene.render("left", spp=args["spp"], seed=derive_seed("bench", "left", args["spp"], 1),
+                     settings=settings)
+seconds = time.perf_counter() - t1
+import numpy as np
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "import": imported, "build": built, "warmup": warm,
+                  "rss_mb": rss, "finite": float(np.isfinite(image).mean())}))
+"""
+
+
+def cycles_rate(args, config, base) -> None:
+    """Cycles on the same view, in its own process; prints its rate, the ratio to ``base``
+    (``llvm_ad_rgb``'s rate) and the per-job start-up cost."""
+    job = {
+        "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
+        "width": args.width,
+        "height": args.height,
+        "spp": args.spp,
+        "threads": args.threads,
+        "baseline_m": config["rig"]["baseline_m"],
+        "max_depth": config["render"]["max_depth"],
+    }
+    proc = subprocess.run(
+        [sys.executable, "-c", CYCLES_WORKER, json.dumps(job)], capture_output=True, text=True
+    )
+    if proc.returncode != 0:
+        print(f"{'cycles':12s}: not measured: {proc.stderr.strip().splitlines()[-1:]}")
+        return
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    samples = args.width * args.height * args.spp
+    rate = samples / out["seconds"]
+    ratio = f", {rate / base:6.3f}x llvm_ad_rgb" if base else ""
+    print(
+        f"{'cycles':12s}: {out['seconds']:8.2f} s for {samples / 1e6:8.1f} M samples = "
+        f"{rate / 1e6:8.2f} M samples/s{ratio} (peak RSS {out['rss_mb']:.0f} MB, finite "
+        f"{out['finite']:.4f})"
+    )
+    startup = out["import"] + out["build"] + out["warmup"]
+    per_job = 2 * config["render"]["seeds_per_job"]
+    job_seconds = startup + per_job * out["seconds"]
+    print(
+        f"{'cycles':12s}: start-up per job {startup:.1f} s (import bpy {out['import']:.1f} s, "
+        f"scene build {out['build']:.1f} s, first 1-SPP render {out['warmup']:.1f} s): "
+        f"{100 * startup / job_seconds:.1f}% of a job of {per_job} renders "
+        f"(render.seeds_per_job {config['render']['seeds_per_job']}, both views)"
+    )
+    total, _ = paper_samples()
+    print(f"{'cycles':12s}: paper preset render stage projected at {total / rate / 3600:10.1f} h")
 
 
 def paper_samples() -> tuple[int, dict]:
@@ -179,6 +261,7 @@ def main(argv=None) -> int:
     parser.add_argument("--variants", nargs="*", help="default: every available variant")
     parser.add_argument("--options", action="store_true", help="compare render options")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--no-cycles", action="store_true", help="skip the Cycles measurement")
     args = parser.parse_args(argv)
     if args.options:
         return compare_options(args, paper_samples()[1])
@@ -228,6 +311,8 @@ def main(argv=None) -> int:
         hours = total / rate / 3600
         ratio = f", {rate / base:6.2f}x llvm_ad_rgb" if base else ""
         print(f"{variant:12s}: paper preset render stage projected at {hours:10.1f} h{ratio}")
+    if not args.no_cycles:
+        cycles_rate(args, config, base)
     return 0 if rates else 1
 
 

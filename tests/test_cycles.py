@@ -71,6 +71,15 @@ def test_settings_that_change_the_variance_are_refused(cycles, key):
     validate_config({"render": {"renderer": "mitsuba", "cycles": cycles}}, SCHEMA)
 
 
+def test_the_moments_estimator_is_refused_for_cycles():
+    for config in (
+        {"render": {"renderer": "cycles", "estimator": "moments"}},
+        {"renderers": ["mitsuba", "cycles"], "render": {"estimator": "moments"}},
+    ):
+        with pytest.raises(ConfigError, match="render.estimator.*set render.estimator: seeds"):
+            validate_config(config, SCHEMA)
+
+
 def test_every_render_setting_is_set_and_recorded(cycles_scene):
     settings = RenderSettings(max_depth=6, renderer_options={"light_tree": True})
     _, attrs = cycles_scene.render_with_attrs("left", spp=2, seed=2**32 - 5, settings=settings)

@@ -225,6 +225,12 @@ def _check_cycles(config: dict) -> None:
         )
     if "cycles" not in {render.get("renderer"), *(runs or [])}:
         return
+    if render.get("estimator") == "moments":
+        raise ConfigError(
+            "config key 'render.estimator': moments with the Cycles renderer; Cycles samples "
+            "with scrambled quasi-Monte Carlo patterns, not the independent samples the "
+            "moments estimator needs: set render.estimator: seeds"
+        )
     from .renderers.cycles.settings import cycles_options_error
 
     error = cycles_options_error(render.get("cycles"), rfilter=render.get("rfilter", "box"))
