@@ -127,18 +127,23 @@ print(json.dumps({"seconds": seconds, "import": imported, "build": built, "warmu
 """
 
 
-def cycles_rate(args, config, base) -> None:
-    """Cycles on the same view, in its own process; prints its rate, the ratio to ``base``
-    (``llvm_ad_rgb``'s rate) and the per-job start-up cost."""
-    job = {
+def view_job(args, config, *, spp) -> dict:
+    """A worker's settings: the bench view (scene, size, threads) at ``spp``."""
+    return {
         "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
         "width": args.width,
         "height": args.height,
-        "spp": args.spp,
+        "spp": spp,
         "threads": args.threads,
         "baseline_m": config["rig"]["baseline_m"],
         "max_depth": config["render"]["max_depth"],
     }
+
+
+def cycles_rate(args, config, base) -> None:
+    """Cycles on the same view, in its own process; prints its rate, the ratio to ``base``
+    (``llvm_ad_rgb``'s rate) and the per-job start-up cost."""
+    job = view_job(args, config, spp=args.spp)
     proc = subprocess.run(
         [sys.executable, "-c", CYCLES_WORKER, json.dumps(job)], capture_output=True, text=True
     )
@@ -215,16 +220,7 @@ def compare_options(args, config) -> int:
     """Interleaved ratios of each option in :data:`OPTIONS` against the ``path`` baseline."""
     import statistics
 
-    base_job = {
-        "variant": "llvm_ad_rgb",
-        "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
-        "width": args.width,
-        "height": args.height,
-        "spp": args.spp,
-        "threads": args.threads,
-        "baseline_m": config["rig"]["baseline_m"],
-        "max_depth": config["render"]["max_depth"],
-    }
+    base_job = {"variant": "llvm_ad_rgb", **view_job(args, config, spp=args.spp)}
     print(
         f"options on llvm_ad_rgb: {args.scene}, {args.width}x{args.height}, SPP {args.spp}, "
         f"{args.repeats} interleaved repeats; baseline: path, bilinear textures, one job"
@@ -282,16 +278,7 @@ def main(argv=None) -> int:
     for variant in variants:
         slow = variant.startswith("scalar") and args.variants is None
         spp = args.scalar_spp if slow else args.spp
-        job = {
-            "variant": variant,
-            "scene_path": str(REPO / "scenes" / f"{args.scene}.yaml"),
-            "width": args.width,
-            "height": args.height,
-            "spp": spp,
-            "threads": args.threads,
-            "baseline_m": config["rig"]["baseline_m"],
-            "max_depth": config["render"]["max_depth"],
-        }
+        job = {"variant": variant, **view_job(args, config, spp=spp)}
         proc = subprocess.run(
             [sys.executable, "-c", WORKER, json.dumps(job)], capture_output=True, text=True
         )

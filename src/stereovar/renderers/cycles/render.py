@@ -4,32 +4,15 @@ object index), which the geometry checks compare with the renderer-neutral groun
 
 from __future__ import annotations
 
-import os
-import sys
 import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from ...rig import StereoRig
+from ..quiet import silenced
 from .scene import camera_matrix
 from .settings import apply_settings
-
-
-@contextmanager
-def _quiet():
-    """Send Blender's per-render lines on the C-level stdout to /dev/null."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 1)
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(devnull)
 
 
 def _read_layers(path) -> dict:
@@ -105,7 +88,7 @@ def render_view(
     with tempfile.TemporaryDirectory(prefix="stereovar-cycles-") as tmp:
         path = Path(tmp) / "render.exr"
         scene.render.filepath = str(path)
-        with _quiet():
+        with silenced(1):  # Blender's per-render lines
             bpy.ops.render.render(write_still=True)
         channels = _read_layers(path)
     image = np.stack([_channel(channels, f"Combined.{c}") for c in "RGB"], axis=-1)

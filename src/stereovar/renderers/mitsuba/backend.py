@@ -22,7 +22,6 @@ STEREOVAR_LLVM_SEARCH_DIRS
 
 from __future__ import annotations
 
-import contextlib
 import glob
 import os
 import re
@@ -31,6 +30,7 @@ import warnings
 from pathlib import Path
 
 from stereovar.errors import BackendError
+from stereovar.renderers.quiet import silenced
 
 __all__ = [
     "MIN_LLVM_MAJOR",
@@ -235,29 +235,11 @@ def configure_llvm() -> Path | None:
     return found
 
 
-@contextlib.contextmanager
-def _quiet_stderr(enabled: bool):
-    """Silence file descriptor 2 (Dr.Jit's C++ messages) while the block runs."""
-    if not enabled:
-        yield
-        return
-    sys.stderr.flush()
-    saved = os.dup(2)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 2)
-        yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(devnull)
-
-
 def _import_drjit():
     """Configure libLLVM, then import Dr.Jit (without its noise about the sentinel path)."""
     configure_llvm()
     quiet = "drjit" not in sys.modules and os.environ.get(_DRJIT_ENV) == NO_LIBLLVM_SENTINEL
-    with _quiet_stderr(quiet):
+    with silenced(2, quiet):
         import drjit
     return drjit
 
