@@ -217,4 +217,5 @@ def test_two_renderers_run_end_to_end_and_are_compared(tmp_path):
 
     attrs = open_dataset(next((root / "results/cycles/renders").rglob("seeds*.zarr"))).attrs
     assert attrs["renderer"] == "cycles" and '"denoise": false' in attrs["renderer_options"]
+    assert attrs["cycles_pixel_filter"] == "BOX 1 px" and attrs["cycles_device"] == "CPU"
     assert planned_jobs(root, "all") == {}

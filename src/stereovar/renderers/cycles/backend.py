@@ -35,14 +35,28 @@ def load_bpy():
     return bpy
 
 
+FIXED_SETTINGS = {
+    "cycles_device": "CPU",
+    "cycles_integrator": "path tracing",
+    "cycles_pixel_filter": "BOX 1 px",
+    "cycles_view_transform": "Standard",
+    "cycles_output": "linear float32 OpenEXR",
+    "cycles_bounces": "max_bounces = max_depth - 2 (diffuse, glossy, transmission alike)",
+    "cycles_seed_rule": "cycles.seed = render seed mod 2^31",
+}
+"""Render settings every Cycles render uses whatever the config says
+(:func:`.settings.apply_settings`), recorded in every store's provenance."""
+
+
 def describe_backend() -> dict:
-    """Blender's version and the Cycles device, as provenance strings."""
+    """Blender's version, the Cycles device and :data:`FIXED_SETTINGS`, as provenance
+    strings."""
     bpy = load_bpy()
+    build = bpy.app.build_hash
     return {
         "renderer": "cycles",
         "renderer_version": bpy.app.version_string,
         "variant": "cpu",
-        "blender_build_hash": bpy.app.build_hash.decode()
-        if isinstance(bpy.app.build_hash, bytes)
-        else str(bpy.app.build_hash),
+        "blender_build_hash": build.decode() if isinstance(build, bytes) else str(build),
+        **FIXED_SETTINGS,
     }
