@@ -71,6 +71,11 @@ def test_settings_that_change_the_variance_are_refused(cycles, key):
     validate_config({"render": {"renderer": "mitsuba", "cycles": cycles}}, SCHEMA)
 
 
+def test_a_path_depth_cycles_cannot_express_is_refused():
+    with pytest.raises(ConfigError, match="render.max_depth.*use 2 or more"):
+        validate_config({"render": {"renderer": "cycles", "max_depth": 1}}, SCHEMA)
+
+
 def test_the_moments_estimator_is_refused_for_cycles():
     for config in (
         {"render": {"renderer": "cycles", "estimator": "moments"}},
@@ -78,6 +83,20 @@ def test_the_moments_estimator_is_refused_for_cycles():
     ):
         with pytest.raises(ConfigError, match="render.estimator.*set render.estimator: seeds"):
             validate_config(config, SCHEMA)
+
+
+@pytest.mark.parametrize("metal", ["Cu", "Al", "Au"])
+def test_conductor_colour_is_the_normal_incidence_fresnel_reflectance(mi, metal):
+    """The Principled base colour of a conductor against the conductor Fresnel equation at
+    normal incidence, :math:`F_0 = ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2)`, with Mitsuba's
+    own eta and k of that metal."""
+    from stereovar.renderers.cycles.scene import conductor_rgb
+
+    params = mi.traverse(mi.load_dict({"type": "conductor", "material": metal}))
+    n = np.asarray(params["eta.value"], dtype=np.float64).reshape(-1)[:3]
+    k = np.asarray(params["k.value"], dtype=np.float64).reshape(-1)[:3]
+    expected = ((n - 1) ** 2 + k**2) / ((n + 1) ** 2 + k**2)
+    np.testing.assert_allclose(conductor_rgb(metal), expected, rtol=1e-5)
 
 
 def test_every_render_setting_is_set_and_recorded(cycles_scene):

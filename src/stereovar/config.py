@@ -209,21 +209,27 @@ def _check_cross_fields(config: dict) -> None:
     _check_intervention(config)
     _check_bootstrap(config)
     _check_moments(config)
+    _check_renderers(config)
     _check_cycles(config)
+
+
+def _check_renderers(config: dict) -> None:
+    """``renderers`` includes ``render.renderer``, the primary renderer."""
+    runs = config.get("renderers")
+    primary = config.get("render", {}).get("renderer", "mitsuba")
+    if runs and primary not in runs:
+        raise ConfigError(
+            f"config key 'renderers': {runs} does not include render.renderer "
+            f"{primary!r}, the primary renderer; add it or set render.renderer to one of: "
+            f"{', '.join(runs)}"
+        )
 
 
 def _check_cycles(config: dict) -> None:
     """``render.renderer: cycles`` (or cycles in ``renderers``) refuses settings that would
-    bias the measurement; ``renderers`` includes ``render.renderer``."""
+    bias the measurement."""
     render = config.get("render", {})
-    runs = config.get("renderers")
-    if runs and render.get("renderer", "mitsuba") not in runs:
-        raise ConfigError(
-            f"config key 'renderers': {runs} does not include render.renderer "
-            f"{render.get('renderer', 'mitsuba')!r}, the primary renderer; add it or set "
-            f"render.renderer to one of: {', '.join(runs)}"
-        )
-    if "cycles" not in {render.get("renderer"), *(runs or [])}:
+    if "cycles" not in {render.get("renderer"), *(config.get("renderers") or [])}:
         return
     if render.get("estimator") == "moments":
         raise ConfigError(
@@ -231,11 +237,15 @@ def _check_cycles(config: dict) -> None:
             "with scrambled quasi-Monte Carlo patterns, not the independent samples the "
             "moments estimator needs: set render.estimator: seeds"
         )
-    from .renderers.cycles.settings import cycles_options_error
+    from .renderers.cycles.settings import bounces, cycles_options_error
 
     error = cycles_options_error(render.get("cycles"), rfilter=render.get("rfilter", "box"))
     if error:
         raise ConfigError(error)
+    try:
+        bounces(render.get("max_depth", 8))
+    except ValueError as err:
+        raise ConfigError(f"config key 'render.max_depth': {err}") from None
 
 
 MOMENTS_SAMPLER = "independent"

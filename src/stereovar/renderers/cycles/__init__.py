@@ -5,8 +5,8 @@ into a Blender scene with the same geometry as the Mitsuba compiler, :mod:`.sett
 and records the render settings that keep the experiment honest, and :mod:`.render` renders
 a view. The ground truth stays renderer-neutral: :meth:`CyclesScene.trace` and
 :meth:`CyclesScene.shape_materials` trace the Mitsuba-compiled geometry of the same spec, so
-one ground truth serves both renderers (the geometry checks in the tests compare Cycles' own
-Depth and IndexOB passes with it).
+one ground truth serves both renderers (:meth:`CyclesScene.geometry` renders Cycles' own
+planar depth and object index, which the tests compare with it).
 
 Importing this package pulls in no third-party module; ``bpy`` loads in
 :meth:`CyclesRenderer.prepare`.
@@ -124,11 +124,11 @@ class CyclesRenderer(Renderer):
         from ...rig import make_rig
         from ..base import scene_provenance
         from ..mitsuba import MitsubaRenderer
+        from ..mitsuba.scene import camera_from_spec
         from .backend import load_bpy
-        from .scene import spec_camera
 
         bpy = load_bpy()
-        camera = spec_camera(spec)
+        camera = camera_from_spec(spec)
         stereo = make_rig(camera.to_world, camera.fov_deg, **rig)
         geometry = MitsubaRenderer().prepare(spec, rig=rig, threads=threads)
         provenance = scene_provenance(spec, self.backend(variant))

@@ -9,24 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...io.images import read_image
 from ...rig import StereoRig
 from ..quiet import silenced
 from .scene import camera_matrix
 from .settings import apply_settings
-
-
-def _read_layers(path) -> dict:
-    import OpenEXR
-
-    with OpenEXR.File(str(path), separate_channels=True) as f:
-        return {name: np.asarray(ch.pixels) for name, ch in f.channels().items()}
-
-
-def _channel(channels: dict, suffix: str) -> np.ndarray:
-    for name, pixels in channels.items():
-        if name.endswith(suffix):
-            return pixels
-    raise RuntimeError(f"Cycles wrote no '{suffix}' channel (has {', '.join(channels)})")
 
 
 def render_view(
@@ -90,9 +77,8 @@ def render_view(
         scene.render.filepath = str(path)
         with silenced(1):  # Blender's per-render lines
             bpy.ops.render.render(write_still=True)
-        channels = _read_layers(path)
-    image = np.stack([_channel(channels, f"Combined.{c}") for c in "RGB"], axis=-1)
-    return image.astype(np.float32), attrs
+        image = read_image(path)  # the Combined layer, linear float32
+    return image, attrs
 
 
 GEOMETRY_FILTER_PX = 0.01
@@ -127,7 +113,8 @@ def render_geometry(bpy, camera, rig: StereoRig, view: str, *, threads=None) -> 
     Every object is rendered with one emission material whose colour is (View Z Depth,
     Object Index, 0), with no bounce, one sample per pixel and a
     :data:`GEOMETRY_FILTER_PX`-wide pixel filter, so each pixel holds the values at the
-    first hit of its centre ray. The scene's materials and filter are restored afterwards.
+    first hit of its centre ray. The scene's materials are restored afterwards (and the next
+    render sets its own filter).
     """
     scene = bpy.context.scene
     layer = scene.view_layers[0]

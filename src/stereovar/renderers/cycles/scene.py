@@ -12,7 +12,7 @@ The same spec gives the same geometry as :mod:`stereovar.renderers.mitsuba.scene
   :math:`r (1 - \\cos(\\pi / n))`, 7.5e-5 r);
 * every mesh is placed in world space by the spec's transform, so the objects' own matrices
   are the identity;
-* textures are the same baked bitmaps (:func:`stereovar.scenes.textures.bake_texture_cached`),
+* textures are the same baked bitmaps (:func:`~stereovar.renderers.mitsuba.scene.baked_texture`),
   read raw (non-colour) with bilinear filtering and repeat, scaled by the spec's ``repeat``;
 * materials: ``diffuse`` → Diffuse BSDF; ``glossy`` → Principled BSDF (dielectric, base colour
   the reflectance, IOR the spec's); ``conductor`` → Principled BSDF, metallic, base colour the
@@ -43,7 +43,7 @@ import numpy as np
 
 from ...errors import SceneError
 from ...geometry import object_matrix
-from ..mitsuba.scene import camera_from_spec, lathe_mesh
+from ..mitsuba.scene import baked_texture, lathe_mesh
 
 SPHERE_SEGMENTS = 256
 """Azimuthal segments of a sphere's mesh (half as many rings)."""
@@ -174,19 +174,12 @@ def conductor_rgb(metal: str) -> tuple[float, float, float]:
     return tuple(float(c) for c in rgb)
 
 
-@lru_cache(maxsize=64)
-def _baked(texture_json: str) -> np.ndarray:
-    from ...scenes.textures import bake_texture_cached
-
-    return bake_texture_cached(json.loads(texture_json))
-
-
 def _texture_node(bpy, nodes, links, spec: dict, name: str):
     tex = spec["textures"][name]
     key = f"tex_{name}"
     image = bpy.data.images.get(key)
     if image is None:
-        baked = np.asarray(_baked(json.dumps(tex, sort_keys=True)), dtype=np.float32)
+        baked = np.asarray(baked_texture(json.dumps(tex, sort_keys=True)), np.float32)
         height, width = baked.shape[:2]
         rgba = np.ones((height, width, 4), dtype=np.float32)
         rgba[..., :3] = baked[..., :3] if baked.ndim == 3 else baked[..., None]
@@ -351,7 +344,3 @@ def build_scene(bpy, spec: dict, *, width: int, height: int, fov_deg: float, sha
     scene.render.use_border = False
     return camera
 
-
-def spec_camera(spec: dict):
-    """The spec's left camera (shared with the Mitsuba compiler)."""
-    return camera_from_spec(spec)

@@ -111,7 +111,9 @@ def lathe_mesh(profile, segments: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @lru_cache(maxsize=64)
-def _baked_texture(texture_json: str) -> np.ndarray:
+def baked_texture(texture_json: str) -> np.ndarray:
+    """The baked bitmap of a texture spec given as sorted JSON (cached per process; both
+    renderers' compilers read it)."""
     from ...scenes.textures import bake_texture_cached
 
     return bake_texture_cached(json.loads(texture_json))
@@ -123,7 +125,7 @@ def _rgb(value):
 
 def _texture_dict(mi, spec: dict, name: str) -> dict:
     tex = spec["textures"][name]
-    image = _baked_texture(json.dumps(tex, sort_keys=True))
+    image = baked_texture(json.dumps(tex, sort_keys=True))
     su, sv = tex.get("repeat", (1.0, 1.0))
     return {
         "type": "bitmap",
