@@ -197,6 +197,8 @@ def test_each_verdict_from_synthetic_inputs():
     assert verdict("level", 0.75, 0.4, 0.35, 0.45) == FAILS
     assert verdict("level", 0.75, 0.7, 0.6, 0.8, (0.65, 0.55, 0.7)) == EXPLAINED
     assert verdict("level", 0.75, math.nan, math.nan, math.nan) == UNTESTABLE
+    # an interval holding the paper's value and the null (rho 0) cannot tell them apart
+    assert verdict("level", 0.75, 0.4, -0.1, 0.9) == UNTESTABLE
     assert verdict("direction", -0.4, -0.3, -0.5, -0.1) == HOLDS
     assert verdict("direction", -0.4, 0.3, 0.1, 0.5) == FAILS
     assert verdict("direction", -0.4, -0.3, -0.6, 0.1) == UNTESTABLE
@@ -235,8 +237,10 @@ def test_claims_table_gives_the_verdict_the_inputs_imply():
     assert claims["rho (glass) = 0.301"]["verdict"] == HOLDS
     assert claims["rho glass below non-glass (0.301 - 0.779)"]["verdict"] == HOLDS
     assert claims["rho invariant to SPP within 0.2%"]["verdict"] == HOLDS
-    assert claims["real sensors carry rho = 0"]["verdict"] == HOLDS
+    # sensor rho 0 +- 0.01 holds the claimed 0, which is also the null: not testable
+    assert claims["real sensors carry rho = 0"]["verdict"] == UNTESTABLE
     assert claims["glass variance 7x non-glass"]["ours"] == pytest.approx(7.0)
+    assert claims["glass variance 7x non-glass"]["verdict"] == HOLDS
     assert claims["no-warp rho = 0.36"]["verdict"] == UNTESTABLE
     # a sensor that reaches the same level explains the headline away
     rows = _scene_rows("a", 0.754, 0.301, 0.75) + _scene_rows("b", 0.754, 0.301, 0.75)

@@ -29,6 +29,10 @@ class ImageError(StereovarError):
     """An image, disparity, depth or mask file cannot be read or has the wrong shape."""
 
 
+class ClaimsError(StereovarError):
+    """The claims file (the paper's claims the claims table tests) is missing or malformed."""
+
+
 class AuditError(StereovarError):
     """An audit's files do not form N >= 2 renders per view of stereo frames with ground
     truth, or their disparity convention is the wrong one."""

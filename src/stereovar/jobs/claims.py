@@ -54,17 +54,23 @@ def claims_job(
     *,
     spp,
     config_digest="",
+    claims_digest="",
 ) -> list[dict]:
     """The claims table and ``results/summary.json``: every headline number with its
-    interval and control, the config digest, the renderer and the estimator."""
+    interval and control, the config digest, the renderer, the estimator and the claims file
+    with its SHA-256.
+
+    ``claims_digest`` is the claims file's SHA-256 when the workflow was read (the rule's
+    rerun trigger); a file changed since is refused, so the table never mixes the two."""
     import json
     import math
     from pathlib import Path
 
+    from ..errors import ClaimsError
     from ..io.store import write_file
     from ..io.tables import read_rows, write_tables
     from ..statistics.across import statistics_table
-    from ..statistics.claims import CLAIMS_COLUMNS, RULES, claims_table
+    from ..statistics.claims import CLAIMS_COLUMNS, claims_table, load_claims
 
     rows = [r for path in correlations for r in read_rows(path)]
     rows = [r for r in rows if r.get("spp") == int(spp)]
@@ -72,12 +78,19 @@ def claims_job(
     sweep_rows = read_rows(sweep) if sweep else []
     intervention = [r for path in interventions for r in read_rows(path)]
     run = run_of(rows)
-    claims = claims_table(rows, sweep=sweep_rows, curve=curve, intervention=intervention)
+    claims_file = load_claims()
+    if claims_digest and claims_digest != claims_file.sha256:
+        raise ClaimsError(
+            f"claims file '{claims_file.path}' changed after the workflow was read; run it again"
+        )
+    claims = claims_table(
+        rows, sweep=sweep_rows, curve=curve, intervention=intervention, claims=claims_file
+    )
     write_tables(
         claims,
         CLAIMS_COLUMNS,
         outputs,
-        caption=f"The paper's claims on this run (SPP={spp}). {RULES}",
+        caption=f"The paper's claims on this run (SPP={spp}). {claims_file.caption()}",
         constants=run,
     )
 
@@ -110,6 +123,7 @@ def claims_job(
         "scenes": sorted({str(r["scene"]) for r in rows}),
         "interval": "95% spatial block bootstrap (scenes combined)",
         "statistics": headline,
+        "claims_file": {"path": "stereovar/statistics/claims.yaml", "sha256": claims_file.sha256},
         "claims": [{k: clean(v) for k, v in c.items()} for c in claims],
     }
     text = json.dumps(document, indent=2) + "\n"
