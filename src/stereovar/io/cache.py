@@ -4,7 +4,8 @@ Snakemake deletes a job's outputs before it runs the job, so a render batch whos
 (a bad variant, a typo in a spec) would lose every render in it. Each render is therefore also
 kept here, under the SHA-256 of everything that determines its pixels
 (:func:`render_key`): the scene's content (the spec and every file an XML scene reads), the
-renderer with its version, the variant actually used and the code that compiles scenes, the
+renderer with its version, the variant actually used, the CPU target its kernels are compiled
+for (:mod:`stereovar.renderers.mitsuba.jit_target`) and the code that compiles scenes, the
 rig, the view, the SPP, the sampler seed and the integrator, filter and sampler. The workflow
 never deletes this directory; a render job whose key is present reads the render instead of
 rendering it, so a failed or interrupted run costs only the renders it had not finished.
@@ -31,6 +32,7 @@ KEY_FIELDS = (
     "renderer",
     "renderer_version",
     "variant",
+    "jit_target",
     "renderer_code",
     "width",
     "height",

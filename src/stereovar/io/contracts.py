@@ -32,6 +32,7 @@ RENDER_PROVENANCE = (
     "renderer",
     "renderer_version",
     "variant",
+    "jit_target",
     "width",
     "height",
     "integrator",

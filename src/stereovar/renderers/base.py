@@ -191,15 +191,22 @@ class Renderer(ABC):
         Returns
         -------
         dict
-            ``renderer``, ``renderer_version`` and the resolved ``variant`` (never
-            ``auto``), plus any renderer-specific versions; strings.
+            ``renderer``, ``renderer_version``, the resolved ``variant`` (never
+            ``auto``) and ``jit_target`` (the CPU target kernels are compiled for, where
+            the renderer compiles for one, else empty), plus any renderer-specific
+            versions; strings.
 
         Raises
         ------
         BackendError
             ``variant`` is unknown or unavailable here (one line).
         """
-        return {"renderer": self.name, "renderer_version": "", "variant": variant}
+        return {
+            "renderer": self.name,
+            "renderer_version": "",
+            "variant": variant,
+            "jit_target": "",
+        }
 
     @abstractmethod
     def prepare(

@@ -57,6 +57,7 @@ def describe_backend() -> dict:
         "renderer": "cycles",
         "renderer_version": bpy.app.version_string,
         "variant": "cpu",
+        "jit_target": "",
         "blender_build_hash": build.decode() if isinstance(build, bytes) else str(build),
         **FIXED_SETTINGS,
     }

@@ -94,6 +94,7 @@ class MitsubaRenderer(Renderer):
             "renderer_version": info["mitsuba_version"],
             "drjit_version": info["drjit_version"],
             "variant": info["variant"],
+            "jit_target": info["jit_target"],
         }
 
     def prepare(

@@ -18,6 +18,8 @@ DRJIT_LIBLLVM_PATH
 STEREOVAR_LLVM_SEARCH_DIRS
     ``os.pathsep``-separated directories that replace the default libLLVM search path
     (an empty value searches nothing, which simulates a machine without libLLVM).
+STEREOVAR_JIT_TARGET
+    The CPU Dr.Jit's LLVM kernels are compiled for (:mod:`.jit_target`; default ``host``).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ import warnings
 from pathlib import Path
 
 from stereovar.errors import BackendError
+from stereovar.renderers.mitsuba.jit_target import apply_jit_target, current_jit_target
 from stereovar.renderers.quiet import silenced
 
 __all__ = [
@@ -236,11 +239,13 @@ def configure_llvm() -> Path | None:
 
 
 def _import_drjit():
-    """Configure libLLVM, then import Dr.Jit (without its noise about the sentinel path)."""
+    """Configure libLLVM, then import Dr.Jit (without its noise about the sentinel path) and
+    set the LLVM back end's target (:func:`.jit_target.apply_jit_target`)."""
     configure_llvm()
     quiet = "drjit" not in sys.modules and os.environ.get(_DRJIT_ENV) == NO_LIBLLVM_SENTINEL
     with silenced(2, quiet):
         import drjit
+    apply_jit_target()
     return drjit
 
 
@@ -390,8 +395,10 @@ def describe_backend() -> dict:
     -------
     dict
         ``variant`` (the current Mitsuba variant, or None before :func:`load_mitsuba`),
-        ``libllvm`` (the path given to Dr.Jit, or None), ``mitsuba_version`` and
-        ``drjit_version``; all values are strings or None.
+        ``libllvm`` (the path given to Dr.Jit, or None), ``jit_target`` (the CPU and
+        vector width LLVM kernels are compiled for, e.g. ``znver3/8``; empty for CUDA and
+        scalar variants), ``mitsuba_version`` and ``drjit_version``; all values are strings
+        or None.
     """
     mi = _import_mitsuba()
     dr = sys.modules["drjit"]
@@ -400,6 +407,7 @@ def describe_backend() -> dict:
     return {
         "variant": mi.variant(),
         "libllvm": libllvm if libllvm != NO_LIBLLVM_SENTINEL and llvm_active else None,
+        "jit_target": current_jit_target() if mi.variant().startswith("llvm_") else "",
         "mitsuba_version": str(mi.__version__),
         "drjit_version": str(dr.__version__),
     }
