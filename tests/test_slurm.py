@@ -157,19 +157,67 @@ def wait_for_running_render(env, workdir, proc, timeout=600):
     raise AssertionError("no render job ran within the timeout")
 
 
-def kill_job_processes(env, job_id):
-    """SIGKILL every process of a running SLURM job, as an OOM killer or a crash would.
+def _parent(pid: int) -> int | None:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    return int(stat.rsplit(")", 1)[1].split()[1])
+
+
+def _comm(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/comm").read_text().strip()
+    except OSError:
+        return ""
+
+
+def job_step_pids(listed, protected) -> list[int]:
+    """Of the pids ``scontrol listpids`` gave, those that run under one of the job's
+    ``slurmstepd`` processes and are none of ``protected`` (the workflow and this test, with
+    their ancestors).
+
+    ``proctrack/linuxproc`` collects a job's processes by walking /proc, and on some machines
+    its list reaches past the job: the workflow that submitted it was killed with the job.
+    Only descendants of a ``slurmstepd`` are the job's own step processes.
+    """
+    keep = []
+    for pid in listed:
+        if pid in protected:
+            continue
+        parent = _parent(pid)
+        while parent not in (None, 0, 1) and _comm(parent) != "slurmstepd":
+            parent = _parent(parent)
+        if parent not in (None, 0, 1):
+            keep.append(pid)
+    return keep
+
+
+def lineage(pid: int) -> set[int]:
+    """``pid`` and its ancestors."""
+    out = set()
+    while pid not in (None, 0) and pid not in out:
+        out.add(pid)
+        pid = _parent(pid)
+    return out
+
+
+def kill_job_processes(env, job_id, workflow_pid):
+    """SIGKILL the step processes of a running SLURM job, as an OOM killer or a crash would
+    (:func:`job_step_pids`: never the workflow's process or this test's).
 
     (``scancel`` is not used: sacct then reports the state as ``CANCELLED by <uid>``, which
     snakemake-executor-plugin-slurm 2.8 does not recognise, so the workflow would wait on
     the job forever.)
     """
+    protected = lineage(os.getpid()) | lineage(workflow_pid)
     deadline = time.time() + 60
     while time.time() < deadline:
         out = subprocess.run(
             ["scontrol", "listpids", str(job_id)], env=env, capture_output=True, text=True
         ).stdout
-        pids = [int(line.split()[0]) for line in out.splitlines()[1:] if line.split()]
+        listed = [int(line.split()[0]) for line in out.splitlines()[1:] if line.split()]
+        pids = job_step_pids(listed, protected)
         if pids:
             for pid in pids:
                 try:
@@ -178,7 +226,7 @@ def kill_job_processes(env, job_id):
                     pass
             return
         time.sleep(0.2)
-    raise AssertionError(f"no process of SLURM job {job_id} found")
+    raise AssertionError(f"no step process of SLURM job {job_id} found")
 
 
 def kill_one_render(env, workdir, *args):
@@ -188,7 +236,7 @@ def kill_one_render(env, workdir, *args):
         cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
     )  # fmt: skip
     job_id, comment = wait_for_running_render(env, workdir, proc)
-    kill_job_processes(env, job_id)
+    kill_job_processes(env, job_id, proc.pid)
     output, _ = proc.communicate(timeout=1200)
     return proc.returncode, output, job_id, comment
 
@@ -230,3 +278,35 @@ def test_failed_run_is_reported_and_a_rerun_completes_only_what_is_missing(
         assert after[done] == ["COMPLETED"], f"{done} was rendered again"
     assert outputs(workdir) == outputs(local_reference)
     assert not list((workdir / "results").rglob(".*tmp-*"))
+
+
+def test_only_a_job_steps_own_processes_are_killed(tmp_path):
+    """Of a pid list reaching past the job (this test, its parents, init), only the child of
+    a ``slurmstepd`` is a step process (a copy of bash named slurmstepd stands in for it)."""
+    import shutil as sh
+
+    stepd = tmp_path / "slurmstepd"
+    sh.copy("/bin/bash", stepd)
+    parent = subprocess.Popen([str(stepd), "-c", "sleep 60 & wait"])
+    children: list[int] = []
+    try:
+        deadline = time.time() + 10
+        while not children and time.time() < deadline:
+            children = [
+                int(p.name)
+                for p in Path("/proc").iterdir()
+                if p.name.isdigit() and _parent(int(p.name)) == parent.pid
+            ]
+            time.sleep(0.05)
+        assert children and _comm(parent.pid) == "slurmstepd"
+        protected = lineage(os.getpid())
+        listed = [1, os.getpid(), *protected, parent.pid, *children]
+        assert job_step_pids(listed, protected) == children
+    finally:
+        for pid in children:
+            try:
+                os.kill(pid, 9)
+            except ProcessLookupError:
+                pass
+        parent.kill()
+        parent.wait()
