@@ -5,7 +5,7 @@ VENV := .venv
 PYTHON := $(VENV)/bin/python
 SNAKEMAKE := $(VENV)/bin/snakemake
 
-.PHONY: setup run test lint clean
+.PHONY: setup run test test-other-cpu lint clean
 
 setup:
 	bash scripts/setup.sh
@@ -15,6 +15,13 @@ run: setup
 
 test: setup
 	$(PYTHON) -m pytest
+
+# The suite as another x86-64 CPU would run it: Dr.Jit's kernels compiled for a generic AVX2
+# CPU with 4 lanes, numpy without its AVX2, FMA and AVX-512 kernels (README: Results across
+# machines).
+test-other-cpu: setup
+	STEREOVAR_JIT_TARGET=avx2-w4 NPY_DISABLE_CPU_FEATURES="AVX2 FMA3 AVX512F AVX512CD AVX512_SKX" \
+		$(PYTHON) -m pytest
 
 lint: setup
 	$(PYTHON) -m ruff check .
