@@ -193,3 +193,153 @@ def test_cached_bake_equals_bake_and_survives_a_corrupt_cache(tmp_path):
     other = bake_texture_cached({**spec, "seed": 4}, cache_dir=tmp_path)
     assert not np.array_equal(other, expected)
     assert len(list(tmp_path.glob("*.npy"))) == 2
+
+
+# --------------------------------------------------------------------------------------------
+# the baked-texture cache verifies what it reads
+# --------------------------------------------------------------------------------------------
+
+CACHED = {
+    "pattern": "planks",
+    "colors": [[0.2, 0.1, 0.05], [0.7, 0.5, 0.3]],
+    "seed": 5,
+    "resolution": 64,
+}
+
+
+def damaged_warnings(caplog) -> list[str]:
+    return [r.getMessage() for r in caplog.records if "is damaged" in r.getMessage()]
+
+
+def test_a_scaled_cached_texture_is_rebaked_with_one_warning(tmp_path, caplog):
+    from stereovar.scenes.textures import bake_texture_cached
+
+    fresh = bake_texture(CACHED)  # baked from scratch, no cache involved
+    bake_texture_cached(CACHED, cache_dir=tmp_path)
+    (path,) = tmp_path.glob("*.npy")
+    np.save(path, np.load(path) * np.float32(0.25))  # what a damaged cache looks like
+    image = bake_texture_cached(CACHED, cache_dir=tmp_path)
+    np.testing.assert_array_equal(image, fresh)
+    (line,) = damaged_warnings(caplog)
+    assert str(path) in line and "SHA-256" in line and "\n" not in line
+    # the cache holds the clean bake again, and reading it warns no more
+    np.testing.assert_array_equal(np.load(path), fresh)
+    caplog.clear()
+    np.testing.assert_array_equal(bake_texture_cached(CACHED, cache_dir=tmp_path), fresh)
+    assert damaged_warnings(caplog) == []
+
+
+def test_a_2x2_array_in_place_of_a_texture_is_rebaked(tmp_path, caplog):
+    import hashlib
+    import json
+
+    from stereovar.scenes.textures import bake_texture_cached
+
+    fresh = bake_texture(CACHED)
+    bake_texture_cached(CACHED, cache_dir=tmp_path)
+    (path,) = tmp_path.glob("*.npy")
+    tiny = np.full((2, 2, 3), 0.5, np.float32)  # float32 RGB, as a texture, but 2x2
+    np.save(path, tiny)
+    np.testing.assert_array_equal(bake_texture_cached(CACHED, cache_dir=tmp_path), fresh)
+    assert len(damaged_warnings(caplog)) == 1
+    from stereovar.scenes.textures import texture_cache_paths
+
+    _, record = texture_cache_paths(CACHED, tmp_path)
+    # the same array with a record that matches its bytes: refused for its shape
+    np.save(path, tiny)
+    meta = json.loads(record.read_text())
+    record.write_text(json.dumps({**meta, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}))
+    caplog.clear()
+    np.testing.assert_array_equal(bake_texture_cached(CACHED, cache_dir=tmp_path), fresh)
+    (line,) = damaged_warnings(caplog)
+    assert "(2, 2, 3)" in line and "(64, 64, 3)" in line
+
+
+def test_a_cached_texture_without_its_record_is_not_used(tmp_path):
+    from stereovar.scenes.textures import bake_texture_cached, texture_cache_paths
+
+    path, record = texture_cache_paths(CACHED, tmp_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.save(path, bake_texture(CACHED) * np.float32(0.25))  # a bare .npy, no record
+    np.testing.assert_array_equal(
+        bake_texture_cached(CACHED, cache_dir=tmp_path), bake_texture(CACHED)
+    )
+    assert record.exists()
+
+
+def test_the_record_describes_the_stored_bytes(tmp_path):
+    import hashlib
+    import json
+
+    from stereovar.scenes.textures import bake_texture_cached, texture_cache_paths
+
+    image = bake_texture_cached(CACHED, cache_dir=tmp_path)
+    path, record = texture_cache_paths(CACHED, tmp_path)
+    meta = json.loads(record.read_text())
+    assert meta["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert meta["shape"] == [64, 64, 3] and meta["dtype"] == "float32"
+    assert not image.flags.writeable  # shared by the compilers of one process
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([path.name, record.name])
+
+
+WALL_SCENE = """\
+name: textured_wall
+camera: {origin: [0.0, 0.0, 0.0], target: [0.0, 0.0, 3.0], up: [0.0, 1.0, 0.0], fov_deg: 50.0}
+textures:
+  paper: {pattern: stripes, colors: [[0.7, 0.6, 0.5], [0.2, 0.3, 0.4]], seed: 7, resolution: 64}
+materials:
+  paper: {type: diffuse, texture: paper}
+objects:
+- name: wall
+  shape: rectangle
+  material: paper
+  transform: {translate: [0.0, 0.0, 3.0], rotate: [0.0, 180.0, 0.0], scale: [3.0, 3.0, 1.0]}
+lights:
+- name: lamp
+  radiance: [20.0, 20.0, 20.0]
+  transform: {translate: [1.5, 0.0, 0.5], scale: [0.3, 0.3, 1.0]}
+"""
+"""A textured wall lit from beside the camera: a scene that compiles in a moment."""
+
+
+def test_renders_and_the_render_cache_never_hold_damaged_texture_pixels(
+    mi, tmp_path, monkeypatch, caplog
+):
+    """A render job reading a damaged texture cache renders (and caches) exactly what a job
+    with a clean cache does."""
+    from stereovar.io.cache import RenderCache
+    from stereovar.io.store import open_dataset
+    from stereovar.jobs.render import render_job
+    from stereovar.renderers.mitsuba.scene import baked_texture
+
+    monkeypatch.setenv("STEREOVAR_CACHE_DIR", str(tmp_path / "cache"))
+    rig = {"width": 32, "height": 18, "baseline_m": 0.026, "convention": "paper"}
+    spec = tmp_path / "textured_wall.yaml"
+    spec.write_text(WALL_SCENE)
+
+    def run(name):
+        baked_texture.cache_clear()  # the per-process cache of bakes: read the disk again
+        outs = {v: tmp_path / f"{name}_{v}.zarr" for v in ("left", "right")}
+        render_job(spec, outs, seeds=[0], spp=2, cache=tmp_path / f"renders_{name}", **rig)
+        return [open_dataset(outs[v])["radiance"].values for v in ("left", "right")]
+
+    try:
+        clean = run("clean")
+        (texture,) = sorted((tmp_path / "cache" / "textures").glob("*.npy"))
+        np.save(texture, np.load(texture) * np.float32(0.25))
+        damaged = run("damaged")
+    finally:
+        baked_texture.cache_clear()
+    assert clean[0].mean() > 0.01  # the wall is lit and seen
+    for a, b in zip(clean, damaged, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert len(damaged_warnings(caplog)) == 1
+    entries = {p.name: p for p in (tmp_path / "renders_clean").rglob("*.zarr") if p.is_dir()}
+    cache = RenderCache(tmp_path / "renders_damaged")
+    assert len(entries) == 2 and sorted(entries) == sorted(
+        p.name for p in cache.root.rglob("*.zarr") if p.is_dir()
+    )
+    for name, path in entries.items():
+        np.testing.assert_array_equal(
+            cache.get(name.removesuffix(".zarr")), open_dataset(path)["radiance"].values
+        )

@@ -24,11 +24,15 @@ at ``((j + 0.5) / n, (i + 0.5) / n)``.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
+import logging
 import os
 from pathlib import Path
 
 import numpy as np
+
+log = logging.getLogger("stereovar")
 
 PATTERNS = ("planks", "tiles", "noise", "stripes", "checker", "grain")
 
@@ -361,33 +365,113 @@ def texture_cache_dir() -> Path:
     return Path(root) / "textures"
 
 
-def bake_texture_cached(spec: dict, cache_dir=None) -> np.ndarray:
-    """:func:`bake_texture` with a content-addressed on-disk cache.
+def texture_shape(spec: dict) -> tuple[int, int, int]:
+    """Shape of the bitmap :func:`bake_texture` gives for ``spec``: ``(n, n, 3)`` with ``n``
+    its ``resolution`` (default 256)."""
+    n = int(spec.get("resolution", 256))
+    return (n, n, 3)
 
-    The key is the SHA-256 of the canonical JSON of ``spec`` and :data:`TEXTURE_VERSION`, so a
-    cached image is only reused for the identical recipe. Every render job compiles its scene
-    afresh; the cache spares each one the baking (about a second for a scene with several
-    1024² textures). An unreadable or unwritable cache falls back to baking.
+
+def texture_cache_paths(spec: dict, cache_dir=None) -> tuple[Path, Path]:
+    """Where the cached bake of ``spec`` lives: the ``.npy`` bitmap and its ``.json`` record.
+
+    Both are named by the SHA-256 of the canonical JSON of ``spec`` and
+    :data:`TEXTURE_VERSION`, so a cached image is only reused for the identical recipe.
     """
     key = json.dumps({"spec": spec, "version": TEXTURE_VERSION}, sort_keys=True)
     digest = hashlib.sha256(key.encode()).hexdigest()
-    path = Path(cache_dir or texture_cache_dir()) / f"{digest}.npy"
+    root = Path(cache_dir or texture_cache_dir())
+    return root / f"{digest}.npy", root / f"{digest}.json"
+
+
+def read_cached_texture(spec: dict, cache_dir=None) -> tuple[np.ndarray | None, str | None]:
+    """The cached bake of ``spec``, verified against what was recorded when it was baked.
+
+    The bytes of the ``.npy`` file are read once; their SHA-256 must equal the one in the
+    record beside it, and the array decoded from those same bytes must be float32 of
+    :func:`texture_shape`.
+
+    Parameters
+    ----------
+    spec : dict
+        A texture spec (:func:`bake_texture`).
+    cache_dir : path-like, optional
+        The cache (default :func:`texture_cache_dir`).
+
+    Returns
+    -------
+    image : numpy.ndarray or None
+        The verified bitmap; None when there is none to use.
+    problem : str or None
+        Why the cached file was refused (one phrase), or None when it was used or there is
+        no cached file.
+    """
+    path, record_path = texture_cache_paths(spec, cache_dir)
     try:
-        image = np.load(path, allow_pickle=False)
-        if image.dtype == np.float32 and image.ndim == 3:
-            return image
-    except (OSError, ValueError):
-        pass
-    image = bake_texture(spec)
-
-    def save(tmp):
-        with open(tmp, "wb") as fh:
-            np.save(fh, image, allow_pickle=False)
-
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return None, None
+    except OSError as err:
+        return None, f"it cannot be read ({err.strerror or err})"
     try:
-        from ..io.store import write_file
+        recorded = json.loads(record_path.read_text())["sha256"]
+    except FileNotFoundError:
+        return None, f"its record {record_path.name} of the SHA-256 it was baked with is missing"
+    except (OSError, ValueError, KeyError, TypeError):
+        return None, f"its record {record_path.name} is unreadable"
+    actual = hashlib.sha256(data).hexdigest()
+    if actual != recorded:
+        return None, f"its SHA-256 is {actual}, not the {recorded} it was baked with"
+    try:
+        image = np.load(io.BytesIO(data), allow_pickle=False)
+    except (OSError, ValueError, EOFError) as err:
+        return None, f"it is not a NumPy array ({err})"
+    shape = texture_shape(spec)
+    if not isinstance(image, np.ndarray) or image.dtype != np.float32 or image.shape != shape:
+        found = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else "no array"
+        return None, f"it holds {found}, not float32 {shape}"
+    return image, None
 
-        write_file(path, save)
-    except OSError:
-        pass
+
+def bake_texture_cached(spec: dict, cache_dir=None) -> np.ndarray:
+    """:func:`bake_texture` with a verified, content-addressed on-disk cache.
+
+    Every render job compiles its scene afresh; the cache spares each one the baking (about a
+    second for a scene with several 1024² textures). A bake is stored as a ``.npy`` file and a
+    ``.json`` record of its SHA-256, shape and dtype (:func:`texture_cache_paths`), each
+    written atomically. A cached file is used only when it verifies
+    (:func:`read_cached_texture`); a damaged one is baked again and replaced, with one warning
+    naming it, so a render never uses damaged pixels. An unwritable cache falls back to
+    baking.
+
+    Returns
+    -------
+    numpy.ndarray, shape (resolution, resolution, 3), dtype float32
+        Equal to ``bake_texture(spec)``; read-only, as it may be shared by the callers.
+    """
+    from ..errors import StereovarError
+    from ..io.store import write_file
+
+    image, problem = read_cached_texture(spec, cache_dir)
+    if image is None:
+        path, record_path = texture_cache_paths(spec, cache_dir)
+        if problem:
+            log.warning("baked texture %s is damaged: %s; baking it again", path, problem)
+        image = bake_texture(spec)
+        buffer = io.BytesIO()
+        np.save(buffer, image, allow_pickle=False)
+        data = buffer.getvalue()
+        record = {
+            "sha256": hashlib.sha256(data).hexdigest(),
+            "shape": list(image.shape),
+            "dtype": str(image.dtype),
+            "spec": spec,
+            "version": TEXTURE_VERSION,
+        }
+        try:
+            write_file(path, lambda tmp: Path(tmp).write_bytes(data))
+            write_file(record_path, lambda tmp: Path(tmp).write_text(json.dumps(record)))
+        except (OSError, StereovarError) as err:
+            log.info("baked texture %s not cached (%s)", path, err)
+    image.flags.writeable = False
     return image
