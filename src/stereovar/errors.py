@@ -25,6 +25,11 @@ class StoreError(StereovarError):
     """A stored result (e.g. a render) is missing, damaged or incomplete and must be rerun."""
 
 
+class WriteError(StereovarError):
+    """A result cannot be written (a full disk, a read-only folder); what was written before
+    is kept, and the same command resumes once the cause is fixed."""
+
+
 class ImageError(StereovarError):
     """An image, disparity, depth or mask file cannot be read or has the wrong shape."""
 

@@ -7,6 +7,7 @@ only by a complete new one.
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import uuid
@@ -22,6 +23,65 @@ ZARR_FORMAT = 2
 zarr-python 2 and 3 alike)."""
 
 
+_WRITE_FAILURES = {
+    errno.ENOSPC: "free space at {where}",
+    errno.EDQUOT: "free space at {where} (or raise your disk quota there)",
+    errno.EFBIG: (
+        "the file is larger than this process (ulimit -f) or the file system at {where} "
+        "allows; raise the limit or write to another file system"
+    ),
+    errno.EROFS: "make {where} writable (its file system is mounted read-only)",
+}
+"""Errors only a write gives, with the fix of each (``{where}``: the target's folder)."""
+
+
+def write_error(err: OSError, path, tmp=None):
+    """The one-line error of ``err`` raised while writing ``path`` (through ``tmp``).
+
+    Parameters
+    ----------
+    err : OSError
+        What the write raised.
+    path : path-like
+        The result being written.
+    tmp : path-like, optional
+        The temporary path it was written to (:func:`atomic_path`).
+
+    Returns
+    -------
+    stereovar.errors.WriteError or None
+        ``cannot write <path>: <reason>; <fix>, then rerun the same command (nothing already
+        computed is lost)``; None when ``err`` is not a failure to write there (a file it
+        names lies elsewhere, e.g. an input read while writing), so the caller raises it
+        unchanged.
+    """
+    from ..errors import WriteError
+
+    path = Path(os.path.abspath(path))
+    own = [path] + ([Path(os.path.abspath(tmp))] if tmp is not None else [])
+    named = [
+        Path(os.path.abspath(os.fsdecode(name)))
+        for name in (err.filename, err.filename2)
+        if isinstance(name, (str, bytes, os.PathLike))
+    ]
+    ours = any(n in own or any(o in n.parents for o in own) or n in path.parents for n in named)
+    if err.errno not in _WRITE_FAILURES and not ours:
+        return None
+    where = next((d for d in path.parents if d.exists()), path.parent)
+    if err.errno in _WRITE_FAILURES:
+        fix = _WRITE_FAILURES[err.errno].format(where=where)
+    elif err.errno in (errno.EACCES, errno.EPERM):
+        fix = f"make {where} writable"
+    else:
+        fix = f"check {where} and the disk it is on"
+    code = errno.errorcode.get(err.errno, "") if err.errno is not None else ""
+    reason = (err.strerror or str(err)) + (f" ({code})" if code else "")
+    return WriteError(
+        f"cannot write {path}: {reason}; {fix}, then rerun the same command "
+        "(nothing already computed is lost)"
+    )
+
+
 def _temporary_sibling(path: Path) -> Path:
     return path.with_name(f".{path.name}.tmp-{os.getpid()}-{uuid.uuid4().hex[:8]}")
 
@@ -31,7 +91,11 @@ def _replace(tmp: Path, path: Path) -> None:
     if path.is_dir() and not path.is_symlink():
         old = _temporary_sibling(path)
         os.rename(path, old)
-        os.rename(tmp, path)
+        try:
+            os.rename(tmp, path)
+        except OSError:
+            os.rename(old, path)  # the previous result stays where it was
+            raise
         shutil.rmtree(old, ignore_errors=True)
     else:
         os.replace(tmp, path)
@@ -41,14 +105,21 @@ def _replace(tmp: Path, path: Path) -> None:
 def atomic_path(path):
     """Yield a temporary path to write to; rename it onto ``path`` if the block succeeds.
 
-    On an exception the temporary file or directory is removed and ``path`` is untouched.
+    On an exception the temporary file or directory is removed and ``path`` is untouched. A
+    failure to write there (a full disk, a read-only folder; :func:`write_error`) is raised as
+    a one-line :class:`~stereovar.errors.WriteError` naming ``path`` and the fix.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = _temporary_sibling(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
         _replace(tmp, path)
+    except OSError as err:
+        error = write_error(err, path, tmp)
+        if error is None:
+            raise
+        raise error from err
     finally:
         if tmp.is_dir():
             shutil.rmtree(tmp, ignore_errors=True)

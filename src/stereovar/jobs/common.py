@@ -21,7 +21,9 @@ def run_job(log_path, job, **kwargs) -> None:
     """Run ``job(**kwargs)`` with logging to ``log_path`` and to stderr.
 
     A :class:`~stereovar.errors.StereovarError` becomes one ``error:`` line on stderr and in
-    the log, and exit status 1, without a traceback; other exceptions propagate.
+    the log, and exit status 1, without a traceback. Any other exception is a defect: its
+    traceback goes to stderr and to the log, so a failed job's log is never empty, and the
+    exit status is 1.
     """
     handlers = [logging.StreamHandler(sys.stderr)]
     if log_path:
@@ -38,6 +40,9 @@ def run_job(log_path, job, **kwargs) -> None:
         job(**kwargs)
     except StereovarError as err:
         log.error("error: %s", err)
+        raise SystemExit(1) from None
+    except Exception as err:
+        log.exception("error: unexpected %s: %s", type(err).__name__, err)
         raise SystemExit(1) from None
     log.info("done in %.2f s", time.perf_counter() - start)
 
