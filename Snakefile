@@ -5,6 +5,13 @@ from snakemake.utils import min_version
 
 min_version("8.20")
 
+# Config files read as stereovar reads YAML before Snakemake uses them: a tag such as
+# !!python/object in config.yaml (which Snakemake reports naming neither the file nor the
+# tag) or aliases that expand past what a config holds are one line naming file and line.
+from stereovar.config import check_config_files_or_exit
+
+check_config_files_or_exit(["config.yaml", *workflow.overwrite_configfiles])
+
 
 configfile: "config.yaml"
 

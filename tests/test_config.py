@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -71,6 +72,7 @@ DEFAULTS = {
         "render_threads": 2,
         "gpus_per_render": 0,
         "gpu_model": None,
+        "max_mem_mb": None,
     },
     "preview": {"spp": 32},
     "validation": {"n_seeds": 64, "spp": None},
@@ -298,6 +300,11 @@ def test_conda_env_pins_match_pyproject():
         ({"intervention": {"window": 4}}, ["'intervention.window'", "even", "5"]),
         ({"intervention": {"window": 0}}, ["'intervention.window'"]),
         ({"intervention": {"block": 200}}, ["'intervention.block'", "320x180", "180"]),
+        ({"intervention": {"window": 181}}, ["'intervention.window'", "320x180", "at most 179"]),
+        (
+            {"resolution": {"width": 48, "height": 27}, "intervention": {"window": 999}},
+            ["'intervention.window'", "999 is larger than the image (48x27)", "at most 27"],
+        ),
     ],
 )
 def test_intervention_settings_are_checked(override, needles):
@@ -307,6 +314,26 @@ def test_intervention_settings_are_checked(override, needles):
     assert "\n" not in message
     for needle in needles:
         assert needle in message
+
+
+def test_the_largest_window_accepted_is_the_largest_that_scores_a_pixel():
+    # A SAD window scores a pixel only where it lies inside the image, so on 48x27 a side
+    # of 27 scores one row and 29 nothing: every Table 3 row would be NaN.
+    from stereovar.intervention.scan import disparity_slices
+
+    field = np.random.default_rng(0).random((27, 48))
+    scored = {
+        window: sum(
+            block.size
+            for _, block, _ in disparity_slices(field, field, max_disparity=4, window=window)
+        )
+        for window in (27, 29)
+    }
+    assert scored[27] > 0 and scored[29] == 0
+    small = {"resolution": {"width": 48, "height": 27}}
+    assert validate_config({**small, "intervention": {"window": 27}}, SCHEMA)
+    with pytest.raises(ConfigError, match=r"intervention\.window': 29 .* at most 27"):
+        validate_config({**small, "intervention": {"window": 29}}, SCHEMA)
 
 
 def test_command_line_strings_become_the_scalars_the_schema_asks_for():

@@ -19,9 +19,15 @@ from collections.abc import Mapping
 import jsonschema
 
 from .errors import ConfigError
-from .schema import fill_defaults, load_yaml, plain
+from .schema import MAX_YAML_VALUES, expanded_size, fill_defaults, load_yaml, plain
 
-__all__ = ["load_config", "merge_configs", "validate_config", "validate_config_or_exit"]
+__all__ = [
+    "check_config_files_or_exit",
+    "load_config",
+    "merge_configs",
+    "validate_config",
+    "validate_config_or_exit",
+]
 
 _TYPE_NAMES = {
     "integer": "an integer",
@@ -313,14 +319,55 @@ def _check_intervention(config: dict) -> None:
             f"config key 'intervention.window': {window} is even; use an odd window "
             f"(e.g. {window + 1}) so it is centred on the pixel"
         )
-    block = intervention.get("block")
     size = config.get("resolution", {})
-    smallest = min(size.get("width", block or 1), size.get("height", block or 1))
-    if block is not None and block > smallest:
+    width, height = size.get("width"), size.get("height")
+    if width is None or height is None:
+        return
+    smallest = min(width, height)
+    # A window or block larger than the image leaves no pixel to score: every Table 3 row
+    # would be NaN. The window is odd, so its bound is the largest odd side that fits.
+    for key, largest in (("window", smallest - (smallest + 1) % 2), ("block", smallest)):
+        value = intervention.get(key)
+        if value is not None and value > smallest:
+            raise ConfigError(
+                f"config key 'intervention.{key}': {value} is larger than the image "
+                f"({width}x{height}); use at most {largest}"
+            )
+
+
+def _check_size(config: Mapping, what: str) -> None:
+    """Refuse a config that holds more than :data:`~stereovar.schema.MAX_YAML_VALUES` values
+    once its shared references (YAML aliases) are expanded, or contains itself, before
+    anything copies it; the message names the key that holds them."""
+
+    def size(value) -> float:
+        try:
+            return expanded_size(value)
+        except ValueError:
+            return float("inf")
+
+    total = size(config)
+    if total <= MAX_YAML_VALUES:
+        return
+    # name the deepest mapping key that alone holds too many
+    path, node, held = [], config, total
+    while isinstance(node, Mapping) and node:
+        key, largest = max(((k, size(v)) for k, v in node.items()), key=lambda kv: kv[1])
+        if largest <= MAX_YAML_VALUES:
+            break
+        path.append(key)
+        node, held = node[key], largest
+        if held == float("inf"):
+            break
+    where = f"{what} key '{_key(path)}'" if path else what
+    if held == float("inf"):
         raise ConfigError(
-            f"config key 'intervention.block': {block} is larger than the image "
-            f"({size.get('width')}x{size.get('height')}); use at most {smallest}"
+            f"{where}: contains itself (a recursive YAML alias); give the values in full"
         )
+    raise ConfigError(
+        f"{where}: holds {held:,} values once its YAML aliases are expanded, more than the "
+        f"{MAX_YAML_VALUES:,} a config may hold; write the values out or repeat fewer aliases"
+    )
 
 
 def validate_config(config: Mapping, schema_path, *, command_line: Mapping | None = None) -> dict:
@@ -345,7 +392,10 @@ def validate_config(config: Mapping, schema_path, *, command_line: Mapping | Non
     ConfigError
         With a one-line message naming the dotted key and what is allowed, when a key is
         unknown, a value has the wrong type or is out of range, ``render.spp_sweep.spp``
-        lacks ``render.spp``, or ``render.spp_sweep.scene`` is not in ``scenes``.
+        lacks ``render.spp``, ``render.spp_sweep.scene`` is not in ``scenes``, an
+        intervention window or block is larger than the image, or the config holds more
+        than :data:`~stereovar.schema.MAX_YAML_VALUES` values with its YAML aliases
+        expanded (checked before anything is copied).
     """
     schema = _load_schema(schema_path)
     if config is None:
@@ -355,6 +405,8 @@ def validate_config(config: Mapping, schema_path, *, command_line: Mapping | Non
             f"config: expected a mapping of keys to values, got {_show(config)} "
             f"({_type_name(config)})"
         )
+    _check_size(config, "config")
+    _check_size(command_line or {}, "--config")
     filled = plain(config)
     _coerce_strings(filled, schema, plain(command_line or {}))
     fill_defaults(filled, schema)
@@ -474,3 +526,45 @@ def load_config(path, schema_path) -> dict:
             )
         merged = merge_configs(merged, loaded)
     return validate_config(merged, schema_path)
+
+
+def check_config_files_or_exit(paths) -> None:
+    """Read each workflow config file as stereovar reads YAML (:func:`~stereovar.schema.
+    load_yaml`), and stop with one line naming the file, the line and the problem.
+
+    Snakemake reads config files with a loader that builds the Python objects some tags
+    name (``!!python/name:...``) and reports a tag it refuses as "Config file is not valid
+    JSON or YAML", without the file or the tag; and it loads aliases that expand past what
+    a config may hold. Run before the ``configfile:`` directive, this names both. A file
+    that is valid JSON is left to Snakemake (JSON has neither tags nor aliases); a file
+    that does not exist is left to Snakemake's own message.
+
+    Parameters
+    ----------
+    paths : iterable of str or os.PathLike
+        The workflow's config files (``config.yaml`` and ``--configfile`` files).
+
+    Raises
+    ------
+    SystemExit
+        With the message ``stereovar: <one-line ConfigError message>``.
+    """
+    import json
+    from pathlib import Path
+
+    cwd = Path.cwd()
+    for path in paths:
+        path = Path(path)
+        if path.is_absolute() and path.is_relative_to(cwd):
+            path = path.relative_to(cwd)  # as given on the command line
+        try:
+            json.loads(path.read_text(encoding="utf-8"))
+            continue
+        except (OSError, UnicodeDecodeError):
+            continue
+        except ValueError:
+            pass
+        try:
+            load_yaml(path, "config file")
+        except ConfigError as err:
+            raise SystemExit(f"stereovar: {err}") from None

@@ -10,7 +10,10 @@ replaces. The workflow therefore checks up front (``workflow/rules/common.smk``)
   into one table came from one back end (:func:`check_backends`), in ``onstart`` for local
   runs, where the variant ``auto`` resolves to is this machine's;
 * a lock left by a run that was killed on this machine (:func:`stale_lock`), so the same
-  command resumes.
+  command resumes;
+* that the directories the run writes (``results/``, ``logs/``, ...) can be written
+  (:func:`check_writable`), when the workflow is parsed: Snakemake would otherwise stop with
+  a ``ProtectedOutputException`` naming no fix, or fail inside the first job.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import socket
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from .errors import BackendError
+from .errors import BackendError, StereovarError
 
 BACKEND_KEYS = ("renderer", "renderer_version", "variant")
 """Render attributes that must agree across the renders a table pools."""
@@ -157,3 +160,71 @@ def mark_run(state_dir) -> None:
     tmp = state / f".{RUN_MARKER}.{os.getpid()}"
     tmp.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid()}))
     os.replace(tmp, state / RUN_MARKER)
+
+
+STORE_SUFFIX = ".zarr"
+"""Directories written and replaced as one output: only the store itself is checked."""
+
+
+def unwritable_paths(roots: Iterable) -> list[Path]:
+    """The paths this process could not write or replace among ``roots`` and everything
+    under them (top-down, inside a store only the store), in order.
+
+    A root that does not exist stands for its nearest existing parent, in which the run
+    would create it. Writability is :func:`os.access` with ``W_OK``, as Snakemake checks
+    its outputs: it accounts for permissions, the user and read-only mounts, and writes
+    nothing.
+    """
+    found: list[Path] = []
+    for root in map(Path, roots):
+        if not root.exists():
+            parent = next(p for p in root.absolute().parents if p.exists())
+            if not os.access(parent, os.W_OK):
+                found.append(parent)
+            continue
+        if not os.access(root, os.W_OK):
+            found.append(root)
+        if not root.is_dir() or root.name.endswith(STORE_SUFFIX):
+            continue
+        for top, dirs, files in os.walk(root):
+            for name in sorted(dirs) + sorted(files):
+                path = Path(top) / name
+                if not path.is_symlink() and not os.access(path, os.W_OK):
+                    found.append(path)
+            dirs[:] = sorted(d for d in dirs if not d.endswith(STORE_SUFFIX))
+    return list(dict.fromkeys(found))
+
+
+def _read_only_mount(path: Path) -> bool:
+    try:
+        return bool(os.statvfs(path).f_flag & os.ST_RDONLY)
+    except OSError:
+        return False
+
+
+def check_writable(roots: Iterable) -> None:
+    """Stop a run that could not write its outputs (:func:`unwritable_paths`).
+
+    Raises
+    ------
+    StereovarError
+        One line naming the first such path, why (a read-only file system, or the
+        permissions) and the fix, and how many more there are.
+    """
+    roots = [Path(r) for r in roots]
+    found = unwritable_paths(roots)
+    if not found:
+        return
+    first = found[0]
+    # the fix covers the whole tree the first path is in
+    top = next((r for r in roots if r.exists() and (r == first or r in first.parents)), first)
+    more = f" ({len(found) - 1} more paths there are not writable either)" if found[1:] else ""
+    if _read_only_mount(first):
+        raise StereovarError(
+            f"{first} is on a read-only file system and this run writes there{more}; "
+            "remount it read-write, or run from a copy of the project on a writable disk"
+        )
+    raise StereovarError(
+        f"{first} is not writable by this user and this run writes there{more}; make it "
+        f"writable (chmod -R u+w {top}) or run as its owner"
+    )

@@ -10,6 +10,8 @@ The constants are measured on the default and paper configurations (see the READ
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 MIB = 2**20
 
@@ -90,3 +92,108 @@ def intervention_runtime(
     scans = 2 * n_seeds + 4
     seconds = 30.0 + 20e-9 * scans * n_disparities * width * height
     return _minutes(seconds + 0.2 * n_seeds * width * height / 1e6, attempt)
+
+
+ANALYSIS_IMAGES_MAX = 24
+"""Most images one analysis job holds at once: the intervention and the estimator check
+(``intervention_resources`` in ``workflow/rules/common.smk``, ``estimators.smk``)."""
+
+
+def job_mem_requests(config) -> dict[str, int]:
+    """First-attempt memory request (MB) of each kind of job a validated config runs.
+
+    ``render``: a render job of the largest seed batch (``render.seeds_per_job`` seeds,
+    at most the most seeds any run renders); ``moments``: a moments render job;
+    ``analysis``: an analysis job holding :data:`ANALYSIS_IMAGES_MAX` images. An audit
+    renders nothing, so it has only ``analysis``.
+    """
+    width, height = int(config["resolution"]["width"]), int(config["resolution"]["height"])
+    requests = {"analysis": analysis_mem_mb(width, height, ANALYSIS_IMAGES_MAX)}
+    if config.get("audit"):
+        return requests
+    render = config["render"]
+    seeds = max(render["n_seeds"], (config.get("intervention") or {}).get("n_seeds") or 0)
+    batch = min(render["seeds_per_job"], seeds)
+    requests["render"] = render_mem_mb(width, height, batch=batch)
+    requests["moments"] = moments_mem_mb(width, height)
+    return requests
+
+
+def machine_mem_mb() -> int:
+    """Memory of this machine in MB (10^6 bytes, Snakemake's ``mem_mb`` unit): the physical
+    memory, or the container's cgroup limit when that is lower."""
+    total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+    except OSError:
+        limit = "max"
+    if limit.isdigit():
+        total = min(total, int(limit))
+    return total // 10**6
+
+
+MACHINE = "this machine's memory"
+
+
+def memory_limit(config, *, global_mem_mb=None, machine_mb=None) -> tuple[int, str]:
+    """The most memory (MB) one job of this run may request, and where that bound comes
+    from, in words.
+
+    ``cluster.max_mem_mb`` when set (a cluster node's memory), else this machine's memory
+    (``machine_mb``, :func:`machine_mem_mb` by default); lowered to ``global_mem_mb``, the
+    run's ``--resources mem_mb`` (also from a profile's ``resources:``), which caps the
+    memory of the jobs running at once and so of any one job.
+    """
+    cap = (config.get("cluster") or {}).get("max_mem_mb")
+    if cap is not None:
+        limit, source = int(cap), "cluster.max_mem_mb"
+    else:
+        limit = machine_mem_mb() if machine_mb is None else int(machine_mb)
+        source = MACHINE
+    if global_mem_mb is not None and int(global_mem_mb) < limit:
+        limit, source = int(global_mem_mb), "--resources mem_mb"
+    return limit, source
+
+
+def largest_fitting_size(config, limit_mb: int) -> tuple[int, int] | None:
+    """The largest image size with the config's aspect ratio whose jobs all request at most
+    ``limit_mb`` (:func:`job_mem_requests`), or None when not even 1x1 fits."""
+    width, height = int(config["resolution"]["width"]), int(config["resolution"]["height"])
+
+    def fits(scale: float) -> bool:
+        size = {"width": max(1, int(width * scale)), "height": max(1, int(height * scale))}
+        return max(job_mem_requests({**config, "resolution": size}).values()) <= limit_mb
+
+    lo, hi = 0.0, 1.0
+    if not fits(lo):
+        return None
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
+    return max(1, int(width * lo)), max(1, int(height * lo))
+
+
+def check_job_memory(config, limit_mb: int, source: str) -> None:
+    """Refuse a config whose largest job would request more memory than ``limit_mb``.
+
+    Raises
+    ------
+    ConfigError
+        One line with the job, its request, the bound and where it comes from, and the
+        largest resolution of the same aspect ratio that fits.
+    """
+    from .errors import ConfigError
+
+    requests = job_mem_requests(config)
+    job, request = max(requests.items(), key=lambda item: item[1])
+    if request <= limit_mb:
+        return
+    width, height = config["resolution"]["width"], config["resolution"]["height"]
+    fitting = largest_fitting_size(config, limit_mb)
+    fix = f"use at most {fitting[0]}x{fitting[1]}" if fitting else "no resolution fits"
+    if source == MACHINE:
+        fix += " (on a cluster, set cluster.max_mem_mb to the memory of its largest node)"
+    raise ConfigError(
+        f"config key 'resolution': {width}x{height} makes each {job} job request "
+        f"{request:,} MB of memory, more than the {limit_mb:,} MB of {source}; {fix}"
+    )

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import copy
 import os
+import re
 from collections.abc import Mapping
+from functools import lru_cache
 from pathlib import Path
 
 from .errors import ConfigError, StereovarError
@@ -44,8 +46,166 @@ def plain(value, *, ndigits: int | None = None, strict: bool = False):
     return copy.deepcopy(value)
 
 
+MAX_YAML_VALUES = 100_000
+"""Most values (scalars, lists and mappings, counted with every YAML alias expanded) that a
+config, an audit config or a scene spec may hold. The largest shipped file holds a few
+hundred; a "billion laughs" file of nested aliases holds billions, which copying, validating
+or hashing would expand in memory."""
+
+
+def expanded_size(value) -> int:
+    """Number of values in ``value`` with every shared reference expanded, counted without
+    expanding anything.
+
+    A mapping counts as one value plus its keys and values, a list as one plus its items,
+    anything else as one. Each distinct list or mapping is counted once and its count reused
+    wherever it is referenced again, so the cost is that of the distinct objects (what YAML
+    aliases load to), not of the expanded tree.
+
+    Raises
+    ------
+    ValueError
+        When a list or mapping contains itself (a recursive YAML alias).
+    """
+    sizes: dict[int, int] = {}
+    open_ids: set[int] = set()
+
+    def size(node) -> int:
+        if isinstance(node, Mapping):
+            children = [c for item in node.items() for c in item]
+        elif isinstance(node, list | tuple):
+            children = list(node)
+        else:
+            return 1
+        key = id(node)
+        if key in sizes:
+            return sizes[key]
+        if key in open_ids:
+            raise ValueError("a list or mapping contains itself")
+        open_ids.add(key)
+        total = 1 + sum(size(c) for c in children)
+        open_ids.discard(key)
+        sizes[key] = total
+        return total
+
+    return size(value)
+
+
+def _yaml_size(node, sizes: dict) -> int:
+    """:func:`expanded_size` of a composed YAML node (an alias is the node it names)."""
+    key = id(node)
+    if key not in sizes:
+        value = node.value
+        if isinstance(value, list):
+            pairs = (c for item in value for c in (item if isinstance(item, tuple) else (item,)))
+            sizes[key] = 1 + sum(_yaml_size(c, sizes) for c in pairs)
+        else:
+            sizes[key] = 1
+    return sizes[key]
+
+
+@lru_cache(maxsize=1)
+def _bounded_loader():
+    """``yaml.SafeLoader`` that counts the values of the document as it composes it, aliases
+    expanded, and stops at the first node past ``limit`` (a recursive alias at once)."""
+    import yaml
+    from yaml.composer import ComposerError
+    from yaml.events import AliasEvent, CollectionStartEvent
+
+    class BoundedSafeLoader(yaml.SafeLoader):
+        limit = MAX_YAML_VALUES
+
+        def __init__(self, stream):
+            super().__init__(stream)
+            self._values = 0
+            self._sizes: dict = {}
+            self._open: set = set()
+
+        def compose_node(self, parent, index):
+            event = self.peek_event()
+            if isinstance(event, AliasEvent) and event.anchor in self._open:
+                raise ComposerError(
+                    None,
+                    None,
+                    f"alias *{event.anchor} refers to the list or mapping that contains "
+                    "it; a document cannot contain itself",
+                    event.start_mark,
+                )
+            anchor = event.anchor if isinstance(event, CollectionStartEvent) else None
+            if anchor is not None:
+                self._open.add(anchor)
+            try:
+                node = super().compose_node(parent, index)
+            finally:
+                self._open.discard(anchor)
+            # a node composed here counts itself (its children counted themselves); an
+            # alias counts everything it repeats
+            added = _yaml_size(node, self._sizes) if isinstance(event, AliasEvent) else 1
+            self._values += added
+            if self._values > self.limit:
+                raise ComposerError(
+                    None,
+                    None,
+                    f"the aliases up to here expand the document to more than "
+                    f"{self.limit:,} values; write the values out or repeat fewer aliases",
+                    event.start_mark,
+                )
+            return node
+
+    return BoundedSafeLoader
+
+
+def parse_yaml(text: str, *, name: str | None = None):
+    """``yaml.safe_load`` that refuses a document of more than :data:`MAX_YAML_VALUES`
+    values, YAML aliases expanded, and a recursive alias, before building anything.
+
+    Aliases load as shared references (as with ``yaml.safe_load``), so the result is as
+    small as the text; the bound keeps every later deep copy, validation or hash of it
+    small too.
+
+    Parameters
+    ----------
+    text : str
+        The YAML document.
+    name : str, keyword-only, optional
+        The file's name, shown in the error's position (``in "<name>", line L``).
+
+    Raises
+    ------
+    yaml.YAMLError
+        A ``MarkedYAMLError`` whose ``problem`` says what is wrong and ``problem_mark`` where:
+        a syntax error, a tag that builds a Python object, or the bounds above.
+    """
+    import io
+
+    stream = io.StringIO(text)
+    if name is not None:
+        stream.name = name
+    loader = _bounded_loader()(stream)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
+
+
+def yaml_problem(err) -> str:
+    """The problem of a ``yaml.YAMLError`` in words, on one line; a tag that would build a
+    Python object (``!!python/object:...``) is named as written, with the fix."""
+    problem = getattr(err, "problem", None) or "syntax error"
+    tag = re.search(r"the tag '(tag:yaml\.org,2002:|!)(python/[^']*)'", str(problem))
+    if tag:
+        bangs = "!" if tag.group(1) == "!" else "!!"
+        return (
+            f"the tag {bangs}{tag.group(2)} would build a Python object, which is never read; "
+            "remove the tag and give the plain value"
+        )
+    return " ".join(str(problem).split())
+
+
 def load_yaml(path, what: str, *, error: type[StereovarError] = ConfigError):
-    """Parse a YAML file; a missing, unreadable or invalid file is one ``error`` line."""
+    """Parse a YAML file (:func:`parse_yaml`); a missing, unreadable or invalid file, a tag
+    that builds a Python object, or aliases that expand past :data:`MAX_YAML_VALUES` values
+    are one ``error`` line naming the file and the line."""
     import yaml
 
     path = Path(path)
@@ -53,15 +213,15 @@ def load_yaml(path, what: str, *, error: type[StereovarError] = ConfigError):
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise error(f"{what} '{path}' does not exist") from None
-    except OSError as err:
-        raise error(f"{what} '{path}' cannot be read: {err.strerror}") from None
+    except (OSError, UnicodeDecodeError) as err:
+        why = getattr(err, "strerror", None) or str(err)
+        raise error(f"{what} '{path}' cannot be read: {why}") from None
     try:
-        return yaml.safe_load(text)
+        return parse_yaml(text, name=str(path))
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(err, "problem", None) or "syntax error"
-        raise error(f"{what} '{path}' is not valid YAML{where}: {problem}") from None
+        raise error(f"{what} '{path}' is not valid YAML{where}: {yaml_problem(err)}") from None
 
 
 def resolve(schema, root: Mapping):

@@ -20,7 +20,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ..errors import SceneError
-from ..schema import fill_defaults, plain, resolve
+from ..schema import fill_defaults, parse_yaml, plain, resolve, yaml_problem
 from .references import xml_references
 
 SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "scene.schema.yaml"
@@ -330,12 +330,14 @@ def load_scene_spec(path) -> dict:
     ------
     SceneError
         With a one-line message ``"<file>: <dotted key>: <problem>"`` for a missing file, a
-        YAML syntax error, a schema violation (for an enum, the allowed values; for an
-        unknown key, the allowed keys), a ``name`` that differs from the file stem, an object
-        referencing an unknown material, a diffuse or glossy material referencing an unknown
-        texture, a sphere with non-uniform scale, a lathe without a profile of at least two
-        points, duplicate object or light names, or a ``mitsuba_xml`` file that does not
-        exist, is not well-formed XML or names a file that does not exist
+        YAML syntax error, a tag that builds a Python object, YAML aliases that expand past
+        :data:`~stereovar.schema.MAX_YAML_VALUES` values, a schema violation (for an enum,
+        the allowed values; for an unknown key, the allowed keys), a ``name`` that differs
+        from the file stem, an object referencing an unknown material, a diffuse or glossy
+        material referencing an unknown texture, a sphere with non-uniform scale, a lathe
+        without a profile of at least two points, duplicate object or light names, or a
+        ``mitsuba_xml`` file that does not exist, is not well-formed XML or names a file
+        that does not exist
         (:func:`~stereovar.scenes.references.xml_references`).
     """
     import yaml
@@ -349,13 +351,11 @@ def load_scene_spec(path) -> dict:
     except (OSError, UnicodeDecodeError) as err:
         raise SceneError(f"{source}: (file): cannot read: {err}") from None
     try:
-        data = yaml.safe_load(text)
+        data = parse_yaml(text, name=source)
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "?"
-        problem = getattr(err, "problem", None) or str(err)
-        problem = " ".join(str(problem).split())
-        raise SceneError(f"{source}: (yaml): parse error at {where}: {problem}") from None
+        raise SceneError(f"{source}: (yaml): parse error at {where}: {yaml_problem(err)}") from None
     spec = validate_scene_dict(data, source=source)
     _check_semantics(spec, source, path)
     if "mitsuba_xml" in spec:
