@@ -16,6 +16,7 @@ import json
 import os
 import time
 import warnings
+from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
@@ -173,13 +174,19 @@ def _file_records(frame: Frame, old: dict, pool) -> dict:
 
 
 def _check_sizes(frame: Frame) -> tuple[int, int]:
-    first = next(iter(frame.renders[VIEWS[0]].values()))
-    size = image_size(first)
-    for path in frame.files():
-        other = image_size(path)
+    """The frame's size from its files' headers; a file whose header gives another size than
+    most of the frame's files is named, before any file is decoded."""
+    sizes = {path: image_size(path) for path in frame.files()}
+    size, count = Counter(sizes.values()).most_common(1)[0]  # a tie: the first render's
+    for path, other in sizes.items():
         if other != size:
+            others = (
+                f"the frame's other {count} files are"
+                if count == len(sizes) - 1
+                else f"{count} of the frame's {len(sizes)} files are"
+            )
             raise AuditError(
-                f"{path} is {other[1]}x{other[0]} px but {first} is {size[1]}x{size[0]}; every "
+                f"{path} is {other[1]}x{other[0]} px but {others} {size[1]}x{size[0]} px; every "
                 "render, disparity, depth and mask of a frame needs the same size: export them "
                 "at one resolution"
             )
@@ -391,7 +398,7 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
         )
     if not check.conclusive:
         report.warnings.append(
-            f"frame {frame.name}: the sign check is inconclusive (median error "
+            f"frame {frame.name}: the sign check is inconclusive: {check.reason} (median error "
             f"{100 * check.error:.1f}% declared, {100 * check.opposite_error:.1f}% opposite); "
             f"audit.convention: {settings.get('convention') or 'conventional'} is taken as given"
         )

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import AuditError
+from ..io.images import regular_file
 from ..rig import VIEWS
 
 FIELDS = ("frame", "view", "seed")
@@ -142,6 +143,8 @@ def discover(settings: dict) -> Discovery:
     AuditError
         A template field matches nothing, a frame or view has fewer than 2 renders, views or
         frames have different seed counts, or a frame lacks its ground truth.
+    ImageError
+        A ground-truth path is a named pipe, a device or a directory, not a file.
     """
     root = _root(settings)
     views = dict(settings.get("views") or {v: v for v in VIEWS})
@@ -239,7 +242,8 @@ def _ground_truth_files(frame, settings, views, root, render_fields) -> dict:
         for view in VIEWS if "view" in fields else VIEWS[:1]:
             rel = template.replace("{frame}", frame).replace("{view}", str(views[view]))
             path = Path(rel) if Path(rel).is_absolute() else root / rel
-            if path.is_file():
+            if path.exists():
+                regular_file(path)  # a named pipe or a device is named as such
                 paths[view] = path
             elif view == VIEWS[0]:  # the right view's ground truth is optional
                 raise AuditError(

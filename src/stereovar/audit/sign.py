@@ -5,6 +5,11 @@ the left with the right disparity sign reproduces the left seed mean up to noise
 interpolation and view-dependent shading; with the opposite sign it does not. The audit
 warps with the declared convention and with the opposite one and stops when the opposite
 one matches clearly better (:func:`sign_check`), before any statistic is computed.
+
+The check can only tell the signs apart where the right image differs between the two
+matches: where it is flat (black, saturated, or made flat by 8-bit quantisation of a dark
+render) both warps give the same value and both errors are the same. A check whose declared
+sign is not clearly better says so, with the reason (:attr:`SignCheck.reason`).
 """
 
 from __future__ import annotations
@@ -21,6 +26,14 @@ CLEARLY_BETTER = 0.5
 
 MIN_PIXELS = 100
 """Fewer compared pixels than this leave the check inconclusive."""
+
+SAME = 1e-6
+"""The two warps agree at a pixel when they differ by at most this fraction of the left
+luminance (floored at this value, as in :func:`median_relative_error`)."""
+
+FLAT = 0.5
+"""When the two warps agree at this fraction of the pixels compared under both signs or
+more, an inconclusive check is put down to a flat image."""
 
 
 def median_relative_error(left, warped, mask) -> float:
@@ -51,6 +64,9 @@ class SignCheck:
     opposite_error: float
     n_pixels: int
     opposite_n_pixels: int
+    same_fraction: float = math.nan
+    """Fraction of the pixels compared under both signs at which the two warps agree
+    (:data:`SAME`); NaN when there is none."""
 
     @property
     def opposite_wins(self) -> bool:
@@ -69,8 +85,23 @@ class SignCheck:
         return (
             self.n_pixels >= MIN_PIXELS
             and math.isfinite(self.error)
-            and not self.error > CLEARLY_BETTER * self.opposite_error
+            and not self.error >= CLEARLY_BETTER * self.opposite_error
         )
+
+    @property
+    def reason(self) -> str:
+        """Why the check is inconclusive (empty when it is not)."""
+        if self.conclusive:
+            return ""
+        if self.n_pixels < MIN_PIXELS:
+            return f"only {self.n_pixels} pixels can be compared ({MIN_PIXELS} needed)"
+        if self.same_fraction >= FLAT:
+            return (
+                f"the two signs' warps agree at {100 * self.same_fraction:.1f}% of the "
+                f"{self.n_pixels} compared pixels (the renders are flat there: black, "
+                "saturated or flattened by quantisation), so neither sign can match better"
+            )
+        return "neither sign matches clearly better"
 
     def attrs(self) -> dict:
         """The check as store attributes."""
@@ -95,17 +126,29 @@ def sign_check(mean_left, mean_right, disparity, *, sign: int, valid=None) -> Si
         The declared convention's sign.
     valid : array_like of bool (H, W), optional
         Pixels to compare (e.g. valid and not glass).
+
+    Returns
+    -------
+    SignCheck
+        Both errors and pixel counts, and the fraction of the pixels compared under both
+        signs at which the two warps agree (:data:`SAME`).
     """
     # Eq. 2 is linear, so the channel mean of the warp is the warp of the channel mean: warp
     # the right luminance only, at the valid pixels only.
     lum_left = np.asarray(mean_left, dtype=np.float64).mean(axis=-1).reshape(-1)
     lum_right = np.asarray(mean_right, dtype=np.float64).mean(axis=-1)
-    results = []
+    results, compared = [], []
     for s in (sign, -sign):
         plan = WarpPlan(disparity, sign=s, valid=valid)
         left, warped = lum_left[plan.index], plan.sample(lum_right)
         mask = np.isfinite(left) & np.isfinite(warped)
         error = median_relative_error(left[:, None], warped[:, None], mask)
         results.append((error, int(mask.sum())))
+        compared.append((plan.index[mask], left[mask], warped[mask]))
     (err, n), (err_opp, n_opp) = results
-    return SignCheck(int(sign), err, err_opp, n, n_opp)
+    (pixels, left, warped), (pixels_opp, _, warped_opp) = compared
+    _, at, at_opp = np.intersect1d(pixels, pixels_opp, assume_unique=True, return_indices=True)
+    floor = SAME * np.maximum(left[at], SAME)
+    same = np.abs(warped[at] - warped_opp[at_opp]) <= floor
+    same_fraction = float(same.mean()) if same.size else math.nan
+    return SignCheck(int(sign), err, err_opp, n, n_opp, same_fraction)

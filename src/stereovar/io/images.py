@@ -12,16 +12,25 @@ decoding; ``imageio`` needs the FreeImage plugin, a separate binary download, fo
 PNG through OpenCV (the only maintained reader and writer of 16-bit RGB PNG on PyPI; Pillow
 reduces 48-bit RGB to 8 bit); PFM, a plain header and raw float32 rows stored bottom to top,
 by hand; NPY and NPZ through numpy.
+
+A path is read only when it is a regular file: a named pipe, a device or a directory is
+refused by its kind before it is opened for reading (:func:`regular_file`), so nothing waits
+on a pipe that no one writes to. What the libraries print themselves about a damaged file
+(OpenEXR's and libpng's diagnostics) is silenced; the :class:`ImageError` says it once.
 """
 
 from __future__ import annotations
 
+import os
+import stat
 import struct
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ImageError
+from ..renderers.quiet import silenced
 
 FORMATS = ("exr", "pfm", "png", "npy", "npz")
 """File formats by extension (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``)."""
@@ -30,6 +39,14 @@ TRANSFERS = ("linear", "srgb")
 """Transfer functions of integer images: stored values are linear, or sRGB-encoded."""
 
 _EXR_FIELD_CHANNELS = ("Z", "depth", "disparity", "Y", "R", "V")
+
+_KINDS = {
+    stat.S_IFIFO: "a named pipe",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFDIR: "a directory",
+    stat.S_IFSOCK: "a socket",
+}
 
 
 def image_format(path) -> str:
@@ -80,48 +97,108 @@ def _unreadable(path, err, what="file") -> ImageError:
     )
 
 
+def _not_regular(path, mode) -> ImageError:
+    kind = _KINDS.get(stat.S_IFMT(mode), "not a file")
+    return ImageError(f"{path}: not a regular file ({kind}); give the path of an image file")
+
+
+def _missing(path) -> ImageError:
+    return ImageError(f"{path}: no such file; check the audit path template")
+
+
+def regular_file(path) -> None:
+    """Check that ``path`` is a regular file (a link to one counts) without opening it.
+
+    Raises
+    ------
+    ImageError
+        It does not exist (or is a dangling link), or it is a named pipe, a device, a
+        directory or a socket (one line naming the kind).
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise _missing(path) from None
+    except OSError as err:
+        raise ImageError(f"{path}: cannot look at it ({err.strerror}); fix its path") from None
+    if not stat.S_ISREG(mode):
+        raise _not_regular(path, mode)
+
+
+@contextmanager
+def _open_regular(path):
+    """``path`` opened for binary reading once it is known to be a regular file: the open
+    does not block (a named pipe opened for reading would wait for a writer) and the kind
+    is checked on the open descriptor."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except FileNotFoundError:
+        raise _missing(path) from None
+    except OSError as err:
+        raise ImageError(f"{path}: cannot open it ({err.strerror}); make it readable") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise _not_regular(path, mode)
+    os.set_blocking(fd, True)
+    with os.fdopen(fd, "rb") as f:
+        yield f
+
+
+@contextmanager
+def _quiet():
+    """Silence stdout and stderr while a library reads a file: OpenEXR and libpng print
+    their own diagnostics of a damaged file there (OpenEXR's bindings also through Python's
+    ``sys.stdout``)."""
+    with ExitStack() as stack:
+        for fd in (1, 2):
+            stack.enter_context(silenced(fd, python=True))
+        yield
+
+
 def image_size(path) -> tuple[int, int]:
     """``(height, width)`` of an image file from its header alone (no pixel is decoded).
 
     Raises
     ------
     ImageError
-        The file is missing or its header is unreadable.
+        The file is missing, not a regular file, or its header is unreadable.
     """
     fmt = image_format(path)
     path = Path(path)
-    if not path.is_file():
-        raise ImageError(f"{path}: no such file; check the audit path template")
-    try:
-        if fmt == "exr":
-            import OpenEXR
-
-            with OpenEXR.File(str(path), header_only=True) as f:
-                lo, hi = f.header()["dataWindow"]
-            return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
-        if fmt == "pfm":
-            with open(path, "rb") as f:
-                _, width, height, _, _ = _pfm_header(f)
-            return height, width
-        if fmt == "png":
-            head = _head(path, 26)
-            if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
-                raise ValueError("no PNG signature")
-            width, height = struct.unpack(">II", head[16:24])
-            return int(height), int(width)
-        if fmt == "npy":
-            return tuple(np.load(path, mmap_mode="r").shape[:2])
-        with np.load(path) as z:
-            return tuple(z[_npz_key(z, path)].shape[:2])
-    except ImageError:
-        raise
-    except Exception as err:  # each library raises its own exception types
-        raise _unreadable(path, err, "header") from None
+    with _open_regular(path) as f:
+        try:
+            with _quiet():
+                return _header_size(f, fmt, path)
+        except ImageError:
+            raise
+        except Exception as err:  # each library raises its own exception types
+            raise _unreadable(path, err, "header") from None
 
 
-def _head(path, n) -> bytes:
-    with open(path, "rb") as f:
-        return f.read(n)
+def _header_size(f, fmt, path) -> tuple[int, int]:
+    if fmt == "exr":
+        import OpenEXR
+
+        with OpenEXR.File(f, header_only=True) as exr:
+            lo, hi = exr.header()["dataWindow"]
+        return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
+    if fmt == "pfm":
+        _, width, height, _, _ = _pfm_header(f)
+        return height, width
+    if fmt == "png":
+        head = f.read(26)
+        if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+            raise ValueError("no PNG signature")
+        width, height = struct.unpack(">II", head[16:24])
+        return int(height), int(width)
+    if fmt == "npy":
+        npy = np.lib.format
+        version = npy.read_magic(f)  # versions 2 and 3 share a header layout
+        read = npy.read_array_header_1_0 if version == (1, 0) else npy.read_array_header_2_0
+        return tuple(read(f)[0][:2])
+    with np.load(f) as z:
+        return tuple(z[_npz_key(z, path)].shape[:2])
 
 
 # --------------------------------------------------------------------------------------------
@@ -273,9 +350,12 @@ def _decode_png(a: np.ndarray, depth: int, transfer: str, scale: float) -> np.nd
 
 
 def _decoded(path, decode):
-    """``decode()``, with any library's failure as one :class:`ImageError` line."""
+    """``decode()`` of a regular file, quietly, with any library's failure as one
+    :class:`ImageError` line."""
+    regular_file(path)
     try:
-        return np.asarray(decode())
+        with _quiet():
+            return np.asarray(decode())
     except ImageError:
         raise
     except Exception as err:  # each library raises its own exception types
@@ -306,6 +386,13 @@ def read_image(
         exclude them).
     """
     fmt = image_format(path)
+    if out is not None:  # the header's size first: no decode of a file of another size
+        height, width = image_size(path)
+        if (height, width) != out.shape[:2]:
+            raise ImageError(
+                f"{path}: its header says {width}x{height} px but the other renders are "
+                f"{out.shape[1]}x{out.shape[0]}; export every render at one resolution"
+            )
 
     def decode():
         if fmt == "exr":
