@@ -76,7 +76,7 @@ def test_png16_with_kitti_disparity_round_trip_within_the_stated_tolerance(expor
     print(f"PNG16 + KITTI round trip: largest |difference| {worst:.4g}")
 
 
-def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path):
+def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapshot):
     root = copy_workflow(tmp_path / "wf", TINY)
     settings, frames = write_synthetic_audit(
         root / "data", n_frames=2, width=160, height=96, n_seeds=16
@@ -90,6 +90,17 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "2 frames × 2 views × 16 seeds" in proc.stdout
+    # again, nothing changed: nothing is imported, no job runs, nothing is written
+    before = tree_snapshot(root / "results")
+    again = subprocess.run(
+        [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
+        cwd=root, capture_output=True, text=True,
+    )
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "imported 0 frames, 2 unchanged" in again.stdout
+    assert "imported 0 frames, 2 unchanged" in again.stderr  # the workflow's own import
+    assert "Nothing to be done" in again.stderr
+    assert tree_snapshot(root / "results") == before
     summary = yaml.safe_load((root / "results/audit/synthetic/summary.json").read_text())
     rows = {(r["quantity"], r["region"]): r for r in summary["rows"]}
     corrected = rows[("attenuation-corrected rho", "all")]
@@ -111,3 +122,32 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].endswith("set audit.convention: conventional")
     assert not (root / "results/audit/wrong").exists()
+
+
+def test_export_to_a_symbolic_link_is_refused_and_a_real_one_reported(exported, tmp_path):
+    # a link put where an export was: Snakemake finds the output present and writes nothing
+    target = exported / f"results/export/mitsuba/seeds/exr/{SCENES[1]}"
+    kept, empty = tmp_path / "kept", tmp_path / "empty"
+    empty.mkdir()
+    target.rename(kept)
+    target.symlink_to(empty)
+    command = [sys.executable, "-m", "stereovar.cli", "export", "--format", "exr",
+               "--configfile", "tiny.yaml"]
+    try:
+        proc = subprocess.run(command, cwd=exported, capture_output=True, text=True)
+    finally:
+        target.unlink()
+        kept.rename(target)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "is a symbolic link" in lines[0], lines
+    assert "exported" not in proc.stdout and not any(empty.iterdir())
+    # the export itself, up to date: what the message names is there
+    proc = subprocess.run(command, cwd=exported, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.strip().splitlines()[-1] == (
+        f"exported 2 scenes to results/export/mitsuba/seeds/exr/ ({', '.join(SCENES)}); "
+        "each scene directory has an audit.yaml that audits it"
+    )
+    for scene in SCENES:
+        assert (exported / f"results/export/mitsuba/seeds/exr/{scene}/audit.yaml").is_file()

@@ -120,28 +120,38 @@ def _snakemake(args: list, root) -> int:
     return subprocess.run(cmd, cwd=root, check=False).returncode
 
 
+def _workflow_config(root, files) -> dict:
+    """The config the workflow would run with: ``config.yaml`` of ``root``, then ``files``
+    (as ``--configfile``), validated against the workflow's schema with its defaults filled
+    in (:func:`stereovar.config.load_config`); one line for anything it refuses."""
+    from .config import load_config
+
+    return load_config(
+        [root / "config.yaml", *files], root / "workflow" / "schemas" / "config.schema.yaml"
+    )
+
+
 def _cmd_audit(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    import yaml
-
     from .audit.run import audit_paths, prepare_audit
+    from .schema import load_yaml
 
     root = _project_root()
     config = Path(args.config)
     if not config.is_file():
         raise StereovarError(f"{config}: no such config file; give the audit's YAML config")
-    try:
-        data = yaml.safe_load(config.read_text()) or {}
-    except yaml.YAMLError as err:
-        raise StereovarError(f"{config}: not valid YAML ({' '.join(str(err).split())})") from None
+    data = load_yaml(config, "audit config", error=StereovarError) or {}
     settings = data.get("audit") if isinstance(data, dict) else None
     if not isinstance(settings, dict):
         raise StereovarError(
             f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
             "convention; see the README's 'Audit your own renders')"
         )
+    # The whole config, as the workflow will see it, before any file is read; the import
+    # then uses the settings the workflow uses (defaults filled), so it imports only once.
+    settings = _workflow_config(root, [config])["audit"]
     prepare_audit(settings, stream=sys.stdout)
     if args.import_only:
         return 0
@@ -155,15 +165,29 @@ def _cmd_audit(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .audit.export import check_export_targets, export_targets
+
     root = _project_root()
+    files = [Path(f) for f in args.configfile or []]
+    config = _workflow_config(root, files)
+    targets = export_targets(config, args.format)
+    check_export_targets(targets)  # a link or a stray folder would pass for an export
     options = ["-j", str(args.cores), "export", "--config", f"export={{formats: [{args.format}]}}"]
     for f in args.configfile or []:
         options[3:3] = ["--configfile", f]
     rc = _snakemake(options, root)
-    if rc == 0:
-        print(f"exported to results/export/*/*/{args.format}/; each scene directory has an "
-              "audit.yaml that audits it")
-    return rc
+    if rc != 0:
+        return rc
+    check_export_targets(targets)
+    folder = Path(targets[0]).parent
+    scenes = ", ".join(Path(t).name for t in targets)
+    print(
+        f"exported {len(targets)} scene{'s' * (len(targets) != 1)} to {folder}/ ({scenes}); "
+        "each scene directory has an audit.yaml that audits it"
+    )
+    return 0
 
 
 def _register_audit(subparsers) -> None:

@@ -4,6 +4,23 @@
 # renders, variance fields and disparity as files other tools (and the audit) read.
 
 
+# A dry run imports nothing (common.smk): the stores an import would write or replace are
+# the outputs of this rule, which only a dry run has, so it lists the jobs that read them.
+if AUDIT_PLANNED:
+
+    rule audit_import:
+        input:
+            sorted({f for files in AUDIT_PLANNED.values() for f in files}),
+        output:
+            [directory(store) for store in AUDIT_PLANNED],
+            planned_marker(AUDIT),  # never written (stereovar.audit.run.planned_marker)
+        log:
+            f"logs/audit/{AUDIT['name']}/import.log",
+        localrule: True
+        run:
+            raise SystemExit("stereovar: a dry run imports nothing; run without -n to import")
+
+
 rule audit_teaser:
     input:
         variance=lambda wc: f"results/audit/{wc.name}/seeds/variance/{wc.scene}/spp{MAIN_SPP}.zarr",

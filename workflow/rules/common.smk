@@ -22,7 +22,15 @@ from stereovar.preflight import (
 from stereovar.io.renders import set_rerun_arguments
 from stereovar.scenes.references import xml_references
 from stereovar.estimators import ESTIMATORS
-from stereovar.audit.run import audit_paths, audit_run_config, audit_targets, prepare_audit
+from stereovar.audit.run import (
+    audit_paths,
+    audit_run_config,
+    audit_targets,
+    import_mode,
+    planned_marker,
+    planned_stores,
+    prepare_audit,
+)
 from stereovar.experiment import (
     AUDIT_PREFIX,
     batch_seeds,
@@ -54,14 +62,27 @@ validate(config, CONFIG_SCHEMA, set_default=True)
 # An `audit:` section turns the run into an audit of renders made elsewhere: the files are
 # imported into the render and ground-truth store contracts here, before the DAG is built
 # (only what changed; nothing is lost on bad input), and the run's scenes, renderer
-# ("audit/<name>"), N and SPP become the audit's (stereovar.audit.run).
+# ("audit/<name>"), N and SPP become the audit's (stereovar.audit.run). Only a run that
+# executes jobs imports; a dry run, or a command that only reads the workflow, says what
+# an import would do and writes nothing (stereovar.audit.run.import_mode).
 AUDIT = config.get("audit")
 if AUDIT:
     try:
-        AUDIT_DISCOVERY = prepare_audit(AUDIT, do_import=workflow.is_main_process)
+        AUDIT_IMPORT = prepare_audit(
+            AUDIT,
+            mode=import_mode(
+                main_process=workflow.is_main_process,
+                dry_run=getattr(workflow.output_settings, "dryrun", False),
+                argv=sys.argv[1:],
+            ),
+        )
     except StereovarError as err:
         raise SystemExit(f"stereovar: {err}")
+    AUDIT_DISCOVERY = AUDIT_IMPORT.discovery
+    AUDIT_PLANNED = planned_stores(AUDIT, AUDIT_IMPORT)  # a dry run's stores to import
     config.update(audit_run_config(config, AUDIT_DISCOVERY))
+else:
+    AUDIT_PLANNED = {}
 
 
 ENV = "../../envs/stereovar.yaml"
@@ -347,7 +368,8 @@ def all_targets():
     """Everything `snakemake all` builds, for the configured renderer and estimator (for an
     audit: its verdict page and everything behind it, :func:`stereovar.audit.run.audit_targets`)."""
     if AUDIT:
-        return [*render_stores(), *audit_targets(config)]
+        planned = [planned_marker(AUDIT)] if AUDIT_PLANNED else []  # a dry run's import
+        return [*render_stores(), *audit_targets(config), *planned]
     shared = [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),

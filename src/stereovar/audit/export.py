@@ -17,11 +17,13 @@ every scene exported to the same format (PNG: this scene only, whose full scale 
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from ..errors import StereovarError
 from ..io.images import write_field, write_image
 from ..io.renders import LazyRenders
 from ..io.store import atomic_path, load_store
@@ -31,6 +33,48 @@ EXPORT_FORMATS = ("exr", "pfm", "npy", "png")
 """Formats of :func:`export_scene`."""
 
 LETTERS = {"left": "L", "right": "R"}
+
+
+def export_targets(config: dict, fmt: str) -> list[str]:
+    """The scene directories ``snakemake export`` writes in format ``fmt`` for a validated
+    workflow config: ``results/export/{renderer}/{estimator}/{fmt}/{scene}``."""
+    render = config["render"]
+    prefix = f"results/export/{render['renderer']}/{render['estimator']}/{fmt}"
+    return [f"{prefix}/{scene}" for scene in config["scenes"]]
+
+
+def check_export_targets(targets) -> None:
+    """Check that each export target is absent or an export this workflow wrote.
+
+    Snakemake takes any file, folder or symbolic link at an output path for that output,
+    and writes nothing when it is newer than the inputs. An export is a real directory
+    holding its ``audit.yaml`` (written last, :func:`export_scene`); anything else at a
+    target would pass for one.
+
+    Parameters
+    ----------
+    targets : iterable of path-like
+        Export scene directories (:func:`export_targets`).
+
+    Raises
+    ------
+    StereovarError
+        One line naming the first target that is a symbolic link, or that exists but holds
+        no export, and how to fix it.
+    """
+    for target in map(Path, targets):
+        if target.is_symlink():
+            raise StereovarError(
+                f"{target} is a symbolic link (to {os.readlink(target)}), which Snakemake "
+                "takes for a finished export and writes nothing to; remove the link "
+                f"(rm {target}) and export again (to keep exports on another disk, link "
+                "results/export instead)"
+            )
+        if target.exists() and not (target / "audit.yaml").is_file():
+            raise StereovarError(
+                f"{target} exists but holds no export (no audit.yaml), and Snakemake would "
+                f"take it for one; move it away (or remove it) and export again"
+            )
 
 
 def png_full_scale(renders: dict) -> float:

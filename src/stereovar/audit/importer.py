@@ -1,12 +1,17 @@
 """Import an audit's files into the project's render and ground-truth store contracts.
 
 :func:`import_audit` discovers the frames (:func:`stereovar.audit.layout.discover`), checks
-every file's size from its header, hashes every file (SHA-256) and re-imports only the
-frames whose files, or whose import settings, changed since the last import (the record is
-``results/audit/{name}/import.json``). A frame is imported by decoding all of its files,
-checking them, settling the disparity sign photometrically
+every file's size from its header and re-imports only the frames whose files, or whose import
+settings, changed since the last import (the record is ``results/audit/{name}/import.json``).
+Whether a file changed is decided on its content (SHA-256), never on its size and time stamps
+alone: ``cp -p``, ``rsync -a`` and ``tar x`` keep both. A frame is imported by decoding all of
+its files, checking them, settling the disparity sign photometrically
 (:func:`stereovar.audit.sign.sign_check`) and only then writing its stores, each atomically:
 a bad file stops the import with one line and leaves every store already imported as it was.
+
+Each file is hashed and decoded while one open descriptor holds it, and checked afterwards
+(:func:`read_verified`): a file replaced or rewritten meanwhile stops the import, so the
+SHA-256 recorded with a store is always that of the bytes decoded into it.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
+import threading
 import time
 import warnings
 from collections import Counter
@@ -24,12 +31,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import AuditError
+from ..errors import AuditError, ImageError
 from ..experiment import audit_source, batch_label, ground_truth_store, render_store
 from ..io.contracts import config_digest
 from ..io.images import image_format, image_size, read_field, read_image
 from ..io.renders import render_dataset
-from ..io.store import atomic_path, write_file, write_zarr
+from ..io.store import (
+    atomic_path,
+    remove_stale_temporaries,
+    stale_temporaries,
+    write_file,
+    write_zarr,
+)
 from ..rig import VIEWS
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
@@ -50,6 +63,11 @@ IMPORT_KEYS = (
 
 DEFAULT_DISPARITY_SCALE = 256.0
 """PNG disparity is value / 256 (KITTI); 0 is invalid."""
+
+RECENT_NS = 2_000_000_000
+"""A file last modified less than this many nanoseconds before it is opened is hashed again
+after it is decoded (:func:`read_verified`): file time stamps advance in steps of a few
+milliseconds, so a rewrite that soon after the previous one can leave them as they were."""
 
 
 def manifest_path(name: str) -> str:
@@ -79,9 +97,176 @@ def sha256(path) -> str:
         return hashlib.file_digest(f, "sha256").hexdigest()
 
 
+def _number(settings: dict, key: str, default):
+    value = settings.get(key)
+    if value is None:
+        return default
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise AuditError(f"audit.{key} is {value!r}, not a number; give a number or leave it out")
+    return float(value)
+
+
+def import_settings(settings: dict) -> dict:
+    """The ``audit:`` settings of :data:`IMPORT_KEYS` as the import applies them.
+
+    Each one not given takes the value the import uses for it (the schema's default:
+    ``convention: conventional``, ``scale: 1``, ``disparity_scale: 256``, ``glass_ids: []``,
+    ``spp: 0``); numbers are floats (``scale: 1`` and ``scale: 1.0`` are one import). The
+    settings as written and the same settings with the schema's defaults filled in (the
+    workflow's) so give one :func:`settings_digest`.
+
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` config section.
+
+    Returns
+    -------
+    dict
+        :data:`IMPORT_KEYS` to their values.
+
+    Raises
+    ------
+    AuditError
+        A number that is not one (one line).
+    """
+    views = settings.get("views") or {}
+    focal, baseline = _number(settings, "focal_px", None), _number(settings, "baseline_m", None)
+    return {
+        "views": {v: str(views.get(v, v)) for v in VIEWS},
+        "convention": settings.get("convention") or "conventional",
+        "transfer": settings.get("transfer") or None,
+        "scale": _number(settings, "scale", 1.0),
+        "disparity_scale": _number(settings, "disparity_scale", DEFAULT_DISPARITY_SCALE),
+        "focal_px": focal or None,
+        "baseline_m": baseline or None,
+        "glass_ids": [int(i) for i in settings.get("glass_ids") or []],
+        "spp": audit_spp(settings),
+    }
+
+
+def settings_digest(settings: dict) -> str:
+    """SHA-256 of the :func:`import_settings` of ``settings`` (a change re-imports)."""
+    return config_digest(import_settings(settings))
+
+
+def _identity(st: os.stat_result) -> tuple:
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+
+_KINDS = {
+    stat.S_IFIFO: "a named pipe",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFDIR: "a directory",
+    stat.S_IFSOCK: "a socket",
+}
+
+
+def _changed(path, before, fd, digest=None, f=None) -> str | None:
+    """How the file ``fd`` opened at ``path`` differs from ``before`` (None: it does not)."""
+    if _identity(os.fstat(fd)) != _identity(before):
+        return "its size or time stamps changed"
+    try:
+        now = os.stat(path)
+    except FileNotFoundError:
+        return "it was removed"
+    if _identity(now) != _identity(before):
+        return "another file was moved to its path"
+    if digest is not None and hashlib.file_digest(f, "sha256").hexdigest() != digest:
+        return "its bytes changed"
+    return None
+
+
+def read_verified(path, decode=None) -> tuple[dict, object]:
+    """Hash a file and decode it while one open descriptor holds it; check it did not change.
+
+    The file is opened once; its bytes are hashed (SHA-256) through that descriptor and
+    ``decode(path)`` reads them while it is held. Afterwards the descriptor's status and the
+    path's must both equal those at the open (device, inode, size, modification and change
+    times), and a file modified less than :data:`RECENT_NS` before the open is hashed again:
+    the SHA-256 returned is that of the bytes decoded. (Decoding the hashed bytes from
+    memory would need readers of bytes in :mod:`stereovar.io.images`; they take paths.)
+
+    Parameters
+    ----------
+    path : path-like
+    decode : callable, optional
+        ``decode(path)`` reads the file (:func:`~stereovar.io.images.read_image`, ...);
+        without it the file is only hashed.
+
+    Returns
+    -------
+    record : dict
+        ``{"sha256", "size", "mtime_ns"}`` of the file as hashed.
+    value : object
+        What ``decode`` returned (None without it).
+
+    Raises
+    ------
+    ImageError
+        The path cannot be opened or is not a regular file (a named pipe, a device).
+    AuditError
+        The file changed between its open and the end of decoding (one line).
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # a named pipe must not block
+    except FileNotFoundError:
+        raise ImageError(f"{path}: no such file; check the audit path template") from None
+    except OSError as err:
+        raise ImageError(
+            f"{path}: cannot open it ({err.strerror}); make it readable or fix the audit path "
+            "template"
+        ) from None
+    with os.fdopen(fd, "rb") as f:
+        opened, before = time.time_ns(), os.fstat(fd)
+        if not stat.S_ISREG(before.st_mode):
+            kind = _KINDS.get(stat.S_IFMT(before.st_mode), "not a file")
+            raise ImageError(
+                f"{path}: not a regular file ({kind}); give the path of an image file"
+            )
+        digest = hashlib.file_digest(f, "sha256").hexdigest()
+        value = None
+        if decode is not None:
+            try:
+                value = decode(path)
+            except Exception:
+                if _changed(path, before, fd) is None:
+                    raise  # a bad file, not a changed one
+            recent = opened - max(before.st_mtime_ns, before.st_ctime_ns) < RECENT_NS
+            f.seek(0)
+            how = _changed(path, before, fd, digest if recent else None, f)
+        else:
+            how = _changed(path, before, fd)
+    if how is not None:
+        raise AuditError(
+            f"{path} changed while it was imported ({how}); import again once it is written "
+            "completely"
+        )
+    return {"sha256": digest, "size": before.st_size, "mtime_ns": before.st_mtime_ns}, value
+
+
+class _Reads:
+    """The files of one frame read so far (decoded or only hashed), each through
+    :func:`read_verified`: path to its record. Safe to call from worker threads."""
+
+    def __init__(self):
+        self.records: dict = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, decode, path, **options):
+        """``decode(path, **options)`` (None: hash only) through :func:`read_verified`."""
+        record, value = read_verified(
+            path, None if decode is None else (lambda p: decode(p, **options))
+        )
+        with self._lock:
+            self.records[str(path)] = record
+        return value
+
+
 @dataclass
 class FrameReport:
-    """What importing one frame found."""
+    """What importing one frame found (in a dry run: that it would be imported)."""
 
     name: str
     imported: bool
@@ -102,8 +287,13 @@ class ImportReport:
     frames: list
     warnings: list = field(default_factory=list)
     seconds: dict = field(default_factory=dict)
-    """Wall-clock seconds per phase (``hash``, ``ground truth``, ``decode``, ``sign check``,
-    ``write``), summed over the frames."""
+    """Wall-clock seconds per phase (``hash`` of unchanged frames, ``ground truth``,
+    ``decode`` (each including its files' hashes), ``sign check``, ``write``), summed over
+    the frames."""
+    dry_run: bool = False
+    """Nothing was written: :attr:`frames` that are ``imported`` would be."""
+    temporaries: list = field(default_factory=list)
+    """Temporaries of killed imports removed (in a dry run: that would be)."""
 
     @contextmanager
     def timed(self, phase: str):
@@ -120,13 +310,26 @@ class ImportReport:
         imported = [f.name for f in self.frames if f.imported]
         kept = len(self.frames) - len(imported)
         out = [
-            f"audit {self.name}: {self.discovery.summary()}; imported "
+            f"audit {self.name}: {self.discovery.summary()}; "
+            f"{'would import' if self.dry_run else 'imported'} "
             f"{len(imported)} frame{'s' * (len(imported) != 1)}"
             + (f" ({', '.join(imported)})" if imported else "")
             + f", {kept} unchanged"
+            + (" (dry run: nothing written)" if self.dry_run else "")
         ]
+        if self.temporaries:
+            n = len(self.temporaries)
+            pids = sorted({int(str(p.name).rsplit(".tmp-", 1)[1].split("-")[0])
+                           for p in self.temporaries})
+            shown = ", ".join(str(p) for p in self.temporaries[:3])
+            out.append(
+                f"  {'would remove' if self.dry_run else 'removed'} {n} "
+                f"temporar{'y' if n == 1 else 'ies'} of killed imports "
+                f"(process{'es' * (len(pids) > 1)} {', '.join(map(str, pids))}): {shown}"
+                + (f" and {n - 3} more" if n > 3 else "")
+            )
         for f in self.frames:
-            if not f.imported:
+            if not f.imported or self.dry_run:
                 continue
             bad = sum(f.nonfinite_pixels.values())
             out.append(
@@ -144,10 +347,6 @@ class ImportReport:
         return out
 
 
-def _settings_digest(settings: dict) -> str:
-    return config_digest({k: settings.get(k) for k in IMPORT_KEYS})
-
-
 def _load_manifest(name: str) -> dict:
     path = Path(manifest_path(name))
     try:
@@ -156,21 +355,39 @@ def _load_manifest(name: str) -> dict:
         return {}
 
 
-def _file_records(frame: Frame, old: dict, pool) -> dict:
-    """Path to ``{sha256, size, mtime_ns}``; a file whose size and mtime match the last
-    import keeps its recorded hash (as ``git status`` does)."""
-    stats = {str(p): os.stat(p) for p in frame.files()}
-    records, to_hash = {}, []
-    for path, st in stats.items():
-        prev = old.get(path)
-        if prev and prev["size"] == st.st_size and prev["mtime_ns"] == st.st_mtime_ns:
-            records[path] = prev
-        else:
-            to_hash.append(path)
-    for path, digest in zip(to_hash, pool.map(sha256, to_hash), strict=True):
-        st = stats[path]
-        records[path] = {"sha256": digest, "size": st.st_size, "mtime_ns": st.st_mtime_ns}
-    return records
+def _unchanged(frame: Frame, previous: dict, stores: dict, pool) -> bool:
+    """Whether the frame's stores exist and its files hold the bytes its last import
+    recorded (same paths, sizes and SHA-256; time stamps are not trusted)."""
+    old = previous.get("files", {})
+    paths = [str(p) for p in frame.files()]
+    if set(paths) != set(old) or not all(Path(s).is_dir() for s in stores.values()):
+        return False
+    try:
+        if any(os.stat(p).st_size != old[p]["size"] for p in paths):
+            return False
+    except OSError:
+        return False
+    records = pool.map(lambda p: read_verified(p)[0], paths)
+    return all(r["sha256"] == old[p]["sha256"] for p, r in zip(paths, records, strict=True))
+
+
+def _store_folders(name: str) -> tuple[list, Path]:
+    """The folders the import writes stores in, and the one of its record."""
+    base = Path(manifest_path(name)).parent
+    folders = []
+    for sub in ("renders", "ground_truth"):
+        for folder, dirs, _ in os.walk(base / sub):
+            folders.append(folder)
+            dirs[:] = [d for d in dirs if not d.endswith(".zarr") and not d.startswith(".")]
+    return folders, base
+
+
+def _killed_imports(name: str, *, remove: bool) -> list:
+    """Temporaries that killed imports of ``name`` left (removed with ``remove``)."""
+    folders, base = _store_folders(name)
+    find = remove_stale_temporaries if remove else stale_temporaries
+    record = Path(manifest_path(name)).name
+    return find(folders) + find([base], names=[record])
 
 
 def _check_sizes(frame: Frame) -> tuple[int, int]:
@@ -201,49 +418,49 @@ def _is_png8(path) -> bool:
     return len(head) == 25 and head[24] == 8
 
 
-def _disparity(settings: dict, frame: Frame) -> dict:
+def _disparity(settings: dict, frame: Frame, reads: _Reads) -> dict:
     gt = frame.ground_truth
     if "disparity" in gt:
-        scale = float(settings.get("disparity_scale") or DEFAULT_DISPARITY_SCALE)
-        return {v: read_field(p, png_scale=scale) for v, p in gt["disparity"].items()}
-    focal, baseline = settings.get("focal_px"), settings.get("baseline_m")
+        scale = settings["disparity_scale"]
+        return {v: reads(read_field, p, png_scale=scale) for v, p in gt["disparity"].items()}
+    focal, baseline = settings["focal_px"], settings["baseline_m"]
     if not (focal and baseline):
         raise AuditError(
             "audit.depth needs audit.focal_px and audit.baseline_m to give disparity "
             "(d = f B / z); set both, or give audit.disparity"
         )
     return {
-        v: disparity_from_depth(read_field(p), focal_px=float(focal), baseline_m=float(baseline))
+        v: disparity_from_depth(reads(read_field, p), focal_px=focal, baseline_m=baseline)
         for v, p in gt["depth"].items()
     }
 
 
-def _depth(settings: dict, frame: Frame, disparity: dict) -> dict:
+def _depth(settings: dict, frame: Frame, disparity: dict, reads: _Reads) -> dict:
     if "depth" in frame.ground_truth:
-        return {v: read_field(p) for v, p in frame.ground_truth["depth"].items()}
-    focal, baseline = settings.get("focal_px"), settings.get("baseline_m")
+        return {v: reads(read_field, p) for v, p in frame.ground_truth["depth"].items()}
+    focal, baseline = settings["focal_px"], settings["baseline_m"]
     if focal and baseline:
         return {
-            v: disparity_from_depth(d, focal_px=float(focal), baseline_m=float(baseline))
+            v: disparity_from_depth(d, focal_px=focal, baseline_m=baseline)
             for v, d in disparity.items()
         }
     return {}
 
 
-def _glass(settings: dict, frame: Frame):
+def _glass(settings: dict, frame: Frame, reads: _Reads):
     gt = frame.ground_truth
     if "glass_mask" in gt:
         path = gt["glass_mask"][VIEWS[0]]
-        return read_field(path) > 0, f"glass mask {path}"
+        return reads(read_field, path) > 0, f"glass mask {path}"
     if "segmentation" in gt:
-        ids = settings.get("glass_ids") or []
+        ids = settings["glass_ids"]
         if not ids:
             raise AuditError(
                 "audit.segmentation needs audit.glass_ids, the segment ids that are glass; "
                 "list them (e.g. glass_ids: [3, 7])"
             )
         path = gt["segmentation"][VIEWS[0]]
-        seg = read_field(path)
+        seg = reads(read_field, path)
         return np.isin(np.rint(seg).astype(np.int64), ids), f"segmentation {path}"
     return None, None
 
@@ -264,13 +481,13 @@ def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     return float((same & valid).sum() / max(int(valid.sum()), 1))
 
 
-def _decode_view(paths: list, size: tuple, pool, transfer, scale) -> tuple:
+def _decode_view(paths: list, size: tuple, pool, transfer, scale, reads: _Reads) -> tuple:
     """Decode one view's renders into one ``(n, H, W, 3)`` float32 stack, each file straight
     into its slice by a worker thread, which also counts its NaN/Inf pixels."""
     stack = np.empty((len(paths), *size, 3), dtype=np.float32)
 
     def one(k):
-        image = read_image(paths[k], transfer=transfer, scale=scale, out=stack[k])
+        image = reads(read_image, paths[k], transfer=transfer, scale=scale, out=stack[k])
         if np.isfinite(image.sum(dtype=np.float64)):  # one pass when every value is finite
             return 0
         return int((~np.isfinite(image)).any(axis=-1).sum())
@@ -278,27 +495,32 @@ def _decode_view(paths: list, size: tuple, pool, transfer, scale) -> tuple:
     return stack, np.asarray(list(pool.map(one, range(len(paths)))), dtype=np.int64)
 
 
-def _import_frame(settings, frame: Frame, size, records: dict, pool, report: ImportReport):
+def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     """Import one frame: its ground truth, then its renders, the sign check and the stores.
 
-    Every store is written to a temporary path and renamed into place only once every file
-    of the frame decoded and the sign check passed, so a failure leaves the frame's old
-    stores as they were.
+    Every file is hashed as it is decoded (:func:`read_verified`); the SHA-256 recorded in
+    the stores' provenance and returned are of the bytes decoded. Every store is written to
+    a temporary path and renamed into place only once every file of the frame decoded and
+    the sign check passed, so a failure leaves the frame's old stores as they were.
+
+    Returns
+    -------
+    FrameReport, dict
+        What the import found; each file's :func:`read_verified` record.
     """
-    transfer, scale = settings.get("transfer"), float(settings.get("scale") or 1.0)
-    sign = CONVENTIONS[settings.get("convention") or "conventional"]
-    files = {str(p): records[str(p)]["sha256"] for p in frame.files()}
-    digest = config_digest({"files": files, "settings": _settings_digest(settings)})
+    transfer, scale = settings["transfer"], settings["scale"]
+    sign = CONVENTIONS[settings["convention"]]
     source = audit_source(settings["name"])
     fr = FrameReport(frame.name, True)
+    reads = _Reads()
     with report.timed("ground truth"):
-        gt = _frame_ground_truth(settings, frame, sign, digest, source, files, fr)
-    datasets, means = {}, {}
+        gt, gt_files = _frame_ground_truth(settings, frame, sign, source, fr, reads)
+    datasets, means, view_files = {}, {}, {}
     for view in VIEWS:
         labels = list(frame.renders[view])
-        paths = [str(p) for p in frame.renders[view].values()]
+        paths = view_files[view] = [str(p) for p in frame.renders[view].values()]
         with report.timed("decode"):
-            images, n_bad = _decode_view(paths, size, pool, transfer, scale)
+            images, n_bad = _decode_view(paths, size, pool, transfer, scale, reads)
         fr.nonfinite_pixels[view] = int(n_bad.sum())
         means[view] = _seed_mean(images, n_bad)
         if any(_is_png8(p) for p in paths):
@@ -311,7 +533,6 @@ def _import_frame(settings, frame: Frame, size, records: dict, pool, report: Imp
             n_nonfinite=n_bad,
             attrs={
                 "scene": frame.name,
-                "scene_digest": digest,
                 "renderer": source,
                 "renderer_version": "",
                 "variant": "imported",
@@ -321,10 +542,20 @@ def _import_frame(settings, frame: Frame, size, records: dict, pool, report: Imp
                 "height": int(size[0]),
                 "seed_labels": labels,
                 "source_files": paths,
-                "source_sha256": [files[p] for p in paths],
                 "transfer": transfer or "",
             },
         )
+    with report.timed("hash"):  # ground truth no statistic reads (a right-view mask)
+        for path in frame.files():
+            if str(path) not in reads.records:
+                reads(None, path)
+    files = {str(p): reads.records[str(p)]["sha256"] for p in frame.files()}
+    digest = config_digest({"files": files, "settings": settings_digest(settings)})
+    for view in VIEWS:
+        datasets[view].attrs.update(
+            scene_digest=digest, source_sha256=[files[p] for p in view_files[view]]
+        )
+    gt.attrs.update(scene_digest=digest, source_sha256=[files[p] for p in gt_files])
     with report.timed("sign check"):
         _check_sign(settings, frame, gt, means, sign, fr, report)
     datasets["ground_truth"] = gt
@@ -339,29 +570,28 @@ def _import_frame(settings, frame: Frame, size, records: dict, pool, report: Imp
             f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
             "identical); export 16-bit PNG or EXR for an audit that can see small variance"
         )
-    return fr
+    return fr, {str(p): reads.records[str(p)] for p in frame.files()}
 
 
-def _frame_ground_truth(settings, frame: Frame, sign, digest, source, files, fr: FrameReport):
-    """The frame's ground-truth dataset; fills the disparity counts of ``fr``."""
-    disparity = _disparity(settings, frame)
-    glass, glass_source = _glass(settings, frame)
+def _frame_ground_truth(settings, frame: Frame, sign, source, fr: FrameReport, reads: _Reads):
+    """The frame's ground-truth dataset (its ``scene_digest`` and ``source_sha256`` are set
+    once every file is read) and its files; fills the disparity counts of ``fr``."""
+    disparity = _disparity(settings, frame, reads)
+    glass, glass_source = _glass(settings, frame, reads)
     gt_files = [str(p) for paths in frame.ground_truth.values() for p in paths.values()]
     gt, counts = imported_ground_truth(
         disparity[VIEWS[0]],
         sign=sign,
         disparity_right=disparity.get(VIEWS[1]),
-        depth=_depth(settings, frame, disparity),
+        depth=_depth(settings, frame, disparity, reads),
         glass=glass,
         material_source=glass_source,
         attrs={
             "scene": frame.name,
-            "scene_digest": digest,
             "renderer": source,
-            "baseline_m": float(settings.get("baseline_m") or 0.0),
-            "focal_px": float(settings.get("focal_px") or 0.0),
+            "baseline_m": float(settings["baseline_m"] or 0.0),
+            "focal_px": float(settings["focal_px"] or 0.0),
             "source_files": gt_files,
-            "source_sha256": [files[p] for p in gt_files],
         },
     )
     if counts["valid"] == 0:
@@ -375,7 +605,7 @@ def _frame_ground_truth(settings, frame: Frame, sign, digest, source, files, fr:
         counts["outside"],
         counts["valid"],
     )
-    return gt
+    return gt, gt_files
 
 
 def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report) -> None:
@@ -422,21 +652,26 @@ def check_settings(settings: dict) -> None:
         )
 
 
-def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
+def import_audit(settings: dict, *, workers: int = 2, dry_run: bool = False) -> ImportReport:
     """Import an audit's files into the render and ground-truth store contracts.
 
     Parameters
     ----------
     settings : dict
-        The ``audit:`` config section (see ``workflow/schemas/config.schema.yaml``).
+        The ``audit:`` config section (see ``workflow/schemas/config.schema.yaml``), as
+        written or with the schema's defaults filled in (one import either way).
     workers : int, keyword-only
         Threads that hash and decode files.
+    dry_run : bool, keyword-only
+        Only find what an import would do (which frames changed: their files are hashed),
+        and write nothing.
 
     Returns
     -------
     ImportReport
-        Frames found, imported and unchanged, with warnings (8-bit PNG floors, PNG
-        transfer assumed, inconclusive sign checks).
+        Frames found, imported (or that would be) and unchanged, temporaries of killed
+        imports removed, and warnings (8-bit PNG floors, PNG transfer assumed, inconclusive
+        sign checks).
 
     Raises
     ------
@@ -444,13 +679,15 @@ def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
         One line naming the file and the fix; stores already imported are left as they are.
     """
     check_settings(settings)
+    settings = {**settings, **import_settings(settings)}
     found = discover(settings)
     name = settings["name"]
+    report = ImportReport(name, found, [], dry_run=dry_run)
+    report.temporaries = _killed_imports(name, remove=not dry_run)
     old = _load_manifest(name)
-    digest = _settings_digest(settings)
-    report = ImportReport(name, found, [])
+    digest = settings_digest(settings)
     pngs = [p for f in found.frames for v in VIEWS for p in f.renders[v].values()]
-    if not settings.get("transfer") and any(image_format(p) == "png" for p in pngs):
+    if not settings["transfer"] and any(image_format(p) == "png" for p in pngs):
         report.warnings.append(
             "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
             "linear or srgb to say how they were written"
@@ -460,35 +697,43 @@ def import_audit(settings: dict, *, workers: int = 2) -> ImportReport:
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
         for frame, size in zip(found.frames, sizes, strict=True):
             prev = old.get("frames", {}).get(frame.name, {})
-            with report.timed("hash"):
-                records = _file_records(frame, prev.get("files", {}), pool)
             stores = frame_stores(settings, frame.name, frame.n_seeds)
-            unchanged = (
-                old.get("settings") == digest
-                and {p: r["sha256"] for p, r in prev.get("files", {}).items()}
-                == {p: r["sha256"] for p, r in records.items()}
-                and all(Path(s).is_dir() for s in stores.values())
-            )
+            with report.timed("hash"):
+                unchanged = old.get("settings") == digest and _unchanged(
+                    frame, prev, stores, pool
+                )
             if unchanged:
                 report.frames.append(FrameReport(frame.name, False))
+                records = prev["files"]
+            elif dry_run:
+                report.frames.append(FrameReport(frame.name, True))
+                continue
             else:
                 try:
-                    fr = _import_frame(settings, frame, size, records, pool, report)
-                    report.frames.append(fr)
+                    fr, records = _import_frame(settings, frame, size, pool, report)
                 except MemoryError:
                     raise AuditError(
                         f"frame {frame.name}: its renders do not fit in memory; import fewer "
                         "seeds per frame"
                     ) from None
-            manifest["frames"][frame.name] = {"files": records, "stores": stores}
-            _write_manifest(name, old, manifest)
+                report.frames.append(fr)
+            if not dry_run:
+                manifest["frames"][frame.name] = {"files": records, "stores": stores}
+                _write_manifest(name, old, manifest)
     return report
 
 
 def _write_manifest(name: str, old: dict, manifest: dict) -> None:
-    """Record the frames imported so far; frames not reached yet keep their old record."""
+    """Record the frames imported so far; frames not reached yet keep their old record. An
+    unchanged record is not written again."""
     frames = {**old.get("frames", {}), **manifest["frames"]}
     if old.get("settings") != manifest["settings"]:
         frames = dict(manifest["frames"])
     text = json.dumps({"settings": manifest["settings"], "frames": frames}, indent=1)
-    write_file(manifest_path(name), lambda tmp: Path(tmp).write_text(text))
+    path = Path(manifest_path(name))
+    try:
+        if path.read_text() == text:
+            return
+    except (OSError, UnicodeDecodeError):
+        pass
+    write_file(path, lambda tmp: Path(tmp).write_text(text))

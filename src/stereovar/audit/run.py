@@ -14,22 +14,147 @@ import sys
 from ..experiment import audit_source, ground_truth_store, run_prefix
 from ..io.images import image_size
 from ..rig import VIEWS
-from .importer import audit_spp, check_settings, import_audit
+from .importer import ImportReport, audit_spp, check_settings, frame_stores, import_audit
 from .layout import Discovery, discover
 
 TABLE_FORMATS = ("csv", "md", "tex", "html")
 
 
-def prepare_audit(settings: dict, *, do_import: bool = True, stream=None) -> Discovery:
-    """Import the audit's files (``do_import``; else only discover them, as a cluster job
-    does) and print the import's summary lines to ``stream`` (stderr)."""
+IMPORT_MODES = ("import", "plan", "discover")
+"""What :func:`prepare_audit` does with an audit's files: import them; only find what an
+import would do (a dry run: files are hashed, nothing is written); only discover them."""
+
+READ_ONLY_OPTIONS = frozenset(
+    {
+        "--lint",
+        "--list-rules",
+        "--list",
+        "-l",
+        "--list-target-rules",
+        "--lt",
+        "--list-resources",
+        "--dag",
+        "--rulegraph",
+        "--filegraph",
+        "--d3dag",
+        "--summary",
+        "-S",
+        "--detailed-summary",
+        "-D",
+        "--list-changes",
+        "--lc",
+        "--list-input-changes",
+        "--li",
+        "--list-params-changes",
+        "--lp",
+        "--list-untracked",
+        "--lu",
+        "--report",
+        "--containerize",
+        "--print-compilation",
+        "--generate-unit-tests",
+        "--archive",
+        "--unlock",
+        "--cleanup-metadata",
+        "--cm",
+        "--cleanup-shadow",
+        "--conda-create-envs-only",
+        "--conda-cleanup-envs",
+        "--list-conda-envs",
+        "--container-cleanup-images",
+        "--delete-all-output",
+        "--delete-temp-output",
+    }
+)
+"""Snakemake options whose command reads the workflow and runs no job."""
+
+DRY_RUN_OPTIONS = frozenset({"-n", "--dry-run", "--dryrun"})
+"""Snakemake's dry-run options (for Snakemake versions whose settings do not say)."""
+
+
+def import_mode(*, main_process: bool, dry_run: bool, argv=()) -> str:
+    """How a workflow that reads an ``audit:`` config treats its files (:data:`IMPORT_MODES`).
+
+    Only the main process of a run that executes jobs imports. A dry run, or a command that
+    only reads the workflow (``--lint``, ``--summary``, ``--dag``, a report, ...), plans:
+    it reports what an import would do and writes nothing. A cluster job, whose stores the
+    main process imported, only discovers the files.
+
+    Parameters
+    ----------
+    main_process : bool, keyword-only
+        Snakemake's ``workflow.is_main_process``.
+    dry_run : bool, keyword-only
+        Snakemake's ``workflow.output_settings.dryrun``.
+    argv : sequence of str, keyword-only
+        The command line's arguments (``sys.argv[1:]``): the options of
+        :data:`READ_ONLY_OPTIONS` and :data:`DRY_RUN_OPTIONS` (``-n`` also within a group
+        of short flags such as ``-np``); ``--report-after-run`` runs the jobs first.
+
+    Returns
+    -------
+    str
+        ``"import"``, ``"plan"`` or ``"discover"``.
+    """
+    if not main_process:
+        return "discover"
+    options = {a.split("=", 1)[0] for a in argv if a.startswith("-")}
+    flags = {
+        f"-{c}" for a in argv if len(a) > 1 and a[0] == "-" and a[1:].isalpha() for c in a[1:]
+    }
+    given = options | flags
+    reading = given & READ_ONLY_OPTIONS and "--report-after-run" not in options
+    if dry_run or reading or given & DRY_RUN_OPTIONS:
+        return "plan"
+    return "import"
+
+
+def prepare_audit(settings: dict, *, mode: str = "import", stream=None) -> ImportReport:
+    """Import the audit's files, or plan the import, or only discover them
+    (:data:`IMPORT_MODES`, :func:`import_mode`), and print the import's summary lines to
+    ``stream`` (stderr).
+
+    Returns
+    -------
+    ImportReport
+        Its ``discovery`` (the frames); with ``mode="discover"`` no frame is listed.
+    """
+    if mode not in IMPORT_MODES:
+        raise ValueError(f"unknown import mode {mode!r}; use one of {', '.join(IMPORT_MODES)}")
     check_settings(settings)
-    if not do_import:
-        return discover(settings)
-    report = import_audit(settings)
+    if mode == "discover":
+        return ImportReport(settings["name"], discover(settings), [])
+    report = import_audit(settings, dry_run=mode == "plan")
     for line in report.lines():
         print(f"stereovar: {line}", file=stream or sys.stderr)
-    return report.discovery
+    return report
+
+
+def planned_stores(settings: dict, report: ImportReport) -> dict:
+    """The stores a dry run's import would write (re-import), each with the files it is
+    imported from; empty for a report that is not a dry run's.
+
+    A run imports before it builds its jobs; a dry run imports nothing, so the workflow
+    makes these, and :func:`planned_marker`, the outputs of a rule (``audit_import``) that
+    only a dry run has, and the dry run lists the jobs that would read them.
+    """
+    if not report.dry_run:
+        return {}
+    pending = {f.name for f in report.frames if f.imported}
+    out = {}
+    for frame in report.discovery.frames:
+        if frame.name in pending:
+            files = [str(p) for p in frame.files()]
+            for store in frame_stores(settings, frame.name, frame.n_seeds).values():
+                out[store] = files
+    return out
+
+
+def planned_marker(settings: dict) -> str:
+    """A path no run writes, ``results/audit/{name}/.import-planned``: an output of a dry
+    run's ``audit_import`` that ``all`` asks for, so the dry run lists the import (and the
+    jobs that read its stores) even when the changed files kept their time stamps."""
+    return f"results/{audit_source(settings['name'])}/.import-planned"
 
 
 def audit_run_config(config: dict, discovery: Discovery) -> dict:

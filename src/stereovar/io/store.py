@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import shutil
 import uuid
 from collections.abc import Callable
@@ -84,6 +85,71 @@ def write_error(err: OSError, path, tmp=None):
 
 def _temporary_sibling(path: Path) -> Path:
     return path.with_name(f".{path.name}.tmp-{os.getpid()}-{uuid.uuid4().hex[:8]}")
+
+
+_TEMPORARY = re.compile(r"\.(?P<name>.+)\.tmp-(?P<pid>[0-9]+)-[0-9a-f]{8}")
+"""Names :func:`_temporary_sibling` gives: ``.{name}.tmp-{pid}-{8 hex digits}``."""
+
+
+def _process_exists(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (one of another user counts)."""
+    if pid <= 0:
+        return True  # not a process id: never judged dead
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def stale_temporaries(folders, *, names=None) -> list[Path]:
+    """Temporaries of :func:`atomic_path` in ``folders`` whose writing process is gone.
+
+    A process killed while it wrote (SIGKILL, a power cut) leaves its hidden temporary
+    sibling, ``.{name}.tmp-{pid}-{hex}``, behind; one whose ``pid`` is not a running process
+    on this machine is stale. A live process's temporary is never listed.
+
+    Parameters
+    ----------
+    folders : iterable of path-like
+        Folders to look in (not recursively); missing ones are skipped.
+    names : iterable of str, keyword-only, optional
+        Only temporaries of results with these names (default: of any).
+
+    Returns
+    -------
+    list of pathlib.Path
+        Sorted.
+    """
+    names = None if names is None else set(names)
+    stale = []
+    for folder in folders:
+        try:
+            entries = list(os.scandir(folder))
+        except (FileNotFoundError, NotADirectoryError):
+            continue
+        for entry in entries:
+            m = _TEMPORARY.fullmatch(entry.name)
+            if m is None or (names is not None and m["name"] not in names):
+                continue
+            if not _process_exists(int(m["pid"])):
+                stale.append(Path(entry.path))
+    return sorted(stale)
+
+
+def remove_stale_temporaries(folders, *, names=None) -> list[Path]:
+    """Remove the :func:`stale_temporaries` of ``folders`` (and ``names``); returns them."""
+    removed = []
+    for path in stale_temporaries(folders, names=names):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+        if not os.path.lexists(path):
+            removed.append(path)
+    return removed
 
 
 def _replace(tmp: Path, path: Path) -> None:
