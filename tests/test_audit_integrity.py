@@ -162,6 +162,28 @@ def test_a_dry_run_plans_and_writes_nothing(tmp_path, monkeypatch, tree_snapshot
     assert tree_snapshot(tmp_path / "results") == before
 
 
+@pytest.mark.parametrize(
+    ("main_process", "dry_run", "argv", "mode"),
+    [
+        (True, False, ["-j2", "all", "--configfile", "audit.yaml"], "import"),
+        (True, True, ["all"], "plan"),  # Snakemake's own setting
+        (True, False, ["-np", "all"], "plan"),  # a Snakemake whose settings do not say
+        (True, False, ["--dry-run"], "plan"),
+        (True, False, ["--lint"], "plan"),
+        (True, False, ["--lint=json"], "plan"),
+        (True, False, ["-S"], "plan"),
+        (True, False, ["--dag", "all"], "plan"),
+        (True, False, ["--report", "report.html"], "plan"),
+        (True, False, ["--report", "r.html", "--report-after-run", "all"], "import"),
+        (True, False, ["--touch", "all"], "import"),
+        (False, False, ["-j2", "all"], "discover"),  # a cluster job
+        (False, True, ["all"], "discover"),
+    ],
+)
+def test_only_a_run_that_executes_jobs_imports(main_process, dry_run, argv, mode):
+    assert run.import_mode(main_process=main_process, dry_run=dry_run, argv=argv) == mode
+
+
 def test_temporaries_of_killed_imports_are_removed_and_live_ones_kept(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     settings, _ = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
