@@ -15,6 +15,7 @@ from stereovar.io.contracts import config_digest
 from stereovar.preflight import (
     check_backends,
     check_scene_specs,
+    check_writable,
     clear_stale_lock,
     mark_run,
     stored_backends,
@@ -59,6 +60,15 @@ config.update(
 
 validate(config, CONFIG_SCHEMA, set_default=True)
 
+# Every directory the run writes must be writable, checked before anything (an audit's
+# import included) is written; Snakemake would stop with a ProtectedOutputException, or a
+# job would fail, naming no fix. A report only reads the results.
+if workflow.is_main_process and not any(a.startswith("--report") for a in sys.argv):
+    try:
+        check_writable(["results", "logs", "benchmarks"])
+    except StereovarError as err:
+        raise SystemExit(f"stereovar: {err}")
+
 # An `audit:` section turns the run into an audit of renders made elsewhere: the files are
 # imported into the render and ground-truth store contracts here, before the DAG is built
 # (only what changed; nothing is lost on bad input), and the run's scenes, renderer
@@ -83,6 +93,20 @@ if AUDIT:
     config.update(audit_run_config(config, AUDIT_DISCOVERY))
 else:
     AUDIT_PLANNED = {}
+
+# A job that asks for more memory than the machine, the cluster (cluster.max_mem_mb) or
+# --resources mem_mb allows could never run: stop before any job (stereovar.resources).
+if workflow.is_main_process:
+    _global_mem = workflow.global_resources.get("mem_mb")
+    try:
+        sizing.check_job_memory(
+            config,
+            *sizing.memory_limit(
+                config, global_mem_mb=None if _global_mem is None else _global_mem.value
+            ),
+        )
+    except StereovarError as err:
+        raise SystemExit(f"stereovar: {err}")
 
 
 ENV = "../../envs/stereovar.yaml"
