@@ -25,6 +25,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from .errors import BackendError, StereovarError
+from .processes import process_exists
 
 BACKEND_KEYS = ("renderer", "renderer_version", "variant")
 """Render attributes that must agree across the renders a table pools."""
@@ -115,16 +116,6 @@ def check_backends(
     )
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def stale_lock(state_dir) -> bool:
     """Whether the locks in ``state_dir`` (``.snakemake``) belong to a run that is gone.
 
@@ -141,7 +132,7 @@ def stale_lock(state_dir) -> bool:
         host, pid = marker["host"], int(marker["pid"])
     except (OSError, ValueError, KeyError, TypeError):
         return False
-    return host == socket.gethostname() and pid != os.getpid() and not _alive(pid)
+    return host == socket.gethostname() and pid != os.getpid() and not process_exists(pid)
 
 
 def clear_stale_lock(state_dir) -> bool:

@@ -34,7 +34,14 @@ import numpy as np
 from ..errors import AuditError, ImageError
 from ..experiment import audit_source, batch_label, ground_truth_store, render_store
 from ..io.contracts import config_digest
-from ..io.images import image_format, image_size, read_field, read_image
+from ..io.images import (
+    image_format,
+    image_size,
+    missing_error,
+    not_regular_error,
+    read_field,
+    read_image,
+)
 from ..io.renders import render_dataset
 from ..io.store import (
     atomic_path,
@@ -154,15 +161,6 @@ def _identity(st: os.stat_result) -> tuple:
     return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
 
 
-_KINDS = {
-    stat.S_IFIFO: "a named pipe",
-    stat.S_IFCHR: "a character device",
-    stat.S_IFBLK: "a block device",
-    stat.S_IFDIR: "a directory",
-    stat.S_IFSOCK: "a socket",
-}
-
-
 def _changed(path, before, fd, digest=None, f=None) -> str | None:
     """How the file ``fd`` opened at ``path`` differs from ``before`` (None: it does not)."""
     if _identity(os.fstat(fd)) != _identity(before):
@@ -212,7 +210,7 @@ def read_verified(path, decode=None) -> tuple[dict, object]:
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # a named pipe must not block
     except FileNotFoundError:
-        raise ImageError(f"{path}: no such file; check the audit path template") from None
+        raise missing_error(path) from None
     except OSError as err:
         raise ImageError(
             f"{path}: cannot open it ({err.strerror}); make it readable or fix the audit path "
@@ -221,10 +219,7 @@ def read_verified(path, decode=None) -> tuple[dict, object]:
     with os.fdopen(fd, "rb") as f:
         opened, before = time.time_ns(), os.fstat(fd)
         if not stat.S_ISREG(before.st_mode):
-            kind = _KINDS.get(stat.S_IFMT(before.st_mode), "not a file")
-            raise ImageError(
-                f"{path}: not a regular file ({kind}); give the path of an image file"
-            )
+            raise not_regular_error(path, before.st_mode)
         digest = hashlib.file_digest(f, "sha256").hexdigest()
         value = None
         if decode is not None:

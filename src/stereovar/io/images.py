@@ -97,12 +97,14 @@ def _unreadable(path, err, what="file") -> ImageError:
     )
 
 
-def _not_regular(path, mode) -> ImageError:
+def not_regular_error(path, mode) -> ImageError:
+    """The one-line error for ``path`` whose ``st_mode`` is ``mode``: not a regular file."""
     kind = _KINDS.get(stat.S_IFMT(mode), "not a file")
     return ImageError(f"{path}: not a regular file ({kind}); give the path of an image file")
 
 
-def _missing(path) -> ImageError:
+def missing_error(path) -> ImageError:
+    """The one-line error for a ``path`` that does not exist."""
     return ImageError(f"{path}: no such file; check the audit path template")
 
 
@@ -118,11 +120,11 @@ def regular_file(path) -> None:
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
-        raise _missing(path) from None
+        raise missing_error(path) from None
     except OSError as err:
         raise ImageError(f"{path}: cannot look at it ({err.strerror}); fix its path") from None
     if not stat.S_ISREG(mode):
-        raise _not_regular(path, mode)
+        raise not_regular_error(path, mode)
 
 
 @contextmanager
@@ -133,13 +135,13 @@ def _open_regular(path):
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except FileNotFoundError:
-        raise _missing(path) from None
+        raise missing_error(path) from None
     except OSError as err:
         raise ImageError(f"{path}: cannot open it ({err.strerror}); make it readable") from None
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
-        raise _not_regular(path, mode)
+        raise not_regular_error(path, mode)
     os.set_blocking(fd, True)
     with os.fdopen(fd, "rb") as f:
         yield f

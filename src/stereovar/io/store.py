@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..processes import process_exists
+
 ZARR_FORMAT = 2
 """Zarr format of stored datasets (v2 stores with consolidated metadata, readable by
 zarr-python 2 and 3 alike)."""
@@ -91,19 +93,6 @@ _TEMPORARY = re.compile(r"\.(?P<name>.+)\.tmp-(?P<pid>[0-9]+)-[0-9a-f]{8}")
 """Names :func:`_temporary_sibling` gives: ``.{name}.tmp-{pid}-{8 hex digits}``."""
 
 
-def _process_exists(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this machine (one of another user counts)."""
-    if pid <= 0:
-        return True  # not a process id: never judged dead
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def stale_temporaries(folders, *, names=None) -> list[Path]:
     """Temporaries of :func:`atomic_path` in ``folders`` whose writing process is gone.
 
@@ -134,7 +123,7 @@ def stale_temporaries(folders, *, names=None) -> list[Path]:
             m = _TEMPORARY.fullmatch(entry.name)
             if m is None or (names is not None and m["name"] not in names):
                 continue
-            if not _process_exists(int(m["pid"])):
+            if not process_exists(int(m["pid"])):
                 stale.append(Path(entry.path))
     return sorted(stale)
 
