@@ -18,7 +18,7 @@ from collections.abc import Mapping
 
 import jsonschema
 
-from .errors import ConfigError
+from .errors import ConfigError, exit_with_one_line
 from .schema import MAX_YAML_VALUES, expanded_size, fill_defaults, load_yaml, plain
 
 __all__ = [
@@ -460,10 +460,8 @@ def validate_config_or_exit(
     SystemExit
         With the message ``stereovar: <one-line ConfigError message>``.
     """
-    try:
+    with exit_with_one_line():
         return validate_config(config, schema_path, command_line=command_line)
-    except ConfigError as err:
-        raise SystemExit(f"stereovar: {err}") from None
 
 
 def merge_configs(base: Mapping, override: Mapping) -> dict:
@@ -564,7 +562,5 @@ def check_config_files_or_exit(paths) -> None:
             continue
         except ValueError:
             pass
-        try:
+        with exit_with_one_line():
             load_yaml(path, "config file")
-        except ConfigError as err:
-            raise SystemExit(f"stereovar: {err}") from None

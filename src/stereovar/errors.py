@@ -1,5 +1,7 @@
 """Exception types whose message is a single line naming the problem and the fix."""
 
+from contextlib import contextmanager
+
 
 class StereovarError(Exception):
     """Base class for every error the tool reports to a user.
@@ -41,3 +43,26 @@ class ClaimsError(StereovarError):
 class AuditError(StereovarError):
     """An audit's files do not form N >= 2 renders per view of stereo frames with ground
     truth, or their disparity convention is the wrong one."""
+
+
+@contextmanager
+def exit_with_one_line():
+    """Turn a :class:`StereovarError` raised inside into ``SystemExit("stereovar: <message>")``.
+
+    Inside a Snakefile, an exception makes Snakemake print its type, the file and line and a
+    traceback of workflow frames; ``SystemExit`` with a message makes it print only the
+    message (to stderr) and exit with status 1. Command-line entry points use it the same way.
+
+    Examples
+    --------
+    >>> try:
+    ...     with exit_with_one_line():
+    ...         raise ConfigError("config key 'spp': 0 is too small; use at least 1")
+    ... except SystemExit as stop:
+    ...     print(stop.code)
+    stereovar: config key 'spp': 0 is too small; use at least 1
+    """
+    try:
+        yield
+    except StereovarError as err:
+        raise SystemExit(f"stereovar: {err}") from None

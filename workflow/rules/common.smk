@@ -10,7 +10,7 @@ import yaml
 from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
-from stereovar.errors import StereovarError
+from stereovar.errors import exit_with_one_line
 from stereovar.io.contracts import config_digest
 from stereovar.preflight import (
     check_backends,
@@ -64,10 +64,8 @@ validate(config, CONFIG_SCHEMA, set_default=True)
 # import included) is written; Snakemake would stop with a ProtectedOutputException, or a
 # job would fail, naming no fix. A report only reads the results.
 if workflow.is_main_process and not any(a.startswith("--report") for a in sys.argv):
-    try:
+    with exit_with_one_line():
         check_writable(["results", "logs", "benchmarks"])
-    except StereovarError as err:
-        raise SystemExit(f"stereovar: {err}")
 
 # An `audit:` section turns the run into an audit of renders made elsewhere: the files are
 # imported into the render and ground-truth store contracts here, before the DAG is built
@@ -77,7 +75,7 @@ if workflow.is_main_process and not any(a.startswith("--report") for a in sys.ar
 # an import would do and writes nothing (stereovar.audit.run.import_mode).
 AUDIT = config.get("audit")
 if AUDIT:
-    try:
+    with exit_with_one_line():
         AUDIT_IMPORT = prepare_audit(
             AUDIT,
             mode=import_mode(
@@ -86,8 +84,6 @@ if AUDIT:
                 argv=sys.argv[1:],
             ),
         )
-    except StereovarError as err:
-        raise SystemExit(f"stereovar: {err}")
     AUDIT_DISCOVERY = AUDIT_IMPORT.discovery
     AUDIT_PLANNED = planned_stores(AUDIT, AUDIT_IMPORT)  # a dry run's stores to import
     config.update(audit_run_config(config, AUDIT_DISCOVERY))
@@ -98,15 +94,13 @@ else:
 # --resources mem_mb allows could never run: stop before any job (stereovar.resources).
 if workflow.is_main_process:
     _global_mem = workflow.global_resources.get("mem_mb")
-    try:
+    with exit_with_one_line():
         sizing.check_job_memory(
             config,
             *sizing.memory_limit(
                 config, global_mem_mb=None if _global_mem is None else _global_mem.value
             ),
         )
-    except StereovarError as err:
-        raise SystemExit(f"stereovar: {err}")
 
 
 ENV = "../../envs/stereovar.yaml"
@@ -377,12 +371,10 @@ if UNKNOWN_SCENES:
 # Every existing spec, with the XML file it points at and the files that reads, is checked
 # here, before any job starts: a job that found the problem would first have its outputs
 # deleted by Snakemake.
-try:
+with exit_with_one_line():
     check_scene_specs(
         scene_spec_path(s) for s in SCENES if s not in TO_GENERATE and not AUDIT
     )
-except StereovarError as err:
-    raise SystemExit(f"stereovar: {err}")
 # The generator rule only applies to specs that are missing (a pattern matching nothing
 # otherwise), so it never overwrites a committed or edited spec.
 GENERATE_PATTERN = "|".join(re.escape(s) for s in TO_GENERATE) or r"(?!x)x"
@@ -565,7 +557,7 @@ def preflight():
     jobs = list(workflow.dag.needrun_jobs())
     outputs = {str(f) for job in jobs for f in job.output}
     rules = {job.rule.name for job in jobs}
-    try:
+    with exit_with_one_line():
         for renderer in [get_renderer()] if AUDIT else RENDERER_RUNS:
             kept = stored_backends(p for p in render_stores(renderer) if p not in outputs)
             renders = {
@@ -581,8 +573,6 @@ def preflight():
                 planned if "render" in renders else None,
                 allow_mixed=config["render"]["allow_mixed_backends"],
             )
-    except StereovarError as err:
-        raise SystemExit(f"stereovar: {err}")
 
 
 def warn_if_report_is_stale(summary="results/summary.json"):
