@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
-# `pip install -e ".[test,cycles]"` (skipped while pyproject.toml is unchanged; the cycles
+# `pip install -e ".[test,cycles,mitigations]"` (skipped while pyproject.toml is unchanged; the cycles
 # extra, Blender's bpy, installs on CPython 3.11 only).
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
@@ -124,9 +124,9 @@ want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("py
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else
-    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles]\")"
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles]" \
-        || die "pip install -e \".[test,cycles]\" failed (see the pip output above)"
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations]\")"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations]" \
+        || die "pip install -e \".[test,cycles,mitigations]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
 fi
 
