@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
-# `pip install -e ".[test,cycles,mitigations]"` (skipped while pyproject.toml is unchanged; the cycles
-# extra, Blender's bpy, installs on CPython 3.11 only).
+# `pip install -e ".[test,cycles,mitigations]"` (skipped while pyproject.toml is unchanged;
+# the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn).
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
 # Environment:
