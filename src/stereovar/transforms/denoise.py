@@ -188,9 +188,10 @@ def apply_denoise(
     (Sec. 2.1) without promising to remove its cross-view alignment (Sec. 2.3).
 
     Without albedo and normal it runs the colour-only network: lower quality on texture and
-    edges, stated in the mitigation table by the source's inputs. A non-finite colour entry is
-    denoised as 0 and is NaN in the output, so the stores' finite flags drop it as they would
-    without the transform.
+    edges, stated in the mitigation table by the source's inputs. A normal pass without an
+    albedo pass is not used (OIDN takes a normal only together with an albedo). A non-finite
+    colour entry is denoised as 0 and is NaN in the output, so the stores' finite flags drop
+    it as they would without the transform.
 
     Parameters
     ----------
