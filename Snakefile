@@ -41,6 +41,7 @@ include: "workflow/rules/intervention.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/estimators.smk"
 include: "workflow/rules/audit.smk"
+include: "workflow/rules/mitigations.smk"
 
 
 onstart:

@@ -430,6 +430,15 @@ def _check_registered(config: dict) -> None:
     ):
         if key in render and render[key] not in registry:
             registry.get(render[key])  # raises the one-line error listing what exists
+    _check_mitigations(config)
+
+
+def _check_mitigations(config: dict) -> None:
+    """Every ``mitigations.names`` entry is a mitigation (:mod:`stereovar.mitigations`)."""
+    from .mitigations import resolve_mitigation
+
+    for name in config.get("mitigations", {}).get("names", []):
+        resolve_mitigation(name)  # raises the one-line error listing what exists
 
 
 def validate_config_or_exit(

@@ -1,28 +1,23 @@
-"""What an experiment config asks for: scene/SPP pairs, seed batches and result paths.
+"""What an experiment config asks for: scene/SPP pairs, seed batches and the stores they read.
 
 Shared by the workflow's target lists (``workflow/rules/common.smk``) and the benchmarks, so
-both enumerate exactly the same renders. The result paths name the renderer and the
-estimator that made them:
-
-``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{first}-{last}.zarr``
-    one batch of renders of one view (:mod:`stereovar.io.renders`), for the ``seeds``
-    estimator and the intervention;
-``results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr``
-    the two half renders' sample moments of one view (:mod:`stereovar.io.moments`), for the
-    ``moments`` estimator;
-``results/{renderer}/{estimator}/...``
-    everything computed from the renders: variance, warped, correlation, intervention,
-    tables and figures.
-
-An audit of renders made elsewhere (:mod:`stereovar.audit`) is a source named
-``audit/{name}`` in place of the renderer: its imported renders sit under
-``results/audit/{name}/renders/``, its ground truth under
-``results/audit/{name}/ground_truth/{frame}.zarr`` (:func:`ground_truth_store`) and
-everything computed from them under ``results/audit/{name}/seeds/``.
+both enumerate exactly the same renders. Every path comes from :mod:`stereovar.layout`
+(re-exported here): renders under ``results/{source}[/{transform}]/renders/``, everything
+computed from them under ``results/{source}[/{transform}]/{estimator}/``.
 """
 
 from __future__ import annotations
 
+from .layout import (
+    AUDIT_PREFIX,
+    NONE,
+    audit_source,
+    ground_truth_store,
+    is_audit,
+    moment_store,
+    render_store,
+    run_prefix,
+)
 from .rig import VIEWS
 
 __all__ = [
@@ -92,66 +87,36 @@ def batch_seeds(label: str) -> list[int]:
     return list(range(int(first), int(last) + 1))
 
 
-def render_store(renderer: str, scene: str, view: str, spp, batch) -> str:
-    """Path of one batch of renders:
-    ``results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr``."""
-    return f"results/{renderer}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"
-
-
-AUDIT_PREFIX = "audit/"
-"""Source names of audits: ``audit/{name}``."""
-
-
-def audit_source(name: str) -> str:
-    """The source (renderer) name of the audit ``name``: ``audit/{name}``."""
-    return f"{AUDIT_PREFIX}{name}"
-
-
-def is_audit(renderer: str) -> bool:
-    """Whether a source name is an audit's (:func:`audit_source`)."""
-    return str(renderer).startswith(AUDIT_PREFIX)
-
-
-def ground_truth_store(renderer: str, scene: str) -> str:
-    """Path of a scene's ground truth: ``results/ground_truth/{scene}.zarr``, traced from the
-    scene for every renderer, or ``results/audit/{name}/ground_truth/{frame}.zarr``, imported
-    with an audit's renders."""
-    if is_audit(renderer):
-        return f"results/{renderer}/ground_truth/{scene}.zarr"
-    return f"results/ground_truth/{scene}.zarr"
-
-
-def run_prefix(renderer: str, estimator: str) -> str:
-    """Directory of everything computed from one renderer's renders by one estimator."""
-    return f"results/{renderer}/{estimator}"
-
-
-def moment_store(renderer: str, scene: str, view: str, spp) -> str:
-    """Path of one view's moment store:
-    ``results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr``."""
-    return f"results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr"
-
-
-def seed_stores(config: dict, scene: str, spp, n_seeds: int | None = None) -> dict:
+def seed_stores(
+    config: dict, scene: str, spp, n_seeds: int | None = None, transform: str = NONE
+) -> dict:
     """View to the render stores of seed indices ``0..n_seeds-1`` (``render.n_seeds`` by
-    default) of one scene at ``spp``, in ``render.seeds_per_job`` batches."""
+    default) of one scene at ``spp`` after ``transform``, in ``render.seeds_per_job``
+    batches."""
     render = config["render"]
     n = int(render["n_seeds"] if n_seeds is None else n_seeds)
     batches = seed_batches(n, int(render["seeds_per_job"]))
+    source = render["renderer"]
     return {
-        view: [render_store(render["renderer"], scene, view, spp, batch_label(b)) for b in batches]
+        view: [render_store(source, scene, view, spp, batch_label(b), transform) for b in batches]
         for view in VIEWS
     }
 
 
-def estimator_stores(config: dict, scene: str, spp, estimator: str | None = None) -> dict:
+def estimator_stores(
+    config: dict, scene: str, spp, estimator: str | None = None, transform: str = NONE
+) -> dict:
     """View to the stores ``estimator`` (``render.estimator`` by default) reads for one
-    scene at ``spp``: every seed batch (``seeds``) or the one moment store (``moments``)."""
+    scene at ``spp`` after ``transform``: what the estimator declares it reads
+    (:attr:`stereovar.estimators.base.VarianceEstimator.reads`), every seed batch
+    (``renders``) or the one moment store (``moments``)."""
+    from .estimators import ESTIMATORS
+
     estimator = estimator or config["render"].get("estimator", "seeds")
-    if estimator == "moments":
+    if ESTIMATORS.get(estimator).reads == "moments":
         renderer = config["render"]["renderer"]
-        return {view: [moment_store(renderer, scene, view, spp)] for view in VIEWS}
-    return seed_stores(config, scene, spp)
+        return {view: [moment_store(renderer, scene, view, spp, transform)] for view in VIEWS}
+    return seed_stores(config, scene, spp, transform=transform)
 
 
 def intervention_renders(config: dict) -> tuple[int, int]:

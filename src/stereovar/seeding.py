@@ -3,8 +3,9 @@
 Mitsuba (like most path tracers) gives two sensors rendered with the same seed identical
 random streams, so whether the two views share seeds is an experimental condition, never an
 accident. :func:`render_seed` derives the seed of every render from its labels under a named
-policy; :data:`SEED_POLICIES` lists the policies (``independent`` today; a view-shared policy,
-as several Blender-based generators use by default, is one more registration).
+policy; :data:`SEED_POLICIES` lists the policies: ``independent`` (the experiment) and
+``shared`` (both views of a render get one seed, as several Blender-based generators do by
+default; the ``shared_seed`` mitigation, :mod:`stereovar.mitigations`).
 
 Importing this module pulls in no third-party package.
 """
@@ -35,6 +36,15 @@ def derive_seed(*parts) -> int:
 def independent_labels(scene: str, view: str, spp, index) -> tuple:
     """Every (scene, view, spp, index) gets its own seed; the views never share one."""
     return (scene, view, spp, index)
+
+
+@SEED_POLICIES.register("shared")
+def shared_labels(scene: str, view: str, spp, index) -> tuple:
+    """Both views of render ``index`` get one seed: what Kubric, BlenderProc and Infinigen do,
+    since none sets Cycles' seed (default 0). Mitsuba then gives both sensors the same random
+    stream at the same pixel coordinates (``sample_tea_32(seed, pixel index)``). The label
+    ``"shared"`` keeps these seeds apart from any ``independent`` one."""
+    return ("shared", scene, spp, index)
 
 
 def render_seed(scene: str, view: str, spp, index, *, policy: str = "independent") -> int:

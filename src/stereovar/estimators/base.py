@@ -25,6 +25,18 @@ class VarianceEstimator(ABC):
 
     name: str = ""
     description: str = ""
+    reads: str = "renders"
+    """What the estimator reads per view: ``"renders"`` (every seed batch's render store,
+    :mod:`stereovar.io.renders`) or ``"moments"`` (one moment store,
+    :mod:`stereovar.io.moments`)."""
+    takes_transforms: bool = True
+    """Whether it can read the stores of a store transform (:mod:`stereovar.transforms`),
+    which map render stores to render stores."""
+
+    @classmethod
+    def renders_per_view(cls, n_seeds: int) -> int:
+        """Stores read per view for a run of ``n_seeds`` seeds (for job sizing)."""
+        return int(n_seeds) if cls.reads == "renders" else 1
 
     @abstractmethod
     def estimate(self, left: Sequence, right: Sequence):

@@ -270,6 +270,8 @@ class MomentEstimator(VarianceEstimator):
 
     name = "moments"
     description = ESTIMATOR
+    reads = "moments"
+    takes_transforms = False  # a store transform maps single renders, not sample moments
 
     def estimate(self, left, right) -> xr.Dataset:
         """:func:`moment_variance_dataset` of the two views' moment stores."""

@@ -164,6 +164,27 @@ class PreparedScene(ABC):
             "per-sample moments; set render.estimator: seeds"
         )
 
+    def render_aux(self, view: str, *, spp: int, seed: int) -> tuple:
+        """Render ``view``'s auxiliary passes for a denoiser: the first hit's albedo and its
+        shading normal, each averaged over ``spp`` samples.
+
+        Returns
+        -------
+        albedo, normal : numpy.ndarray, shape (H, W, 3), float32
+            Albedo in [0, 1]; world-space shading normal (zero where nothing is hit).
+
+        Raises
+        ------
+        stereovar.errors.ConfigError
+            The renderer has no auxiliary passes.
+        """
+        from ..errors import ConfigError
+
+        raise ConfigError(
+            f"renderer '{self.provenance.get('renderer', type(self).__name__)}' renders no "
+            "albedo or normal pass; the denoise mitigations run on its renders without them"
+        )
+
     @abstractmethod
     def trace(self, view: str) -> FirstHits:
         """First hits of one ray through each pixel centre of ``view``."""
@@ -183,6 +204,9 @@ class Renderer(ABC):
     """
 
     name: str = ""
+    aux_passes: tuple[str, ...] = ()
+    """The auxiliary passes :meth:`PreparedScene.render_aux` gives (``albedo``, ``normal``),
+    read by the denoise mitigations; empty when it gives none."""
 
     def backend(self, variant: str = "auto") -> dict:
         """The back end a render with ``variant`` uses on this machine, found without

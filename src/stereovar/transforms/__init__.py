@@ -18,7 +18,7 @@ from __future__ import annotations
 from ..registry import Registry
 from .base import BASE_FIELDS, Transform, TransformInputs, check_reads
 
-TRANSFORMS = Registry("transform", config_key="mitigations.transforms")
+TRANSFORMS = Registry("transform", config_key="mitigations.names")
 TRANSFORMS.register("denoise", "stereovar.transforms.registered:DENOISE")
 TRANSFORMS.register("denoise_sensor", "stereovar.transforms.registered:DENOISE_SENSOR")
 TRANSFORMS.register("equalise", "stereovar.transforms.registered:EQUALISE")

@@ -1,0 +1,188 @@
+"""The mitigation table: each mitigation's cue, controls, Table 3 and image-quality cost.
+
+One row per mitigation (:mod:`stereovar.mitigations`) and region. Intervals are stated per
+column family:
+
+- correlations (``rho``, ``partial``, the controls, the residual correlations): the mean over
+  scenes with the scenes' block-bootstrap intervals combined
+  (:func:`stereovar.statistics.across.combined_interval`; conditional on the scenes run);
+- Table 3 (the :math:`C_\\sigma` lift over chance, the :math:`C_\\epsilon` shuffle effect):
+  Student t over scenes, or for one scene a Wilson interval over its pixels
+  (:func:`stereovar.audit.verdict.wta_lift`; :func:`stereovar.statistics.claims.t_interval`);
+- image quality: the mean over scenes with a Student t interval.
+
+The Monte Carlo-specific part of the cue is the intensity-controlled :math:`\\rho`
+(``partial``: the variance correlation with the part explained by intensity removed, paper
+Sec. 2.4's shot-noise control). ``mc_cue`` says whether its interval lies above 0
+(``remains``), covers 0 (``removed``) or lies below 0 (``reversed``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .across import rows_interval
+from .claims import t_interval
+
+MITIGATION_COLUMNS = [
+    "mitigation",
+    "kind",
+    "region",
+    "n_scenes",
+    "spp",
+    "n_seeds",
+    "rho",
+    "rho_low",
+    "rho_high",
+    "partial",
+    "partial_low",
+    "partial_high",
+    "mc_cue",
+    "null_shift",
+    "null_shift_low",
+    "null_shift_high",
+    "sensor_sim",
+    "sensor_sim_low",
+    "sensor_sim_high",
+    "cs_lift",
+    "cs_lift_low",
+    "cs_lift_high",
+    "ce_shuffle_effect",
+    "ce_shuffle_effect_low",
+    "ce_shuffle_effect_high",
+    "residual_rho_gt",
+    "residual_rho_gt_low",
+    "residual_rho_gt_high",
+    "residual_rho_zero",
+    "residual_rho_zero_low",
+    "residual_rho_zero_high",
+    "psnr",
+    "psnr_low",
+    "psnr_high",
+    "relative_mse",
+    "bias",
+    "relative_bias",
+    "transform_ms_per_mpix",
+    "description",
+]
+"""Columns of ``results/tables/mitigations.*``."""
+
+CORRELATION_METHODS = {"rho": "warp", "partial": "partial", "null_shift": "null_shift",
+                       "sensor_sim": "sensor_sim"}
+"""Column prefix to the registered statistic (:data:`stereovar.statistics.registry.METHODS`)
+it summarises."""
+
+
+def _f(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def mc_cue_state(low: float, high: float) -> str:
+    """``remains`` (interval above 0), ``removed`` (covers 0), ``reversed`` (below 0), or
+    ``n/a`` (no interval).
+
+    Examples
+    --------
+    >>> mc_cue_state(0.1, 0.3), mc_cue_state(-0.1, 0.2), mc_cue_state(float("nan"), 1.0)
+    ('remains', 'removed', 'n/a')
+    """
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return "n/a"
+    if low > 0:
+        return "remains"
+    if high < 0:
+        return "reversed"
+    return "removed"
+
+
+def _scene_values(rows, region, quantity) -> list[float]:
+    return [_f(r["value"]) for r in rows if r["region"] == region and r["quantity"] == quantity]
+
+
+def _intervention_effect(rows, region) -> tuple[float, float, float]:
+    """:math:`C_\\epsilon` WTA accuracy, normal minus block-shuffled, mean over scenes with a
+    t interval (Table 3's residual-shuffle effect)."""
+    per_scene = {}
+    for r in rows:
+        if (r["cost"], r["metric"], r["region"]) != ("residual_sad", "wta_accuracy", region):
+            continue
+        if str(r.get("source") or "render") != "render":
+            continue
+        per_scene.setdefault(r["scene"], {})[r["condition"]] = _f(r["value"])
+    diffs = [c["normal"] - c["decorrelated"] for c in per_scene.values()
+             if "normal" in c and "decorrelated" in c]
+    return t_interval(diffs)
+
+
+def mitigation_table(runs: list[dict]) -> list[dict]:
+    """The rows of :data:`MITIGATION_COLUMNS`.
+
+    Parameters
+    ----------
+    runs : list of dict
+        Per mitigation, in table order: ``mitigation``, ``kind``, ``description``, ``spp``,
+        ``correlation`` (its scenes' correlation rows), ``intervention`` (its scenes'
+        intervention rows; may be empty) and ``scene_rows`` (its scenes' mitigation rows,
+        :data:`stereovar.jobs.mitigations.MITIGATION_SCENE_COLUMNS`).
+
+    Returns
+    -------
+    list of dict
+        One row per mitigation and region present in its correlation rows.
+    """
+    from ..audit.verdict import wta_lift
+    from .regions import REGIONS
+
+    out = []
+    for run in runs:
+        corr = run["correlation"]
+        regions = [g for g in REGIONS if any(r["region"] == g for r in corr)]
+        scenes = sorted({r["scene"] for r in corr})
+        n_seeds = sorted({int(_f(r["n_seeds"])) for r in corr if math.isfinite(_f(r["n_seeds"]))})
+        for region in regions:
+            row = {
+                "mitigation": run["mitigation"],
+                "kind": run["kind"],
+                "region": region,
+                "n_scenes": len(scenes),
+                "spp": run["spp"],
+                "n_seeds": n_seeds[0] if len(n_seeds) == 1 else ",".join(map(str, n_seeds)),
+                "description": run["description"],
+            }
+            for column, method in CORRELATION_METHODS.items():
+                chosen = [r for r in corr if r["region"] == region and r["method"] == method]
+                row[column], row[f"{column}_low"], row[f"{column}_high"] = rows_interval(chosen)
+            row["mc_cue"] = mc_cue_state(row["partial_low"], row["partial_high"])
+            lift = wta_lift(run["intervention"], "render", region) if run["intervention"] else (
+                math.nan, math.nan, math.nan)
+            row["cs_lift"], row["cs_lift_low"], row["cs_lift_high"] = lift
+            effect = _intervention_effect(run["intervention"], region)
+            (row["ce_shuffle_effect"], row["ce_shuffle_effect_low"],
+             row["ce_shuffle_effect_high"]) = effect
+            scene_rows = run["scene_rows"]
+            for quantity in ("residual_rho_gt", "residual_rho_zero"):
+                chosen = [
+                    {"rho": r["value"], "boot_low": r["low"], "boot_high": r["high"]}
+                    for r in scene_rows
+                    if r["region"] == region and r["quantity"] == quantity
+                ]
+                row[quantity], row[f"{quantity}_low"], row[f"{quantity}_high"] = rows_interval(
+                    chosen
+                )
+            row["psnr"], row["psnr_low"], row["psnr_high"] = t_interval(
+                _scene_values(scene_rows, region, "psnr")
+            )
+            for quantity in ("relative_mse", "bias", "relative_bias"):
+                values = np.asarray(_scene_values(scene_rows, region, quantity))
+                values = values[np.isfinite(values)]
+                row[quantity] = float(values.mean()) if values.size else math.nan
+            ms = np.asarray(_scene_values(scene_rows, "all", "transform_ms_per_mpix"))
+            ms = ms[np.isfinite(ms)]
+            row["transform_ms_per_mpix"] = float(ms.mean()) if ms.size else math.nan
+            out.append(row)
+    return out

@@ -1,0 +1,148 @@
+# Mitigations (stereovar.mitigations): renders after a store transform or rendered under a
+# seed policy, each measured like the source's own renders (variance, warp, correlation, the
+# intervention: the rules of the other files, on the source key "{renderer}/{transform}"),
+# plus the cross-view residual correlation and the image quality against a converged
+# reference; then results/tables/mitigations.* and the trade-off figure.
+
+
+# A render-time policy: the scene rendered anew with the policy's sampler seeds (both views
+# of a render share one seed under shared_seed).
+rule render_policy:
+    wildcard_constraints:
+        renderer=RENDERER_NAMES,
+    input:
+        unpack(scene_inputs),
+    output:
+        left=directory("results/{renderer}/{policy}/renders/{scene}/left/spp{spp}/seeds{batch}.zarr"),
+        right=directory(
+            "results/{renderer}/{policy}/renders/{scene}/right/spp{spp}/seeds{batch}.zarr"
+        ),
+    params:
+        seeds=lambda wc: batch_seeds(wc.batch),
+        spp=lambda wc: int(wc.spp),
+        **rig_params(),
+        **{k: v for k, v in render_params().items() if k not in ("variant", "seed_policy")},
+        seed_policy=lambda wc: SEED_POLICY_MITIGATIONS[wc.policy],
+    log:
+        "logs/{renderer}/{policy}/renders/{scene}/spp{spp}/seeds{batch}.log",
+    benchmark:
+        "benchmarks/{renderer}/{policy}/renders/{scene}/spp{spp}/seeds{batch}.tsv"
+    threads: RENDER_THREADS
+    resources:
+        **render_resources(),
+    conda:
+        ENV
+    script:
+        "../scripts/render.py"
+
+
+# The denoiser's albedo and normal of one view: one cheap pass of the renderer's AOVs.
+rule render_aux:
+    wildcard_constraints:
+        renderer=RENDERER_NAMES,
+    input:
+        unpack(scene_inputs),
+    output:
+        directory("results/{renderer}/renders/{scene}/{view}/aux.zarr"),
+    params:
+        view=lambda wc: wc.view,
+        spp=AUX_SPP,
+        **rig_params(),
+    log:
+        "logs/{renderer}/renders/{scene}/{view}/aux.log",
+    benchmark:
+        "benchmarks/{renderer}/renders/{scene}/{view}/aux.tsv"
+    threads: RENDER_THREADS
+    resources:
+        **render_resources(n_views=1, spp=AUX_SPP),
+    conda:
+        ENV
+    script:
+        "../scripts/render_aux.py"
+
+
+# The one generic rule of every store transform: one batch of one view's renders in, the
+# same seeds transformed out (stereovar.transforms; the seed of its draws is recorded).
+rule transform:
+    wildcard_constraints:
+        renderer=SOURCE_NAMES,
+    input:
+        unpack(transform_inputs),
+    output:
+        directory("results/{renderer}/{transform}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"),
+    params:
+        transform=lambda wc: wc.transform,
+        batch=lambda wc: batch_seeds(wc.batch),
+        view=lambda wc: wc.view,
+        seed=MITIGATIONS["seed"],
+        options=transform_options,
+    log:
+        "logs/{renderer}/{transform}/renders/{scene}/{view}/spp{spp}/seeds{batch}.log",
+    benchmark:
+        "benchmarks/{renderer}/{transform}/renders/{scene}/{view}/spp{spp}/seeds{batch}.tsv"
+    threads: 1
+    resources:
+        **analysis_resources(images=2 * N_SEEDS + 4, n_reads=N_SEEDS),
+    conda:
+        ENV
+    script:
+        "../scripts/transform.py"
+
+
+rule mitigation_scene:
+    input:
+        unpack(mitigation_scene_inputs),
+    output:
+        "results/{renderer}/seeds/mitigation/{scene}/spp{spp}.csv",
+    params:
+        analysis=config["analysis"],
+        controls=config["controls"],
+    log:
+        "logs/{renderer}/seeds/mitigation/{scene}/spp{spp}.log",
+    benchmark:
+        "benchmarks/{renderer}/seeds/mitigation/{scene}/spp{spp}.tsv"
+    threads: 1
+    resources:
+        **analysis_resources(images=4 * N_SEEDS + 8, n_reads=2 * N_SEEDS),
+    conda:
+        ENV
+    script:
+        "../scripts/mitigation_scene.py"
+
+
+rule mitigations_table:
+    input:
+        mitigation_table_inputs,
+    output:
+        csv="results/tables/mitigations.csv",
+        md="results/tables/mitigations.md",
+        tex="results/tables/mitigations.tex",
+        html=report(
+            "results/tables/mitigations.html",
+            caption="../report/mitigations.rst",
+            category="Tables",
+            labels={"table": "mitigations"},
+        ),
+        figure=report(
+            "results/figures/mitigations.png",
+            caption="../report/mitigations_figure.rst",
+            category="Figures",
+            labels={"figure": "mitigations"},
+        ),
+    params:
+        runs=mitigation_table_params(),
+    log:
+        "logs/tables/mitigations.log",
+    benchmark:
+        "benchmarks/tables/mitigations.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/mitigations_table.py"
+
+
+rule mitigations:
+    input:
+        mitigation_targets(),
+    localrule: True
