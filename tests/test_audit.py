@@ -13,7 +13,7 @@ from stereovar.audit.ground_truth import (
     imported_ground_truth,
     left_right_occlusion,
 )
-from stereovar.audit.importer import import_audit, manifest_path, sha256
+from stereovar.audit.importer import import_audit, import_record, sha256
 from stereovar.audit.layout import discover
 from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import shift_rows, synthetic_frame, write_synthetic_audit
@@ -93,8 +93,8 @@ def test_reimport_does_nothing_until_a_file_changes(audit):
     )
     ds = open_dataset("results/audit/synthetic/renders/f01/right/spp0/seeds0-3.zarr")
     np.testing.assert_array_equal(ds["radiance"].values[1], image * 2)
-    record = json.loads(open(manifest_path("synthetic")).read())
-    assert record["frames"]["f01"]["files"][path]["sha256"] == sha256(path)
+    record = json.loads(open(import_record("synthetic", "f01")).read())
+    assert record["frame"] == "f01" and record["files"][path]["sha256"] == sha256(path)
 
 
 def test_sign_check_stops_the_wrong_convention_with_one_line(audit):

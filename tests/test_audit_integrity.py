@@ -1,7 +1,8 @@
 """What an audit's import records is what it decoded: reimports decided on content, files
-replaced while they are imported, one import-settings digest for the command line and the
-workflow, `stereovar audit` validating its config before reading any file, temporaries of
-killed imports, a dry run that writes nothing, and an export that says only what it wrote."""
+replaced while they are imported, one import-settings digest whether defaults are written out
+or not, `stereovar audit` validating its config before running anything, temporaries of
+killed imports, a dry run that writes nothing, and an export that says only what it wrote.
+The import as workflow jobs: tests/test_audit_jobs.py."""
 
 import hashlib
 import json
@@ -17,7 +18,7 @@ import yaml
 
 from stereovar import cli
 from stereovar.audit import importer, run
-from stereovar.audit.importer import import_audit, manifest_path
+from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import load_config
 from stereovar.errors import AuditError, ConfigError
@@ -36,9 +37,10 @@ def file_sha256(path) -> str:
 
 
 def recorded(name="synthetic") -> dict:
-    """Path to SHA-256 of every file in an audit's import record."""
-    frames = json.loads(Path(manifest_path(name)).read_text())["frames"]
-    return {p: r["sha256"] for f in frames.values() for p, r in f["files"].items()}
+    """Path to SHA-256 of every file in an audit's import records (one per frame)."""
+    records = Path(import_record(name, "f00")).parent.glob("*.json")
+    frames = [json.loads(p.read_text()) for p in records]
+    return {p: r["sha256"] for f in frames for p, r in f["files"].items()}
 
 
 def test_a_file_replaced_with_the_same_size_and_mtime_is_imported_again(tmp_path, monkeypatch):
@@ -108,7 +110,7 @@ def test_a_file_replaced_while_it_is_imported_is_refused(tmp_path, monkeypatch, 
     assert swapped and "\n" not in message
     assert message.startswith(f"{target} changed while it was imported")
     assert not Path("results/audit/synthetic/renders").exists()
-    assert not Path(manifest_path("synthetic")).exists()
+    assert not Path(import_record("synthetic", "f00")).exists()
 
     # the file is stable now: imported, and what is stored is what is recorded
     monkeypatch.setattr(importer, name, real)
@@ -162,28 +164,6 @@ def test_a_dry_run_plans_and_writes_nothing(tmp_path, monkeypatch, tree_snapshot
     assert tree_snapshot(tmp_path / "results") == before
 
 
-@pytest.mark.parametrize(
-    ("main_process", "dry_run", "argv", "mode"),
-    [
-        (True, False, ["-j2", "all", "--configfile", "audit.yaml"], "import"),
-        (True, True, ["all"], "plan"),  # Snakemake's own setting
-        (True, False, ["-np", "all"], "plan"),  # a Snakemake whose settings do not say
-        (True, False, ["--dry-run"], "plan"),
-        (True, False, ["--lint"], "plan"),
-        (True, False, ["--lint=json"], "plan"),
-        (True, False, ["-S"], "plan"),
-        (True, False, ["--dag", "all"], "plan"),
-        (True, False, ["--report", "report.html"], "plan"),
-        (True, False, ["--report", "r.html", "--report-after-run", "all"], "import"),
-        (True, False, ["--touch", "all"], "import"),
-        (False, False, ["-j2", "all"], "discover"),  # a cluster job
-        (False, True, ["all"], "discover"),
-    ],
-)
-def test_only_a_run_that_executes_jobs_imports(main_process, dry_run, argv, mode):
-    assert run.import_mode(main_process=main_process, dry_run=dry_run, argv=argv) == mode
-
-
 def test_temporaries_of_killed_imports_are_removed_and_live_ones_kept(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     settings, _ = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
@@ -194,7 +174,7 @@ def test_temporaries_of_killed_imports_are_removed_and_live_ones_kept(tmp_path, 
     dead = folder / f".seeds0-3.zarr.tmp-{gone.pid}-0123abcd"
     live = folder / f".seeds0-3.zarr.tmp-{os.getpid()}-89abcdef"
     dead_gt = Path(f"results/audit/synthetic/ground_truth/.f00.zarr.tmp-{gone.pid}-deadbeef")
-    dead_record = Path(f"results/audit/synthetic/.import.json.tmp-{gone.pid}-00ff00ff")
+    dead_record = Path(f"results/audit/synthetic/import/.f00.json.tmp-{gone.pid}-00ff00ff")
     for tmp in (dead, live, dead_gt):
         (tmp / "radiance").mkdir(parents=True)
         (tmp / "radiance" / "0.0.0.0").write_bytes(b"\0" * 1000)
@@ -263,7 +243,8 @@ def test_cli_refuses_an_invalid_config_before_reading_any_file(
         raise AssertionError("a file was read before the config was validated")
 
     monkeypatch.setattr(run, "discover", no_reading)
-    monkeypatch.setattr(run, "import_audit", no_reading)
+    monkeypatch.setattr(importer, "import_frame", no_reading)
+    monkeypatch.setattr(cli, "_snakemake", no_reading)
     args = ["audit", "bad.yaml", *(["--import-only"] if import_only else [])]
     rc, out, err = run_cli(*args, capsys=capsys)
     assert rc == 2
@@ -271,13 +252,19 @@ def test_cli_refuses_an_invalid_config_before_reading_any_file(
     assert not (root / "results").exists()
 
 
-def test_cli_imports_a_valid_config_once(project, capsys):
+def test_cli_runs_the_workflow_and_import_only_runs_only_the_imports(
+    project, capsys, monkeypatch
+):
     root, settings = project
     (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings}))
+    runs = []
+    monkeypatch.setattr(cli, "_snakemake", lambda args, where: runs.append(args) or 0)
     rc, out, _ = run_cli("audit", "audit.yaml", "--import-only", capsys=capsys)
-    assert rc == 0 and "imported 1 frame (f00), 0 unchanged" in out
-    rc, out, _ = run_cli("audit", "audit.yaml", "--import-only", capsys=capsys)
-    assert rc == 0 and "imported 0 frames, 1 unchanged" in out
+    config = str((root / "audit.yaml").resolve())
+    assert rc == 0 and runs == [["-j", "2", "all", "--configfile", config,
+                                 "--until", "audit_import"]]
+    assert out.startswith("imported synthetic: one record per frame in ")
+    assert not (root / "results").exists()  # the command itself imports nothing
 
 
 # --------------------------------------------------------------------------------------------
@@ -310,70 +297,3 @@ def test_export_refuses_a_target_that_would_pass_for_an_export(
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"stereovar: error: {target.relative_to(root)}")
     assert ("symbolic link" if "link" in stand_in else "holds no export") in lines[0]
-
-
-# --------------------------------------------------------------------------------------------
-# the workflow: a dry run writes nothing; the command line and a run import once
-# --------------------------------------------------------------------------------------------
-
-
-@pytest.mark.workflow
-def test_a_dry_run_writes_nothing_and_agrees_with_the_command_line(tmp_path, tree_snapshot):
-    from .test_workflow import TINY, copy_workflow
-
-    root = copy_workflow(tmp_path / "wf", TINY)
-    settings, frames = write_synthetic_audit(
-        root / "data", n_frames=1, render_format="pfm", **SMALL
-    )
-    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings}))
-    found = "stereovar: audit synthetic: 1 frame × 2 views × 4 seeds; "
-
-    def dry_run():
-        proc = subprocess.run(
-            [sys.executable, "-m", "snakemake", "-n", "all", "--configfile", "audit.yaml"],
-            cwd=root, capture_output=True, text=True,
-        )
-        assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
-        return audit_lines(proc.stderr), proc.stdout + proc.stderr
-
-    def audit_lines(text):
-        return [line for line in text.splitlines() if line.startswith("stereovar: audit ")]
-
-    def cli_import():
-        proc = subprocess.run(
-            [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml", "--import-only"],
-            cwd=root, capture_output=True, text=True,
-        )
-        assert proc.returncode == 0, proc.stderr[-3000:]
-        return audit_lines(proc.stdout)
-
-    # a new audit: the dry run lists the import and every job after it, and writes nothing
-    before = tree_snapshot(root)
-    lines, out = dry_run()
-    assert lines == [found + "would import 1 frame (f00), 0 unchanged (dry run: nothing written)"]
-    assert "rule audit_import:" in out and "rule audit_verdict:" in out
-    assert tree_snapshot(root) == before
-    # the command line imports; the workflow (its digest of the settings with the schema's
-    # defaults filled in) finds nothing to import
-    assert cli_import()[0] == found + "imported 1 frame (f00), 0 unchanged"
-    before = tree_snapshot(root)
-    lines, out = dry_run()
-    assert lines == [found + "would import 0 frames, 1 unchanged (dry run: nothing written)"]
-    assert "rule audit_import:" not in out
-    assert tree_snapshot(root) == before
-    # a render replaced by another of the same size and mtime (cp -p): a dry run lists its
-    # import and the jobs that read it, writing nothing; the command line imports it once
-    target = settings["renders"].format(frame="f00", view="R", seed="000")
-    source = settings["renders"].format(frame="f00", view="R", seed="003")
-    mtime = os.stat(target).st_mtime_ns
-    shutil.copy2(source, target)
-    os.utime(target, ns=(mtime, mtime))
-    before = tree_snapshot(root)
-    lines, out = dry_run()
-    assert lines == [found + "would import 1 frame (f00), 0 unchanged (dry run: nothing written)"]
-    assert "rule audit_import:" in out and "rule variance:" in out
-    assert tree_snapshot(root) == before
-    assert cli_import()[0] == found + "imported 1 frame (f00), 0 unchanged"
-    ds = open_dataset(root / "results/audit/synthetic/renders/f00/right/spp0/seeds0-3.zarr")
-    np.testing.assert_array_equal(ds["radiance"].values[0], frames[0].renders["right"][3])
-    assert cli_import() == [found + "imported 0 frames, 1 unchanged"]

@@ -135,7 +135,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from .audit.run import audit_paths, prepare_audit
+    from .audit.run import audit_paths
     from .schema import load_yaml
 
     root = _project_root()
@@ -149,16 +149,21 @@ def _cmd_audit(args: argparse.Namespace) -> int:
             f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
             "convention; see the README's 'Audit your own renders')"
         )
-    # The whole config, as the workflow will see it, before any file is read; the import
-    # then uses the settings the workflow uses (defaults filled), so it imports only once.
+    # The whole config, as the workflow will see it, before any file is read; the import is
+    # the workflow's (one audit_import job per frame).
     settings = _workflow_config(root, [config])["audit"]
-    prepare_audit(settings, stream=sys.stdout)
+    command = ["-j", str(args.cores), "all", "--configfile", str(config.resolve())]
     if args.import_only:
-        return 0
-    rc = _snakemake(["-j", str(args.cores), "all", "--configfile", str(config.resolve())], root)
+        command += ["--until", "audit_import"]
+    rc = _snakemake(command, root)
     if rc != 0:
         return rc
-    summary = root / audit_paths(settings["name"])["summary"]
+    paths = audit_paths(settings["name"])
+    if args.import_only:
+        records = root / Path(paths["summary"]).parent / "import"
+        print(f"imported {settings['name']}: one record per frame in {records}")
+        return 0
+    summary = root / paths["summary"]
     print("\n".join(json.loads(summary.read_text())["summary"]))
     print(f"verdict page: {summary.parent / 'verdict.html'}")
     return 0
@@ -201,7 +206,9 @@ def _register_audit(subparsers) -> None:
     audit.add_argument("config", metavar="CONFIG", help="YAML config with an audit: section")
     audit.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
     audit.add_argument(
-        "--import-only", action="store_true", help="import (and sign-check) the files only"
+        "--import-only",
+        action="store_true",
+        help="run only the import jobs (one per frame: decode, check, sign-check, store)",
     )
     audit.set_defaults(func=_cmd_audit)
     export = subparsers.add_parser(

@@ -1,24 +1,48 @@
-# An audit of renders made elsewhere (config section `audit:`): the files are imported in
-# common.smk; every rule downstream of the renders runs on them under results/audit/{name}/.
-# These rules add one teaser per frame and the verdict page. `export` writes this project's
-# renders, variance fields and disparity as files other tools (and the audit) read.
+# An audit of renders made elsewhere (config section `audit:`): common.smk only finds its
+# files (stereovar.audit.run.discover_audit: nothing is read or written while the workflow is
+# parsed); `audit_import` imports each frame in a job of its own, and every rule downstream of
+# the renders runs on the stores under results/audit/{name}/. These rules add one teaser per
+# frame and the verdict page. `export` writes this project's renders, variance fields and
+# disparity as files other tools (and the audit) read.
 
 
-# A dry run imports nothing (common.smk): the stores an import would write or replace are
-# the outputs of this rule, which only a dry run has, so it lists the jobs that read them.
-if AUDIT_PLANNED:
+if AUDIT:
 
+    def audit_frame_files(wildcards):
+        """The files one frame is imported from (stereovar.audit.run.frame_files)."""
+        return frame_files(AUDIT_DISCOVERY, wildcards.scene)
+
+    def audit_frame_fingerprint(wildcards):
+        """Changes when a frame's file is replaced keeping its size and mtime (cp -p), not
+        when it is only touched (stereovar.audit.importer.frame_fingerprint)."""
+        frame = next(f for f in AUDIT_DISCOVERY.frames if f.name == wildcards.scene)
+        return frame_fingerprint(AUDIT, frame)
+
+    # One job per frame. Snakemake imports a frame again when one of its files is newer
+    # than its stores (unless its bytes are those it recorded: --max-checksum-file-size,
+    # profiles/default), when the import settings change, or when the fingerprint does.
     rule audit_import:
+        wildcard_constraints:
+            scene=frame_pattern(AUDIT_DISCOVERY),
         input:
-            sorted({f for files in AUDIT_PLANNED.values() for f in files}),
+            audit_frame_files,
         output:
-            [directory(store) for store in AUDIT_PLANNED],
-            planned_marker(AUDIT),  # never written (stereovar.audit.run.planned_marker)
+            **{
+                key: path if key == "record" else directory(path)
+                for key, path in import_outputs(AUDIT, AUDIT_DISCOVERY.n_seeds).items()
+            },
+        params:
+            settings=AUDIT,
+            fingerprint=audit_frame_fingerprint,
         log:
-            f"logs/audit/{AUDIT['name']}/import.log",
-        localrule: True
-        run:
-            raise SystemExit("stereovar: a dry run imports nothing; run without -n to import")
+            f"logs/audit/{AUDIT['name']}/import/{{scene}}.log",
+        benchmark:
+            f"benchmarks/audit/{AUDIT['name']}/import/{{scene}}.tsv"
+        threads: 2
+        conda:
+            ENV
+        script:
+            "../scripts/audit_import.py"
 
 
 rule audit_teaser:

@@ -2,9 +2,12 @@
 
 :func:`import_audit` discovers the frames (:func:`stereovar.audit.layout.discover`), checks
 every file's size from its header and re-imports only the frames whose files, or whose import
-settings, changed since the last import (the record is ``results/audit/{name}/import.json``).
-Whether a file changed is decided on its content (SHA-256), never on its size and time stamps
-alone: ``cp -p``, ``rsync -a`` and ``tar x`` keep both. A frame is imported by decoding all of
+settings, changed since the last import (one record per frame,
+``results/audit/{name}/import/{frame}.json``: :func:`import_record`). Whether a file changed
+is decided on its content (SHA-256), never on its size and time stamps alone: ``cp -p``,
+``rsync -a`` and ``tar x`` keep both. The workflow imports one frame per job
+(:func:`import_frame`, rule ``audit_import``); Snakemake decides which frames to import again
+(:func:`frame_fingerprint` is the rule's ``params``). A frame is imported by decoding all of
 its files, checking them, settling the disparity sign photometrically
 (:func:`stereovar.audit.sign.sign_check`) and only then writing its stores, each atomically:
 a bad file stops the import with one line and leaves every store already imported as it was.
@@ -50,6 +53,7 @@ from ..io.store import (
     write_file,
     write_zarr,
 )
+from ..layout import RESULTS
 from ..rig import VIEWS
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
@@ -77,9 +81,11 @@ after it is decoded (:func:`read_verified`): file time stamps advance in steps o
 milliseconds, so a rewrite that soon after the previous one can leave them as they were."""
 
 
-def manifest_path(name: str) -> str:
-    """The import record of an audit: ``results/audit/{name}/import.json``."""
-    return f"results/{audit_source(name)}/import.json"
+def import_record(name: str, frame: str) -> str:
+    """The import record of one frame of an audit:
+    ``results/audit/{name}/import/{frame}.json``: the import-settings digest, each file's
+    SHA-256 (of the bytes decoded), size and time stamps, and the stores written."""
+    return f"{RESULTS}/{audit_source(name)}/import/{frame}.json"
 
 
 def audit_spp(settings: dict) -> int:
@@ -238,7 +244,64 @@ def read_verified(path, decode=None) -> tuple[dict, object]:
             f"{path} changed while it was imported ({how}); import again once it is written "
             "completely"
         )
-    return {"sha256": digest, "size": before.st_size, "mtime_ns": before.st_mtime_ns}, value
+    return _file_record(digest, before), value
+
+
+def _file_record(digest: str, st: os.stat_result) -> dict:
+    """A file's entry in an import record: its SHA-256 and the status it had when hashed."""
+    return {
+        "sha256": digest,
+        "size": st.st_size,
+        "mtime_ns": st.st_mtime_ns,
+        "ctime_ns": st.st_ctime_ns,
+        "ino": st.st_ino,
+    }
+
+
+FINGERPRINT_KEYS = ("size", "mtime_ns", "ctime_ns", "ino")
+"""What :func:`frame_fingerprint` compares of a file's status with its import record."""
+
+
+def frame_fingerprint(settings: dict, frame: Frame) -> str:
+    """What decides that a frame is imported again, for Snakemake's ``params`` trigger.
+
+    One token per file: the file's status (size, time stamps, inode) as its last import
+    recorded it when the file still has that status or, when it has another, still holds
+    the bytes recorded (it is hashed, only then); otherwise its status now. A file
+    replaced by another of the same size and mtime (``cp -p``, ``tar x``: its ctime or
+    inode changes) so changes the fingerprint, and a file only touched (``touch``, a
+    checkout) does not; a frame never imported costs one ``stat`` per file, no hashing.
+    Snakemake stores the fingerprint with the job's outputs and compares it at the next run.
+
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` config section.
+    frame : Frame
+        The frame, from :func:`stereovar.audit.layout.discover`.
+
+    Returns
+    -------
+    str
+        A SHA-256 hex digest.
+    """
+    old = load_record(settings["name"], frame.name)
+    recorded = old.get("files", {}) if old.get("settings") == settings_digest(settings) else {}
+    tokens = {}
+    for path in map(str, frame.files()):
+        try:
+            st = os.stat(path)
+        except OSError:
+            tokens[path] = None  # the import job names it
+            continue
+        now = [getattr(st, f"st_{k}") for k in FINGERPRINT_KEYS]
+        before = recorded.get(path)
+        if before is not None and all(k in before for k in FINGERPRINT_KEYS):
+            then = [before[k] for k in FINGERPRINT_KEYS]
+            if now == then or (now[0] == then[0] and sha256(path) == before["sha256"]):
+                now = then
+        tokens[path] = now
+    return config_digest({"files": tokens, "settings": settings_digest(settings)})
 
 
 class _Reads:
@@ -342,8 +405,9 @@ class ImportReport:
         return out
 
 
-def _load_manifest(name: str) -> dict:
-    path = Path(manifest_path(name))
+def load_record(name: str, frame: str) -> dict:
+    """The :func:`import_record` of a frame (empty when there is none or it is unreadable)."""
+    path = Path(import_record(name, frame))
     try:
         return json.loads(path.read_text()) if path.is_file() else {}
     except (OSError, ValueError):
@@ -367,8 +431,8 @@ def _unchanged(frame: Frame, previous: dict, stores: dict, pool) -> bool:
 
 
 def _store_folders(name: str) -> tuple[list, Path]:
-    """The folders the import writes stores in, and the one of its record."""
-    base = Path(manifest_path(name)).parent
+    """The folders the import writes stores in, and the one of its records."""
+    base = Path(import_record(name, "frame")).parent.parent
     folders = []
     for sub in ("renders", "ground_truth"):
         for folder, dirs, _ in os.walk(base / sub):
@@ -381,8 +445,7 @@ def _killed_imports(name: str, *, remove: bool) -> list:
     """Temporaries that killed imports of ``name`` left (removed with ``remove``)."""
     folders, base = _store_folders(name)
     find = remove_stale_temporaries if remove else stale_temporaries
-    record = Path(manifest_path(name)).name
-    return find(folders) + find([base], names=[record])
+    return find(folders) + find([Path(import_record(name, "frame")).parent])
 
 
 def _check_sizes(frame: Frame) -> tuple[int, int]:
@@ -647,8 +710,35 @@ def check_settings(settings: dict) -> None:
         )
 
 
+def _png_transfer_warning(settings: dict, frames, report: ImportReport) -> None:
+    pngs = [p for f in frames for v in VIEWS for p in f.renders[v].values()]
+    if not settings["transfer"] and any(image_format(p) == "png" for p in pngs):
+        report.warnings.append(
+            "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
+            "linear or srgb to say how they were written"
+        )
+
+
+def _import_and_record(settings, frame: Frame, size, pool, report: ImportReport) -> FrameReport:
+    """Import one frame (:func:`_import_frame`), then write its :func:`import_record`."""
+    try:
+        fr, records = _import_frame(settings, frame, size, pool, report)
+    except MemoryError:
+        raise AuditError(
+            f"frame {frame.name}: its renders do not fit in memory; import fewer seeds per "
+            "frame"
+        ) from None
+    stores = frame_stores(settings, frame.name, frame.n_seeds)
+    _write_record(settings, frame.name, records, stores)
+    return fr
+
+
 def import_audit(settings: dict, *, workers: int = 2, dry_run: bool = False) -> ImportReport:
     """Import an audit's files into the render and ground-truth store contracts.
+
+    Every frame whose files or import settings changed since its :func:`import_record`
+    (judged by SHA-256) is imported; the workflow imports one frame per job instead
+    (:func:`import_frame`). For notebooks, benchmarks and tests.
 
     Parameters
     ----------
@@ -679,53 +769,91 @@ def import_audit(settings: dict, *, workers: int = 2, dry_run: bool = False) -> 
     name = settings["name"]
     report = ImportReport(name, found, [], dry_run=dry_run)
     report.temporaries = _killed_imports(name, remove=not dry_run)
-    old = _load_manifest(name)
     digest = settings_digest(settings)
-    pngs = [p for f in found.frames for v in VIEWS for p in f.renders[v].values()]
-    if not settings["transfer"] and any(image_format(p) == "png" for p in pngs):
-        report.warnings.append(
-            "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
-            "linear or srgb to say how they were written"
-        )
+    _png_transfer_warning(settings, found.frames, report)
     sizes = [_check_sizes(frame) for frame in found.frames]
-    manifest = {"settings": digest, "frames": {}}
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
         for frame, size in zip(found.frames, sizes, strict=True):
-            prev = old.get("frames", {}).get(frame.name, {})
+            prev = load_record(name, frame.name)
             stores = frame_stores(settings, frame.name, frame.n_seeds)
             with report.timed("hash"):
-                unchanged = old.get("settings") == digest and _unchanged(
+                unchanged = prev.get("settings") == digest and _unchanged(
                     frame, prev, stores, pool
                 )
             if unchanged:
                 report.frames.append(FrameReport(frame.name, False))
-                records = prev["files"]
             elif dry_run:
                 report.frames.append(FrameReport(frame.name, True))
-                continue
             else:
-                try:
-                    fr, records = _import_frame(settings, frame, size, pool, report)
-                except MemoryError:
-                    raise AuditError(
-                        f"frame {frame.name}: its renders do not fit in memory; import fewer "
-                        "seeds per frame"
-                    ) from None
-                report.frames.append(fr)
-            if not dry_run:
-                manifest["frames"][frame.name] = {"files": records, "stores": stores}
-                _write_manifest(name, old, manifest)
+                report.frames.append(_import_and_record(settings, frame, size, pool, report))
     return report
 
 
-def _write_manifest(name: str, old: dict, manifest: dict) -> None:
-    """Record the frames imported so far; frames not reached yet keep their old record. An
-    unchanged record is not written again."""
-    frames = {**old.get("frames", {}), **manifest["frames"]}
-    if old.get("settings") != manifest["settings"]:
-        frames = dict(manifest["frames"])
-    text = json.dumps({"settings": manifest["settings"], "frames": frames}, indent=1)
-    path = Path(manifest_path(name))
+def import_frame(settings: dict, frame: str, *, workers: int = 2) -> ImportReport:
+    """Import one frame of an audit, whatever its last import recorded: the job of the
+    workflow's ``audit_import`` rule, which Snakemake runs when the frame's files (their
+    time stamps, or :func:`frame_fingerprint`) or the import settings changed.
+
+    The frame's files are found again (:func:`~stereovar.audit.layout.discover`), their
+    sizes checked from their headers, then decoded and checked (:func:`_import_frame`:
+    truncated files, the sign check, ...) before any store is written; the stores and the
+    frame's :func:`import_record` are each written atomically.
+
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` config section.
+    frame : str
+        The frame's name.
+    workers : int, keyword-only
+        Threads that hash and decode files.
+
+    Returns
+    -------
+    ImportReport
+        With the one frame.
+
+    Raises
+    ------
+    AuditError, ImageError
+        One line naming the file and the fix; no store of the frame is written.
+    """
+    check_settings(settings)
+    settings = {**settings, **import_settings(settings)}
+    found = discover(settings)
+    match = [f for f in found.frames if f.name == frame]
+    if not match:
+        raise AuditError(
+            f"frame {frame}: no file of it matches audit.renders {settings['renders']!r} any "
+            "more; run the workflow again (it finds the frames anew)"
+        )
+    report = ImportReport(settings["name"], found, [])
+    names = {Path(p).name for p in frame_stores(settings, frame, match[0].n_seeds).values()}
+    folders, _ = _store_folders(settings["name"])
+    report.temporaries = remove_stale_temporaries(folders, names=names) + (
+        remove_stale_temporaries(
+            [Path(import_record(settings["name"], frame)).parent],
+            names=[Path(import_record(settings["name"], frame)).name],
+        )
+    )
+    _png_transfer_warning(settings, match, report)
+    size = _check_sizes(match[0])
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        report.frames.append(_import_and_record(settings, match[0], size, pool, report))
+    return report
+
+
+def _write_record(settings: dict, frame: str, files: dict, stores: dict) -> None:
+    """Write a frame's :func:`import_record` atomically (not again when unchanged)."""
+    record = {
+        "audit": settings["name"],
+        "frame": frame,
+        "settings": settings_digest(settings),
+        "files": files,
+        "stores": stores,
+    }
+    text = json.dumps(record, indent=1)
+    path = Path(import_record(settings["name"], frame))
     try:
         if path.read_text() == text:
             return

@@ -1,4 +1,5 @@
-"""Jobs of ``workflow/rules/audit.smk``: an audit's verdict page and the export of renders."""
+"""Jobs of ``workflow/rules/audit.smk``: an audit's import (one job per frame), its verdict
+page and the export of renders."""
 
 from __future__ import annotations
 
@@ -7,6 +8,19 @@ import json
 from pathlib import Path
 
 from .common import log
+
+
+def import_job(settings: dict, *, frame: str, workers: int = 2):
+    """Import one frame of an audit (:func:`stereovar.audit.importer.import_frame`): each
+    view's render store, the ground-truth store and the frame's import record (each file's
+    SHA-256), at the paths of :func:`stereovar.audit.run.import_outputs`; log what the
+    import found."""
+    from ..audit.importer import import_frame
+
+    report = import_frame(settings, frame, workers=workers)
+    for line in report.lines():
+        log.info("%s", line)
+    return report
 
 
 def verdict_job(
