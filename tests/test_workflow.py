@@ -29,6 +29,7 @@ TINY = {
         "spp_sweep": {"scene": "scene_000", "spp": [1, 2]},
     },
     "preview": {"spp": 4},
+    "mitigations": {"names": []},  # tests/test_mitigations.py runs the mitigations
 }
 #: Jobs that depend on one non-sweep scene at the main SPP.
 SCENE_CHAIN = {"render": 1, "variance": 1, "warp": 1, "correlation": 1}

@@ -57,6 +57,8 @@ rule claims:
         ),
         sweep=f"{RUN}/tables/spp_sweep.csv",
         interventions=expand("{run}/intervention/{scene}.csv", run=INTERVENTION_RUN, scene=SCENES),
+        # the mitigation table, when mitigations.names asks for one
+        mitigations=mitigation_targets()[:1],
     output:
         csv="results/tables/claims.csv",
         md="results/tables/claims.md",

@@ -55,10 +55,12 @@ def claims_job(
     spp,
     config_digest="",
     claims_digest="",
+    mitigations=None,
 ) -> list[dict]:
     """The claims table and ``results/summary.json``: every headline number with its
     interval and control, the config digest, the renderer, the estimator and the claims file
-    with its SHA-256.
+    with its SHA-256; with ``mitigations`` (``results/tables/mitigations.csv``), every
+    mitigation row too.
 
     ``claims_digest`` is the claims file's SHA-256 when the workflow was read (the rule's
     rerun trigger); a file changed since is refused, so the table never mixes the two."""
@@ -126,6 +128,13 @@ def claims_job(
         "claims_file": {"path": "stereovar/statistics/claims.yaml", "sha256": claims_file.sha256},
         "claims": [{k: clean(v) for k, v in c.items()} for c in claims],
     }
+    if mitigations:
+        from ..statistics.mitigations import INTERVALS
+
+        document["mitigations"] = {
+            "intervals": INTERVALS,
+            "rows": [{k: clean(v) for k, v in r.items()} for r in read_rows(mitigations)],
+        }
     text = json.dumps(document, indent=2) + "\n"
     write_file(Path(summary), lambda tmp: Path(tmp).write_text(text))
     for c in claims:

@@ -69,6 +69,14 @@ MITIGATION_COLUMNS = [
 ]
 """Columns of ``results/tables/mitigations.*``."""
 
+INTERVALS = {
+    "correlations": "95% spatial block bootstrap per scene, scenes combined (conditional on "
+    "the scenes run)",
+    "table3": "95% Student t over scenes (Wilson over pixels for one scene)",
+    "image_quality": "95% Student t over scenes",
+}
+"""How each column family's interval is computed (also stated in ``results/summary.json``)."""
+
 CORRELATION_METHODS = {"rho": "warp", "partial": "partial", "null_shift": "null_shift",
                        "sensor_sim": "sensor_sim"}
 """Column prefix to the registered statistic (:data:`stereovar.statistics.registry.METHODS`)
