@@ -8,16 +8,6 @@
 
 if AUDIT:
 
-    def audit_frame_files(wildcards):
-        """The files one frame is imported from (stereovar.audit.run.frame_files)."""
-        return frame_files(AUDIT_DISCOVERY, wildcards.scene)
-
-    def audit_frame_fingerprint(wildcards):
-        """Changes when a frame's file is replaced keeping its size and mtime (cp -p), not
-        when it is only touched (stereovar.audit.importer.frame_fingerprint)."""
-        frame = next(f for f in AUDIT_DISCOVERY.frames if f.name == wildcards.scene)
-        return frame_fingerprint(AUDIT, frame)
-
     # One job per frame. Snakemake imports a frame again when one of its files is newer
     # than its stores (unless its bytes are those it recorded: --max-checksum-file-size,
     # profiles/default), when the import settings change, or when the fingerprint does.
@@ -25,15 +15,19 @@ if AUDIT:
         wildcard_constraints:
             scene=frame_pattern(AUDIT_DISCOVERY),
         input:
-            audit_frame_files,
+            lambda wc: frame_files(AUDIT_DISCOVERY, wc.scene),
         output:
             **{
-                key: path if key == "record" else directory(path)
+                # the record is kept until the job replaces it: the job's own process
+                # reads it to give the fingerprint Snakemake planned with
+                key: update(path) if key == "record" else directory(path)
                 for key, path in import_outputs(AUDIT, AUDIT_DISCOVERY.n_seeds).items()
             },
         params:
             settings=AUDIT,
-            fingerprint=audit_frame_fingerprint,
+            # changes when a file is replaced keeping its size and mtime (cp -p), not when
+            # it is only touched (stereovar.audit.importer.frame_fingerprint)
+            fingerprint=lambda wc: import_fingerprint(AUDIT, AUDIT_DISCOVERY, wc.scene),
         log:
             f"logs/audit/{AUDIT['name']}/import/{{scene}}.log",
         benchmark:

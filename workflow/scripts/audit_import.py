@@ -9,4 +9,5 @@ run_job(
     settings=dict(snakemake.params.settings),
     frame=snakemake.wildcards.scene,
     workers=snakemake.threads,
+    fingerprint=snakemake.params.fingerprint,
 )

@@ -280,10 +280,13 @@ def frame_fingerprint(settings: dict, frame: Frame) -> str:
     frame : Frame
         The frame, from :func:`stereovar.audit.layout.discover`.
 
+    The job records the tokens it was given (:func:`import_frame` ``fingerprint``), so the
+    fingerprint of a frame just imported is the one Snakemake stored.
+
     Returns
     -------
     str
-        A SHA-256 hex digest.
+        JSON: the import-settings digest and the token of each file.
     """
     old = load_record(settings["name"], frame.name)
     recorded = old.get("files", {}) if old.get("settings") == settings_digest(settings) else {}
@@ -299,9 +302,9 @@ def frame_fingerprint(settings: dict, frame: Frame) -> str:
         if before is not None and all(k in before for k in FINGERPRINT_KEYS):
             then = [before[k] for k in FINGERPRINT_KEYS]
             if now == then or (now[0] == then[0] and sha256(path) == before["sha256"]):
-                now = then
+                now = before.get("token", then)
         tokens[path] = now
-    return config_digest({"files": tokens, "settings": settings_digest(settings)})
+    return json.dumps({"settings": settings_digest(settings), "files": tokens}, sort_keys=True)
 
 
 class _Reads:
@@ -719,8 +722,11 @@ def _png_transfer_warning(settings: dict, frames, report: ImportReport) -> None:
         )
 
 
-def _import_and_record(settings, frame: Frame, size, pool, report: ImportReport) -> FrameReport:
-    """Import one frame (:func:`_import_frame`), then write its :func:`import_record`."""
+def _import_and_record(
+    settings, frame: Frame, size, pool, report: ImportReport, tokens=None
+) -> FrameReport:
+    """Import one frame (:func:`_import_frame`), then write its :func:`import_record` (with
+    each file's :func:`frame_fingerprint` token from ``tokens``)."""
     try:
         fr, records = _import_frame(settings, frame, size, pool, report)
     except MemoryError:
@@ -729,6 +735,9 @@ def _import_and_record(settings, frame: Frame, size, pool, report: ImportReport)
             "frame"
         ) from None
     stores = frame_stores(settings, frame.name, frame.n_seeds)
+    for path, token in (tokens or {}).items():
+        if path in records and token is not None:
+            records[path] = {**records[path], "token": token}
     _write_record(settings, frame.name, records, stores)
     return fr
 
@@ -789,7 +798,9 @@ def import_audit(settings: dict, *, workers: int = 2, dry_run: bool = False) -> 
     return report
 
 
-def import_frame(settings: dict, frame: str, *, workers: int = 2) -> ImportReport:
+def import_frame(
+    settings: dict, frame: str, *, workers: int = 2, fingerprint: str | None = None
+) -> ImportReport:
     """Import one frame of an audit, whatever its last import recorded: the job of the
     workflow's ``audit_import`` rule, which Snakemake runs when the frame's files (their
     time stamps, or :func:`frame_fingerprint`) or the import settings changed.
@@ -807,6 +818,9 @@ def import_frame(settings: dict, frame: str, *, workers: int = 2) -> ImportRepor
         The frame's name.
     workers : int, keyword-only
         Threads that hash and decode files.
+    fingerprint : str, keyword-only, optional
+        The frame's :func:`frame_fingerprint` when Snakemake planned the job: each file's
+        token is recorded.
 
     Returns
     -------
@@ -839,7 +853,10 @@ def import_frame(settings: dict, frame: str, *, workers: int = 2) -> ImportRepor
     _png_transfer_warning(settings, match, report)
     size = _check_sizes(match[0])
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        report.frames.append(_import_and_record(settings, match[0], size, pool, report))
+        tokens = json.loads(fingerprint)["files"] if fingerprint else None
+        report.frames.append(
+            _import_and_record(settings, match[0], size, pool, report, tokens)
+        )
     return report
 
 

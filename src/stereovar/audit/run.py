@@ -18,6 +18,7 @@ from ..rig import VIEWS
 from .importer import (
     audit_spp,
     check_settings,
+    frame_fingerprint,
     frame_stores,
     import_record,
     import_settings,
@@ -51,6 +52,13 @@ def frame_files(discovery: Discovery, frame: str) -> list[str]:
     """Every file one frame is imported from (renders of each view and seed, then its
     ground truth): the inputs of its ``audit_import`` job."""
     return [str(p) for f in discovery.frames if f.name == frame for p in f.files()]
+
+
+def import_fingerprint(settings: dict, discovery: Discovery, frame: str) -> str:
+    """The ``params`` of one frame's ``audit_import`` job that changes when a file is
+    replaced keeping its size and mtime, not when it is only touched
+    (:func:`~stereovar.audit.importer.frame_fingerprint`)."""
+    return frame_fingerprint(settings, next(f for f in discovery.frames if f.name == frame))
 
 
 def frame_pattern(discovery: Discovery) -> str:

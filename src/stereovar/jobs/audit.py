@@ -10,14 +10,15 @@ from pathlib import Path
 from .common import log
 
 
-def import_job(settings: dict, *, frame: str, workers: int = 2):
+def import_job(settings: dict, *, frame: str, workers: int = 2, fingerprint=None):
     """Import one frame of an audit (:func:`stereovar.audit.importer.import_frame`): each
     view's render store, the ground-truth store and the frame's import record (each file's
     SHA-256), at the paths of :func:`stereovar.audit.run.import_outputs`; log what the
-    import found."""
+    import found. ``fingerprint`` is the job's ``params.fingerprint``
+    (:func:`stereovar.audit.importer.frame_fingerprint`), recorded with the files."""
     from ..audit.importer import import_frame
 
-    report = import_frame(settings, frame, workers=workers)
+    report = import_frame(settings, frame, workers=workers, fingerprint=fingerprint)
     for line in report.lines():
         log.info("%s", line)
     return report
