@@ -77,6 +77,12 @@ DEFAULTS = {
     "preview": {"spp": 32},
     "validation": {"n_seeds": 64, "spp": None},
     "export": {"formats": ["exr"]},
+    "mitigations": {
+        "names": ["shared_seed", "spp_x4", "denoise", "denoise_sensor", "equalise", "sensor_only"],
+        "reference_spp": 128,
+        "aux_spp": 16,
+        "seed": 0,
+    },
 }
 
 
@@ -288,9 +294,14 @@ def test_conda_env_pins_match_pyproject():
     project = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"]
     env = yaml.safe_load((REPO_ROOT / "envs" / "stereovar.yaml").read_text())
     pip = next(item["pip"] for item in env["dependencies"] if isinstance(item, dict))
-    # the env is Python 3.11, so it carries the cycles extra too (without its marker)
-    cycles = [r.split(";")[0].strip() for r in project["optional-dependencies"]["cycles"]]
-    assert sorted(pip) == sorted(project["dependencies"] + cycles)
+    # the env is Python 3.11, so it carries the cycles extra too (without its marker), and
+    # the mitigations extra that the default run needs
+    extras = [
+        r.split(";")[0].strip()
+        for extra in ("cycles", "mitigations")
+        for r in project["optional-dependencies"][extra]
+    ]
+    assert sorted(pip) == sorted(project["dependencies"] + extras)
     assert "python=3.11" in env["dependencies"]
 
 

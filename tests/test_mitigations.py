@@ -70,7 +70,9 @@ def test_layout_keys_sources_transforms_and_estimators():
     )
     assert run_prefix("audit/team", "seeds", "equalise") == "results/audit/team/equalise/seeds"
     assert ground_truth_store("mitsuba/denoise", "s") == "results/ground_truth/s.zarr"
-    assert ground_truth_store("audit/team/denoise", "f0") == "results/audit/team/ground_truth/f0.zarr"
+    assert (
+        ground_truth_store("audit/team/denoise", "f0") == "results/audit/team/ground_truth/f0.zarr"
+    )
     assert mitigation_rows("mitsuba", "seeds", "s", 32, "sensor_only") == (
         "results/mitsuba/sensor_only/seeds/mitigation/s/spp32.csv"
     )
@@ -102,7 +104,9 @@ def test_mitigation_runs_follow_the_config():
 
 
 def test_a_stub_transform_reaches_eq1_eq3_and_the_mitigation_table(
-    plane_run, stub_transform, tmp_path  # noqa: F811
+    plane_run,  # noqa: F811 (the fixture imported from test_architecture)
+    stub_transform,
+    tmp_path,
 ):
     from stereovar.jobs.correlation import correlation_job, warp_job
     from stereovar.jobs.mitigations import (
@@ -178,9 +182,7 @@ def test_a_stub_transform_reaches_eq1_eq3_and_the_mitigation_table(
     # ignore the offset, so it is not compared.
     for region in ("all", "non_glass", "glass"):
         for col in ("rho", "null_shift", "residual_rho_gt", "residual_rho_zero"):
-            assert got[("stub", region)][col] == pytest.approx(
-                got[("none", region)][col], abs=1e-6
-            )
+            assert got[("stub", region)][col] == pytest.approx(got[("none", region)][col], abs=1e-6)
     assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -195,8 +197,11 @@ def test_missing_reads_are_refused_in_one_line(plane_run, tmp_path):  # noqa: F8
         _, stores = plane_run
         with pytest.raises(ConfigError) as err:
             transform_job(
-                stores["left"], tmp_path / "x.zarr", transform="stub_needs_albedo",
-                batch=[0], view="left",
+                stores["left"],
+                tmp_path / "x.zarr",
+                transform="stub_needs_albedo",
+                batch=[0],
+                view="left",
             )
         assert "albedo" in str(err.value) and "\n" not in str(err.value)
         assert not (tmp_path / "x.zarr").exists()
@@ -221,7 +226,12 @@ def test_shared_seed_couples_the_views_at_zero_disparity(tmp_path, policy, coupl
     assert (seeds["left"] == seeds["right"]) == coupled
     mask = {"all": np.ones((18, 32), bool)}
     (row,) = residual_correlation(
-        left, right, np.zeros((18, 32)), sign=1, masks=mask, alignments=("zero",),
+        left,
+        right,
+        np.zeros((18, 32)),
+        sign=1,
+        masks=mask,
+        alignments=("zero",),
         settings=BootstrapSettings(tile=4, reps=200),
     )
     if coupled:
@@ -244,37 +254,97 @@ def test_the_table_summarises_its_inputs_exactly():
     for k, scene in enumerate(["a", "b", "c"]):
         for method in ("warp", "partial", "null_shift", "sensor_sim"):
             rho = float(rng.uniform(-0.2, 0.8))
-            corr.append({"scene": scene, "region": "all", "method": method, "rho": rho,
-                         "boot_low": rho - 0.1 - 0.01 * k, "boot_high": rho + 0.12,
-                         "n_seeds": 8})
+            corr.append(
+                {
+                    "scene": scene,
+                    "region": "all",
+                    "method": method,
+                    "rho": rho,
+                    "boot_low": rho - 0.1 - 0.01 * k,
+                    "boot_high": rho + 0.12,
+                    "n_seeds": 8,
+                }
+            )
         for q in ("residual_rho_gt", "residual_rho_zero"):
             v = float(rng.normal(0, 0.05))
-            scene_rows.append({"scene": scene, "region": "all", "quantity": q, "value": v,
-                               "low": v - 0.02, "high": v + 0.03})
-        for q, v in (("psnr", 20.0 + k), ("relative_mse", 0.1 * k), ("bias", 0.01),
-                     ("relative_bias", 0.02), ("transform_ms_per_mpix", 100.0 + k)):
-            scene_rows.append({"scene": scene, "region": "all", "quantity": q, "value": v,
-                               "low": math.nan, "high": math.nan})
+            scene_rows.append(
+                {
+                    "scene": scene,
+                    "region": "all",
+                    "quantity": q,
+                    "value": v,
+                    "low": v - 0.02,
+                    "high": v + 0.03,
+                }
+            )
+        for q, v in (
+            ("psnr", 20.0 + k),
+            ("relative_mse", 0.1 * k),
+            ("bias", 0.01),
+            ("relative_bias", 0.02),
+            ("transform_ms_per_mpix", 100.0 + k),
+        ):
+            scene_rows.append(
+                {
+                    "scene": scene,
+                    "region": "all",
+                    "quantity": q,
+                    "value": v,
+                    "low": math.nan,
+                    "high": math.nan,
+                }
+            )
         for condition, value in (("normal", 0.6 + 0.1 * k), ("decorrelated", 0.5)):
-            intervention.append({"scene": scene, "cost": "residual_sad",
-                                 "metric": "wta_accuracy", "region": "all", "source": "render",
-                                 "condition": condition, "value": value, "chance": 0.2,
-                                 "n_pixels": 100})
-            intervention.append({"scene": scene, "cost": "variance_cost",
-                                 "metric": "wta_accuracy", "region": "all", "source": "render",
-                                 "condition": condition, "value": value, "chance": 0.2,
-                                 "n_pixels": 100})
-    (row,) = mitigation_table([{"mitigation": "m", "kind": "transform", "description": "d",
-                                "spp": 32, "correlation": corr, "intervention": intervention,
-                                "scene_rows": scene_rows}])
+            intervention.append(
+                {
+                    "scene": scene,
+                    "cost": "residual_sad",
+                    "metric": "wta_accuracy",
+                    "region": "all",
+                    "source": "render",
+                    "condition": condition,
+                    "value": value,
+                    "chance": 0.2,
+                    "n_pixels": 100,
+                }
+            )
+            intervention.append(
+                {
+                    "scene": scene,
+                    "cost": "variance_cost",
+                    "metric": "wta_accuracy",
+                    "region": "all",
+                    "source": "render",
+                    "condition": condition,
+                    "value": value,
+                    "chance": 0.2,
+                    "n_pixels": 100,
+                }
+            )
+    (row,) = mitigation_table(
+        [
+            {
+                "mitigation": "m",
+                "kind": "transform",
+                "description": "d",
+                "spp": 32,
+                "correlation": corr,
+                "intervention": intervention,
+                "scene_rows": scene_rows,
+            }
+        ]
+    )
     part = [r for r in corr if r["method"] == "partial"]
-    want = combined_interval([r["rho"] for r in part], [r["boot_low"] for r in part],
-                             [r["boot_high"] for r in part])
+    want = combined_interval(
+        [r["rho"] for r in part], [r["boot_low"] for r in part], [r["boot_high"] for r in part]
+    )
     assert (row["partial"], row["partial_low"], row["partial_high"]) == pytest.approx(want)
-    assert row["mc_cue"] == ("remains" if want[1] > 0 else "removed" if want[2] >= 0
-                             else "reversed")
+    assert row["mc_cue"] == (
+        "remains" if want[1] > 0 else "removed" if want[2] >= 0 else "reversed"
+    )
     assert (row["psnr"], row["psnr_low"], row["psnr_high"]) == pytest.approx(
-        t_interval([20.0, 21.0, 22.0]))
+        t_interval([20.0, 21.0, 22.0])
+    )
     lift = t_interval([0.6 - 0.2, 0.7 - 0.2, 0.8 - 0.2])
     assert (row["cs_lift"], row["cs_lift_low"], row["cs_lift_high"]) == pytest.approx(lift)
     effect = t_interval([0.1, 0.2, 0.3])
@@ -296,31 +366,55 @@ def test_the_mitigations_target_end_to_end(tmp_path):
 
     config = copy.deepcopy(TINY)
     config["scenes"] = ["scene_000"]
-    config["mitigations"] = {"names": ["shared_seed", "denoise"], "reference_spp": 16,
-                             "aux_spp": 2}
+    config["mitigations"] = {"names": ["shared_seed", "denoise"], "reference_spp": 16, "aux_spp": 2}
     root = copy_workflow(tmp_path / "wf", config)
     before = sorted(p.relative_to(root) for p in root.rglob("*"))
     dry = snakemake(root, "-n", "mitigations")
     assert "render_policy" in dry.stdout and "render_aux" in dry.stdout
     assert "transform" in dry.stdout
-    assert sorted(p.relative_to(root) for p in root.rglob("*") if ".snakemake" not in p.parts
-                  ) == [p for p in before if ".snakemake" not in p.parts]
+    assert sorted(p.relative_to(root) for p in root.rglob("*") if ".snakemake" not in p.parts) == [
+        p for p in before if ".snakemake" not in p.parts
+    ]
     snakemake(root, "-j2", "mitigations")
-    rows = {(r["mitigation"], r["region"]): r for r in read_rows(
-        root / "results/tables/mitigations.csv")}
+    rows = {
+        (r["mitigation"], r["region"]): r
+        for r in read_rows(root / "results/tables/mitigations.csv")
+    }
     assert {m for m, _ in rows} == {"none", "shared_seed", "denoise"}
     assert {g for _, g in rows} == {"all", "non_glass", "glass"}
     shared, none = rows[("shared_seed", "all")], rows[("none", "all")]
     assert shared["residual_rho_zero_low"] > max(0.0, none["residual_rho_zero_high"])
     assert rows[("denoise", "all")]["psnr"] > none["psnr"]
-    store = open_dataset(
-        root / "results/mitsuba/denoise/renders/scene_000/left/spp2/seeds0-1.zarr")
+    store = open_dataset(root / "results/mitsuba/denoise/renders/scene_000/left/spp2/seeds0-1.zarr")
     assert store.attrs["transform"] == "denoise"
     assert store.attrs["transform_aux"] == "albedo,normal"
     policy = open_dataset(
-        root / "results/mitsuba/shared_seed/renders/scene_000/right/spp2/seeds0-1.zarr")
-    left = open_dataset(root / "results/mitsuba/shared_seed/renders/scene_000/left/spp2/seeds0-1.zarr")
+        root / "results/mitsuba/shared_seed/renders/scene_000/right/spp2/seeds0-1.zarr"
+    )
+    left = open_dataset(
+        root / "results/mitsuba/shared_seed/renders/scene_000/left/spp2/seeds0-1.zarr"
+    )
     assert policy["sampler_seed"].values.tolist() == left["sampler_seed"].values.tolist()
     assert (root / "results/figures/mitigations.png").read_bytes()[:4] == b"\x89PNG"
     # nothing to do on a second run
     assert "Nothing to be done" in snakemake(root, "-n", "mitigations").stdout
+
+
+def test_leave_one_out_quality_against_a_loop_and_the_known_noise():
+    from stereovar.jobs.mitigations import leave_one_out_quality
+
+    rng = np.random.default_rng(7)
+    truth = rng.uniform(0.2, 0.8, (24, 30, 3))
+    sigma = 0.05
+    raw = truth + sigma * rng.standard_normal((6, 24, 30, 3))
+    got = leave_one_out_quality(raw, np.arange(6), raw, np.arange(6))
+    mses = []
+    for k in range(6):
+        others = np.delete(raw, k, axis=0)
+        v = others.var(axis=0, ddof=1) / 5
+        mses.append(np.mean((raw[k] - others.mean(0)) ** 2) - np.mean(v))
+    assert got["mse"] == pytest.approx(np.mean(mses), rel=1e-12)
+    # unbiased for the renders' own noise: sigma^2 within the sampling error of 6*2160 terms
+    se = sigma**2 * math.sqrt(2 * (1 + 1 / 5) ** 2 / (6 * 24 * 30 * 3)) * 3
+    assert got["mse"] == pytest.approx(sigma**2, abs=se)
+    assert got["psnr"] == pytest.approx(-10 * np.log10(got["mse"]), rel=1e-12)

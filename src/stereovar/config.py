@@ -237,7 +237,9 @@ def _check_cycles(config: dict) -> None:
     render = config.get("render", {})
     if "cycles" not in {render.get("renderer"), *(config.get("renderers") or [])}:
         return
-    if render.get("estimator") == "moments":
+    from .estimators import reads_moments
+
+    if reads_moments(render.get("estimator")):
         raise ConfigError(
             "config key 'render.estimator': moments with the Cycles renderer; Cycles samples "
             "with scrambled quasi-Monte Carlo patterns, not the independent samples the "
@@ -281,7 +283,9 @@ def _check_moments(config: dict) -> None:
     """``render.estimator: moments`` needs the independent sampler, the box filter and at
     least two samples per half render."""
     render = config.get("render", {})
-    if render.get("estimator") != "moments":
+    from .estimators import reads_moments
+
+    if not reads_moments(render.get("estimator")):
         return
     error = moments_settings_error(
         render.get("sampler", MOMENTS_SAMPLER), render.get("rfilter", MOMENTS_FILTER)

@@ -124,7 +124,9 @@ def split_source_key(key: str) -> tuple[str, str]:
 def source_key_pattern(renderers, transforms) -> str:
     """The regular expression of a source key: a renderer or ``audit/{name}``, optionally
     followed by ``/{transform}`` (one of ``transforms``, never :data:`NONE`)."""
-    source = "|".join([*(re.escape(r) for r in renderers), re.escape(AUDIT_PREFIX) + r"[A-Za-z0-9_-]+"])
+    source = "|".join(
+        [*(re.escape(r) for r in renderers), re.escape(AUDIT_PREFIX) + r"[A-Za-z0-9_-]+"]
+    )
     names = [re.escape(t) for t in transforms if t != NONE]
     suffix = f"(?:/(?:{'|'.join(names)}))?" if names else ""
     return f"(?:{source}){suffix}"

@@ -27,10 +27,11 @@ from stereovar.audit.run import (
     audit_paths,
     audit_run_config,
     audit_targets,
-    import_mode,
-    planned_marker,
-    planned_stores,
-    prepare_audit,
+    discover_audit,
+    frame_files,
+    frame_pattern,
+    import_fingerprint,
+    import_outputs,
 )
 from stereovar.experiment import (
     AUDIT_PREFIX,
@@ -44,6 +45,14 @@ from stereovar.experiment import (
     seed_stores,
 )
 from stereovar.renderers import RENDERERS
+from stereovar import layout
+from stereovar.mitigations import (
+    MITIGATION_ESTIMATOR,
+    SEED_POLICY_MITIGATIONS,
+    keyed_transforms,
+    mitigation_runs,
+)
+from stereovar.transforms import TRANSFORMS, get_transform
 from stereovar.rig import VIEWS
 from stereovar import resources as sizing
 
@@ -67,28 +76,16 @@ if workflow.is_main_process and not any(a.startswith("--report") for a in sys.ar
     with exit_with_one_line():
         check_writable(["results", "logs", "benchmarks"])
 
-# An `audit:` section turns the run into an audit of renders made elsewhere: the files are
-# imported into the render and ground-truth store contracts here, before the DAG is built
-# (only what changed; nothing is lost on bad input), and the run's scenes, renderer
-# ("audit/<name>"), N and SPP become the audit's (stereovar.audit.run). Only a run that
-# executes jobs imports; a dry run, or a command that only reads the workflow, says what
-# an import would do and writes nothing (stereovar.audit.run.import_mode).
+# An `audit:` section turns the run into an audit of renders made elsewhere: its files are
+# found here (templates globbed; nothing is read, hashed or written) and imported into the
+# render and ground-truth store contracts by one `audit_import` job per frame (audit.smk);
+# the run's scenes, renderer ("audit/<name>"), N and SPP become the audit's
+# (stereovar.audit.run).
 AUDIT = config.get("audit")
 if AUDIT:
     with exit_with_one_line():
-        AUDIT_IMPORT = prepare_audit(
-            AUDIT,
-            mode=import_mode(
-                main_process=workflow.is_main_process,
-                dry_run=getattr(workflow.output_settings, "dryrun", False),
-                argv=sys.argv[1:],
-            ),
-        )
-    AUDIT_DISCOVERY = AUDIT_IMPORT.discovery
-    AUDIT_PLANNED = planned_stores(AUDIT, AUDIT_IMPORT)  # a dry run's stores to import
+        AUDIT_DISCOVERY = discover_audit(AUDIT)
     config.update(audit_run_config(config, AUDIT_DISCOVERY))
-else:
-    AUDIT_PLANNED = {}
 
 # A job that asks for more memory than the machine, the cluster (cluster.max_mem_mb) or
 # --resources mem_mb allows could never run: stop before any job (stereovar.resources).
@@ -108,13 +105,19 @@ SCENES = list(config["scenes"])
 GENERATED_SCENE = r"scene_\d{3}"
 
 
+# {renderer} is a source key (stereovar.layout): a renderer or an audit, optionally followed
+# by a mitigation's transform ("mitsuba/denoise"), so every rule from the variance estimator
+# to the tables runs unchanged on transformed renders. Rules that render constrain it to
+# RENDERER_NAMES; the transform rule to SOURCE_NAMES.
 wildcard_constraints:
     scene=r"[A-Za-z0-9_-]+",
     view="|".join(VIEWS),
     spp=r"\d+",
     batch=r"\d+-\d+",
-    renderer="|".join([*RENDERERS, re.escape(AUDIT_PREFIX) + "[A-Za-z0-9_-]+"]),
+    renderer=layout.source_key_pattern(RENDERERS, keyed_transforms()),
     estimator="|".join(ESTIMATORS),
+    transform="|".join(TRANSFORMS),
+    policy="|".join(SEED_POLICY_MITIGATIONS),
 
 
 WIDTH = config["resolution"]["width"]
@@ -127,8 +130,8 @@ CLUSTER = config["cluster"]
 RENDER_THREADS = 1 if workflow.local_exec else CLUSTER["render_threads"]
 N_SEEDS = config["render"]["n_seeds"]
 INTERVENTION_N_SEEDS, INTERVENTION_SPP = intervention_renders(config)
-# renders read per view by the variance job: every seed, or one moment store
-ESTIMATOR_READS = 1 if config["render"]["estimator"] == "moments" else N_SEEDS
+# renders read per view by the variance job: what the estimator declares it reads
+ESTIMATOR_READS = ESTIMATORS.get(config["render"]["estimator"]).renders_per_view(N_SEEDS)
 MAIN_SPP = config["render"]["spp"]
 VALIDATION_N_SEEDS = config["validation"]["n_seeds"]
 VALIDATION_SPP = config["validation"]["spp"] or MAIN_SPP
@@ -180,6 +183,8 @@ def wildcard_renderer(wildcards):
 
 # The wildcard constraint of rules that render: a renderer, never an audit's imported source.
 RENDERER_NAMES = "|".join(RENDERERS)
+# The wildcard constraint of the transform rule's source: a renderer or an audit, untransformed.
+SOURCE_NAMES = layout.source_key_pattern(RENDERERS, ())
 
 
 def ground_truth_input(wildcards):
@@ -384,13 +389,13 @@ def all_targets():
     """Everything `snakemake all` builds, for the configured renderer and estimator (for an
     audit: its verdict page and everything behind it, :func:`stereovar.audit.run.audit_targets`)."""
     if AUDIT:
-        planned = [planned_marker(AUDIT)] if AUDIT_PLANNED else []  # a dry run's import
-        return [*render_stores(), *audit_targets(config), *planned]
+        return [*render_stores(), *audit_targets(config)]
     shared = [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
         *expand("results/tables/claims.{ext}", ext=["csv", "md", "tex", "html"]),
         "results/summary.json",
+        *mitigation_targets(),
     ]
     if len(RENDERER_RUNS) > 1:
         shared += [
@@ -605,3 +610,126 @@ def print_summary():
     table = Path("results/tables/claims.md")
     if table.exists():
         print(f"\n{table}:\n\n{table.read_text()}")
+
+
+# Mitigations (stereovar.mitigations): each row of results/tables/mitigations.* is a source
+# key (the renderer, or the renderer and a transform or seed policy), an SPP and its scenes,
+# measured by the seeds estimator, the intervention and the per-scene mitigation rows.
+MITIGATIONS = config["mitigations"]
+MITIGATION_RUNS = [] if AUDIT or not MITIGATIONS["names"] else mitigation_runs(config)
+REFERENCE_SPP = MITIGATIONS["reference_spp"]
+AUX_SPP = MITIGATIONS["aux_spp"]
+
+
+
+def reference_from_moments(source):
+    """Whether a source's converged reference is a moments render of each view at
+    ``mitigations.reference_spp`` (a renderer with sample moments, rendering with the
+    independent sampler and the box filter), else the mean of its other seeds
+    (:func:`stereovar.jobs.mitigations.leave_one_out_quality`: audits, Cycles)."""
+    from stereovar.config import moments_settings_error
+
+    render = config["render"]
+    return (
+        source in RENDERERS
+        and RENDERERS.get(source).sample_moments
+        and moments_settings_error(render["sampler"], render["rfilter"]) is None
+    )
+
+
+def source_aux_passes(source):
+    """The auxiliary passes a source gives (a renderer's ``aux_passes``; an audit none)."""
+    if source in RENDERERS:
+        return RENDERERS.get(source).aux_passes
+    return ()
+
+
+def transform_inputs(wildcards):
+    """Every render store of the wildcards' view of the source (all seeds: the seed mean and
+    variance are over them) and, when the transform reads albedo or normal and the source
+    renders them, the view's auxiliary passes."""
+    inputs = {
+        "renders": seed_stores(run_config(wildcards.renderer), wildcards.scene, wildcards.spp)[
+            wildcards.view
+        ]
+    }
+    t = get_transform(wildcards.transform)
+    wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
+    if wants and wants <= set(source_aux_passes(wildcards.renderer)):
+        inputs["aux"] = layout.aux_store(wildcards.renderer, wildcards.scene, wildcards.view)
+    return inputs
+
+
+def transform_options(wildcards):
+    """The options of the wildcards' transform that the config sets: the camera model of
+    ``controls.sensor`` (gain, read noise) for the transforms that add or model camera noise."""
+    import inspect
+
+    accepted = inspect.signature(get_transform(wildcards.transform).apply).parameters
+    sensor = config["controls"]["sensor"]
+    offered = {"gain": sensor["gain"], "read_noise": sensor["read_noise"]}
+    return {k: v for k, v in offered.items() if k in accepted}
+
+
+def mitigation_scene_inputs(wildcards):
+    """One scene's render stores of the wildcards' source key at its SPP, its ground truth
+    and each view's converged reference (:func:`reference_from_moments`)."""
+    source, _ = layout.split_source_key(wildcards.renderer)
+    if reference_from_moments(source):
+        reference = {
+            view: layout.moment_store(source, wildcards.scene, view, REFERENCE_SPP)
+            for view in VIEWS
+        }
+    else:
+        reference = seed_stores(run_config(source), wildcards.scene, wildcards.spp)
+    return {
+        **seed_stores(run_config(wildcards.renderer), wildcards.scene, wildcards.spp),
+        "ground_truth": ground_truth_input(wildcards),
+        **{f"reference_{view}": paths for view, paths in reference.items()},
+    }
+
+
+def mitigation_files(run):
+    """The per-scene files one mitigation row is summarised from."""
+    prefix = layout.run_prefix(run.source, MITIGATION_ESTIMATOR, run.transform)
+    files = {
+        "correlation": [f"{prefix}/correlation/{s}/spp{run.spp}.csv" for s in run.scenes],
+        "scene_rows": [
+            layout.mitigation_rows(run.source, MITIGATION_ESTIMATOR, s, run.spp, run.transform)
+            for s in run.scenes
+        ],
+        # the intervention runs at intervention.spp only
+        "intervention": (
+            [f"{prefix}/intervention/{s}.csv" for s in run.scenes]
+            if run.spp == INTERVENTION_SPP
+            else []
+        ),
+    }
+    return files
+
+
+def mitigation_table_inputs(wildcards):
+    """Every mitigation row's per-scene files, as one flat list."""
+    return [p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths]
+
+
+def mitigation_table_params():
+    """What the table job needs per row beside the files: name, kind, description, SPP."""
+    return [
+        {
+            "mitigation": run.name,
+            "kind": run.mitigation.kind,
+            "description": run.mitigation.description,
+            "spp": run.spp,
+            **mitigation_files(run),
+        }
+        for run in MITIGATION_RUNS
+    ]
+
+
+def mitigation_targets():
+    """`snakemake mitigations`: the mitigation table and its trade-off figure (nothing when
+    ``mitigations.names`` is empty or the run is an audit)."""
+    if not MITIGATION_RUNS:
+        return []
+    return [*layout.mitigation_tables(), "results/figures/mitigations.png"]

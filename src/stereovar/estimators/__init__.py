@@ -19,4 +19,13 @@ get_estimator = factory(ESTIMATORS)
 """``get_estimator(name, **options)``: a
 :class:`~stereovar.estimators.base.VarianceEstimator`."""
 
-__all__ = ["ESTIMATORS", "get_estimator"]
+
+
+def reads_moments(name) -> bool:
+    """Whether the estimator ``name`` reads one render's sample moments per view instead of
+    N renders (its declared :attr:`~stereovar.estimators.base.VarianceEstimator.reads`);
+    False for a name that is not registered (e.g. a table without an ``estimator``)."""
+    return name in ESTIMATORS and ESTIMATORS.get(name).reads == "moments"
+
+
+__all__ = ["ESTIMATORS", "get_estimator", "reads_moments"]

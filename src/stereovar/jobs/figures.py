@@ -12,7 +12,9 @@ def _title(attrs, text: str) -> str:
 
 def _estimate(attrs) -> str:
     """How the variance was estimated: ``N = 8`` seeds, or one render (two halves)."""
-    if attrs.get("estimator") == "moments":
+    from ..estimators import reads_moments
+
+    if reads_moments(attrs.get("estimator")):
         return "one render per view"
     return f"N = {attrs['n_seeds']}"
 
@@ -84,7 +86,9 @@ def rho_vs_seeds_figure_job(curve_table, out) -> None:
 
     rows = read_rows(curve_table)
     attrs = rows[0] if rows else {}
-    moments = attrs.get("estimator") == "moments"
+    from ..estimators import reads_moments
+
+    moments = reads_moments(attrs.get("estimator"))
     fig = rho_vs_seeds_figure(
         rows,
         title=_title(attrs, "rho against half renders" if moments else "rho against seeds N'"),

@@ -249,13 +249,61 @@ def reference_moments(path) -> tuple[np.ndarray, np.ndarray]:
     return np.where(ok, m1, np.nan), np.where(ok, var, np.nan)
 
 
+def _reference(spec):
+    """``quality(images, seeds, mask)`` against one view's reference: a moment store's path
+    (:func:`reference_moments`), or a list of the source's untransformed render stores, whose
+    seeds other than the graded image's give its reference (:func:`leave_one_out_quality`)."""
+    from ..statistics.utility import image_quality
+
+    if isinstance(spec, (list, tuple)):
+        raw, raw_seeds, _, _ = _view_stack(spec)
+        return lambda images, seeds, mask: leave_one_out_quality(
+            images, seeds, raw, raw_seeds, mask=mask
+        )
+    mean, var = reference_moments(spec)
+    return lambda images, seeds, mask: image_quality(images, mean, reference_var=var, mask=mask)
+
+
+def leave_one_out_quality(images, seeds, raw, raw_seeds, *, mask=None) -> dict:
+    """Image quality of renders against the mean of the source's other seeds.
+
+    Image :math:`k` of seed index :math:`s_k` is graded against the mean of the untransformed
+    renders of every other seed, whose noise is independent of it when the image depends on
+    its own seed only:
+
+    .. math::
+
+        R_{-k} = \frac1{N-1} \\sum_{n \ne s_k} I_n, \\qquad
+        V_{-k} = \frac{\\hat\\sigma^2_{-k}}{N-1},
+
+    with :math:`\\hat\\sigma^2_{-k}` the unbiased variance of those :math:`N - 1` renders
+    (:func:`seed_moments`); a seed index not among the renders is graded against all
+    :math:`N`. MSE, relative MSE, bias and the reference noise are the images' means, the
+    relative bias the mean bias over the mean reference and PSNR follows from the mean MSE
+    (:func:`stereovar.statistics.utility.image_quality` per image). A transform that reads the
+    seed mean (``equalise``, ``sensor_only``) shares noise with this reference, so its error
+    is underestimated by up to :math:`\\sigma^2/N`.
+    """
+    from ..statistics.utility import image_quality
+
+    raw = np.asarray(raw)
+    results = []
+    for image, s in zip(np.asarray(images), seeds, strict=True):
+        keep = np.asarray(raw_seeds) != s
+        mean, var = seed_moments(raw[keep])
+        n = int(keep.sum())
+        results.append(image_quality(image[None], mean, reference_var=var / n, mask=mask))
+    return _pooled_quality(results)
+
+
 def mitigation_scene_job(
     left, right, ground_truth, reference: dict, out, *, analysis=None, controls=None
 ) -> list[dict]:
     """One scene's mitigation measurements (:data:`MITIGATION_SCENE_COLUMNS`).
 
     ``left`` and ``right`` are the view's render stores (transformed or not), ``reference``
-    maps each view to its converged reference's moment store. The residual correlation
+    maps each view to its converged reference: a moment store, or the source's untransformed
+    render stores (an audit's; :func:`leave_one_out_quality`). The residual correlation
     (:func:`stereovar.statistics.residuals.residual_correlation`) is over the left view's
     regions of the valid set :math:`\\Omega`; the image quality
     (:func:`stereovar.statistics.utility.image_quality`) over each view's own regions (its
@@ -265,16 +313,15 @@ def mitigation_scene_job(
     from ..io.tables import write_tables
     from ..statistics.regions import REGIONS, region_masks, valid_set
     from ..statistics.residuals import residual_correlation
-    from ..statistics.utility import image_quality
     from .correlation import analysis_settings
 
     settings, _ = analysis_settings(analysis, controls)
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
-    stacks, attrs = {}, {}
+    stacks, attrs, seed_order = {}, {}, {}
     for view, paths in (("left", left), ("right", right)):
         stacks[view], seeds, _, attrs[view] = _view_stack(paths)
         order = np.argsort(seeds, kind="stable")
-        stacks[view] = stacks[view][order]
+        stacks[view], seed_order[view] = stacks[view][order], seeds[order]
     gl = gt.sel(view="left")
     sign = int(gt.attrs.get("disparity_sign", 1))
     disparity = gl["disparity"].transpose("y", "x").values
@@ -316,29 +363,43 @@ def mitigation_scene_job(
     for r in residual:
         quantity = "residual_rho_gt" if r["alignment"] == "ground_truth" else "residual_rho_zero"
         add(r["region"], quantity, r["rho"], r["low"], r["high"], r["n_pixels"], r["reason"])
-    refs = {view: reference_moments(reference[view]) for view in ("left", "right")}
+    refs = {view: _reference(reference[view]) for view in ("left", "right")}
     for region in regions:
         per_view = []
         for view in ("left", "right"):
             glass = gt.sel(view=view)["glass"].transpose("y", "x").values.astype(bool)
             mask = {"all": None, "glass": glass, "non_glass": ~glass}[region]
-            mean, var = refs[view]
-            per_view.append(image_quality(stacks[view], mean, reference_var=var, mask=mask))
+            per_view.append(refs[view](stacks[view], seed_order[view], mask))
         pooled = _pooled_quality(per_view)
         for quantity in ("psnr", "mse", "relative_mse", "bias", "relative_bias"):
-            add(region, quantity, pooled[quantity], n_pixels=pooled["n_pixels"],
-                reason=pooled["reason"] if quantity == "psnr" else "")
+            add(
+                region,
+                quantity,
+                pooled[quantity],
+                n_pixels=pooled["n_pixels"],
+                reason=pooled["reason"] if quantity == "psnr" else "",
+            )
         add(region, "reference_noise", pooled["reference_noise"], n_pixels=pooled["n_pixels"])
     seconds = sum(float(a.get("transform_seconds", np.nan)) for a in attrs.values())
     mpix = sum(float(a.get("transform_megapixels", np.nan)) for a in attrs.values())
-    add("all", "transform_ms_per_mpix", 1e3 * seconds / mpix if mpix > 0 else np.nan,
-        reason="" if np.isfinite(seconds) else "renders not transformed")
+    add(
+        "all",
+        "transform_ms_per_mpix",
+        1e3 * seconds / mpix if mpix > 0 else np.nan,
+        reason="" if np.isfinite(seconds) else "renders not transformed",
+    )
     write_tables(rows, MITIGATION_SCENE_COLUMNS, {"csv": out})
     for r in rows:
         if r["quantity"] in ("residual_rho_gt", "residual_rho_zero", "psnr"):
             log.info(
                 "%s spp %d %-9s %-17s %.4f [%.4f, %.4f]%s",
-                scene, spp, r["region"], r["quantity"], r["value"], r["low"], r["high"],
+                scene,
+                spp,
+                r["region"],
+                r["quantity"],
+                r["value"],
+                r["low"],
+                r["high"],
                 f" [{r['reason']}]" if r["reason"] else "",
             )
     return rows

@@ -204,6 +204,9 @@ class Renderer(ABC):
     """
 
     name: str = ""
+    sample_moments: bool = False
+    """Whether :meth:`PreparedScene.render_moments` works (the ``moments`` estimator, and the
+    mitigations' converged reference)."""
     aux_passes: tuple[str, ...] = ()
     """The auxiliary passes :meth:`PreparedScene.render_aux` gives (``albedo``, ``normal``),
     read by the denoise mitigations; empty when it gives none."""

@@ -696,5 +696,7 @@ def claims_table(
     """
     claims = load_claims() if claims is None else claims
     inputs = ClaimInputs(list(rows), list(sweep or []), list(curve or []), list(intervention or []))
-    moments = any(r.get("estimator") == "moments" for r in rows)
+    from ..estimators import reads_moments
+
+    moments = any(reads_moments(r.get("estimator")) for r in rows)
     return [_claim_row(c, inputs, moments=moments) for c in claims.claims]

@@ -77,8 +77,12 @@ INTERVALS = {
 }
 """How each column family's interval is computed (also stated in ``results/summary.json``)."""
 
-CORRELATION_METHODS = {"rho": "warp", "partial": "partial", "null_shift": "null_shift",
-                       "sensor_sim": "sensor_sim"}
+CORRELATION_METHODS = {
+    "rho": "warp",
+    "partial": "partial",
+    "null_shift": "null_shift",
+    "sensor_sim": "sensor_sim",
+}
 """Column prefix to the registered statistic (:data:`stereovar.statistics.registry.METHODS`)
 it summarises."""
 
@@ -122,8 +126,11 @@ def _intervention_effect(rows, region) -> tuple[float, float, float]:
         if str(r.get("source") or "render") != "render":
             continue
         per_scene.setdefault(r["scene"], {})[r["condition"]] = _f(r["value"])
-    diffs = [c["normal"] - c["decorrelated"] for c in per_scene.values()
-             if "normal" in c and "decorrelated" in c]
+    diffs = [
+        c["normal"] - c["decorrelated"]
+        for c in per_scene.values()
+        if "normal" in c and "decorrelated" in c
+    ]
     return t_interval(diffs)
 
 
@@ -166,12 +173,18 @@ def mitigation_table(runs: list[dict]) -> list[dict]:
                 chosen = [r for r in corr if r["region"] == region and r["method"] == method]
                 row[column], row[f"{column}_low"], row[f"{column}_high"] = rows_interval(chosen)
             row["mc_cue"] = mc_cue_state(row["partial_low"], row["partial_high"])
-            lift = wta_lift(run["intervention"], "render", region) if run["intervention"] else (
-                math.nan, math.nan, math.nan)
+            lift = (
+                wta_lift(run["intervention"], "render", region)
+                if run["intervention"]
+                else (math.nan, math.nan, math.nan)
+            )
             row["cs_lift"], row["cs_lift_low"], row["cs_lift_high"] = lift
             effect = _intervention_effect(run["intervention"], region)
-            (row["ce_shuffle_effect"], row["ce_shuffle_effect_low"],
-             row["ce_shuffle_effect_high"]) = effect
+            (
+                row["ce_shuffle_effect"],
+                row["ce_shuffle_effect_low"],
+                row["ce_shuffle_effect_high"],
+            ) = effect
             scene_rows = run["scene_rows"]
             for quantity in ("residual_rho_gt", "residual_rho_zero"):
                 chosen = [

@@ -99,6 +99,7 @@ class MitsubaRenderer(Renderer):
     """Mitsuba 3 (``render.renderer: mitsuba``): CUDA, LLVM or scalar variants."""
 
     name = "mitsuba"
+    sample_moments = True
     aux_passes = ("albedo", "normal")
 
     def backend(self, variant: str = "auto") -> dict:
