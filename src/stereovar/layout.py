@@ -49,6 +49,7 @@ __all__ = [
     "aux_store",
     "ground_truth_store",
     "is_audit",
+    "mitigation_figure",
     "mitigation_rows",
     "mitigation_tables",
     "moment_store",
@@ -177,6 +178,14 @@ def mitigation_rows(source: str, estimator: str, scene: str, spp, transform: str
 def table_paths(name: str, prefix: str = f"{RESULTS}/tables") -> list[str]:
     """A table in every :data:`TABLE_FORMATS`: ``{prefix}/{name}.{ext}``."""
     return [f"{prefix}/{name}.{ext}" for ext in TABLE_FORMATS]
+
+
+def mitigation_figure(source: str | None = None) -> str:
+    """The mitigation trade-off figure: ``results/figures/mitigations.png``, or
+    ``results/audit/{name}/figures/mitigations.png`` for an audit."""
+    if source is not None and is_audit(source):
+        return f"{RESULTS}/{source}/figures/mitigations.png"
+    return f"{RESULTS}/figures/mitigations.png"
 
 
 def mitigation_tables(source: str | None = None) -> list[str]:

@@ -37,6 +37,7 @@ __all__ = [
     "Mitigation",
     "MitigationRun",
     "SEED_POLICY_MITIGATIONS",
+    "audit_mitigation_runs",
     "keyed_transforms",
     "mitigation_runs",
     "resolve_mitigation",
@@ -144,6 +145,31 @@ def keyed_transforms() -> tuple[str, ...]:
     """Every name that can follow a source in a source key: the seed-policy mitigations and
     the store transforms."""
     return (*SEED_POLICY_MITIGATIONS, *_store_transforms())
+
+
+def audit_mitigation_runs(config: dict) -> list[MitigationRun]:
+    """The mitigation rows of an audit (``audit.mitigations``): ``none`` first, then each
+    store transform, on every frame at the audit's SPP.
+
+    Raises
+    ------
+    ConfigError
+        A mitigation renders (``shared_seed``, ``spp_xK``): an audit's renders are given.
+    """
+    names = list(dict.fromkeys([NONE, *config["audit"].get("mitigations", [])]))
+    runs = []
+    for name in names:
+        m = resolve_mitigation(name)
+        if m.kind not in ("baseline", "transform"):
+            transforms = ", ".join(_store_transforms())
+            raise ConfigError(
+                f"config key 'audit.mitigations': {name!r} renders the scenes anew, and an "
+                f"audit's renders are given; use store transforms only ({transforms}), or "
+                "render with that setting and audit those renders"
+            )
+        render = config["render"]
+        runs.append(MitigationRun(m, render["renderer"], int(render["spp"]), tuple(config["scenes"])))
+    return runs
 
 
 def mitigation_runs(config: dict) -> list[MitigationRun]:

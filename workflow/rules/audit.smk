@@ -70,6 +70,9 @@ rule audit_verdict:
             f"results/audit/{wc.name}/seeds/intervention/{s}.csv" for s in SCENES
         ],
         teasers=lambda wc: [f"results/audit/{wc.name}/figures/teaser_{s}.png" for s in SCENES],
+        # audit.mitigations: the mitigation table and its figure
+        mitigations=mitigation_targets()[:1],
+        mitigation_figure=mitigation_targets()[-1:],
     output:
         md="results/audit/{name}/verdict.md",
         html=report(

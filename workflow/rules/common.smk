@@ -49,6 +49,7 @@ from stereovar import layout
 from stereovar.mitigations import (
     MITIGATION_ESTIMATOR,
     SEED_POLICY_MITIGATIONS,
+    audit_mitigation_runs,
     keyed_transforms,
     mitigation_runs,
 )
@@ -389,7 +390,7 @@ def all_targets():
     """Everything `snakemake all` builds, for the configured renderer and estimator (for an
     audit: its verdict page and everything behind it, :func:`stereovar.audit.run.audit_targets`)."""
     if AUDIT:
-        return [*render_stores(), *audit_targets(config)]
+        return [*render_stores(), *audit_targets(config), *mitigation_targets()]
     shared = [
         *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
         *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
@@ -616,7 +617,14 @@ def print_summary():
 # key (the renderer, or the renderer and a transform or seed policy), an SPP and its scenes,
 # measured by the seeds estimator, the intervention and the per-scene mitigation rows.
 MITIGATIONS = config["mitigations"]
-MITIGATION_RUNS = [] if AUDIT or not MITIGATIONS["names"] else mitigation_runs(config)
+if AUDIT:
+    with exit_with_one_line():
+        MITIGATION_RUNS = audit_mitigation_runs(config) if AUDIT.get("mitigations") else []
+else:
+    MITIGATION_RUNS = mitigation_runs(config) if MITIGATIONS["names"] else []
+MITIGATION_SOURCE = get_renderer()  # the renderer, or the audit's source
+MITIGATION_TABLES = layout.mitigation_tables(MITIGATION_SOURCE)
+MITIGATION_FIGURE = layout.mitigation_figure(MITIGATION_SOURCE)
 REFERENCE_SPP = MITIGATIONS["reference_spp"]
 AUX_SPP = MITIGATIONS["aux_spp"]
 
@@ -728,8 +736,8 @@ def mitigation_table_params():
 
 
 def mitigation_targets():
-    """`snakemake mitigations`: the mitigation table and its trade-off figure (nothing when
-    ``mitigations.names`` is empty or the run is an audit)."""
+    """`snakemake mitigations`: the mitigation table and its trade-off figure, the run's or
+    the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty)."""
     if not MITIGATION_RUNS:
         return []
-    return [*layout.mitigation_tables(), "results/figures/mitigations.png"]
+    return [*MITIGATION_TABLES, MITIGATION_FIGURE]

@@ -114,17 +114,17 @@ rule mitigations_table:
     input:
         mitigation_table_inputs,
     output:
-        csv="results/tables/mitigations.csv",
-        md="results/tables/mitigations.md",
-        tex="results/tables/mitigations.tex",
+        csv=MITIGATION_TABLES[0],
+        md=MITIGATION_TABLES[1],
+        tex=MITIGATION_TABLES[2],
         html=report(
-            "results/tables/mitigations.html",
+            MITIGATION_TABLES[3],
             caption="../report/mitigations.rst",
             category="Tables",
             labels={"table": "mitigations"},
         ),
         figure=report(
-            "results/figures/mitigations.png",
+            MITIGATION_FIGURE,
             caption="../report/mitigations_figure.rst",
             category="Figures",
             labels={"figure": "mitigations"},
@@ -132,9 +132,9 @@ rule mitigations_table:
     params:
         runs=mitigation_table_params(),
     log:
-        "logs/tables/mitigations.log",
+        f"logs/{MITIGATION_SOURCE}/tables/mitigations.log",
     benchmark:
-        "benchmarks/tables/mitigations.tsv"
+        f"benchmarks/{MITIGATION_SOURCE}/tables/mitigations.tsv"
     localrule: True
     conda:
         ENV

@@ -9,6 +9,8 @@ run_job(
     correlations=list(snakemake.input.correlations),
     interventions=list(snakemake.input.interventions),
     teasers=list(snakemake.input.teasers),
+    mitigations=(list(snakemake.input.mitigations) or [None])[0],
+    mitigation_figure=(list(snakemake.input.mitigation_figure) or [None])[0],
     outputs=dict(snakemake.output.items()),
     **snakemake.params,
 )

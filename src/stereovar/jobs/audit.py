@@ -25,11 +25,21 @@ def import_job(settings: dict, *, frame: str, workers: int = 2, fingerprint=None
 
 
 def verdict_job(
-    correlations, interventions, teasers, outputs: dict, *, name: str, found: str
+    correlations,
+    interventions,
+    teasers,
+    outputs: dict,
+    *,
+    name: str,
+    found: str,
+    mitigations=None,
+    mitigation_figure=None,
 ) -> dict:
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``: the claims-style
     rows over the audit's frames with intervals, the plain-language verdict and one teaser
-    per frame (:mod:`stereovar.audit.verdict`)."""
+    per frame (:mod:`stereovar.audit.verdict`); with ``mitigations`` (the audit's mitigation
+    table), which mitigation removes the Monte Carlo-specific part and at what cost
+    (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure."""
     from ..audit.verdict import (
         RULES,
         VERDICT_COLUMNS,
@@ -51,6 +61,16 @@ def verdict_job(
     table = as_table(rows)
     base = Path(outputs["md"]).parent
     figures = [Path(t).relative_to(base).as_posix() for t in teasers]
+    findings = []
+    if mitigations:
+        from ..statistics.mitigations import mitigation_findings
+
+        findings = mitigation_findings(read_rows(mitigations))
+        for line in findings:
+            log.info("mitigations: %s", line)
+        lines += [f"mitigations: {findings[-1]}"]
+    if mitigation_figure:
+        figures.append(Path(mitigation_figure).relative_to(base).as_posix())
     caption = f"Audit {name}: {found}. {RULES}"
     md = "\n".join(
         [
@@ -62,6 +82,7 @@ def verdict_job(
             "",
             to_markdown(table, VERDICT_COLUMNS, caption=caption),
             "",
+            *(["## Mitigations", "", *[f"- {f}" for f in findings], ""] if findings else []),
             *[f"![{Path(f).stem}]({f})" for f in figures],
             "",
         ]
@@ -71,6 +92,9 @@ def verdict_job(
         f"<h1>Audit {html.escape(name)}: verdict</h1>\n"
         f"<p><b>Verdict.</b> {html.escape(result['text'])}</p>\n"
     )
+    if findings:
+        items = "".join(f"<li>{html.escape(f)}</li>" for f in findings)
+        extra += f"<h2>Mitigations</h2>\n<ul>{items}</ul>\n"
     images = "".join(
         f'<figure><img src="{html.escape(f)}" style="max-width:100%">'
         f"<figcaption>{html.escape(Path(f).stem)}</figcaption></figure>\n"
@@ -82,6 +106,7 @@ def verdict_job(
         "found": found,
         **result,
         "summary": lines,
+        "mitigations": findings,
         "rules": RULES,
         "rows": json.loads(json.dumps(table, default=str).replace("NaN", "null")),
         "csv": to_csv(table, VERDICT_COLUMNS),
