@@ -168,7 +168,8 @@ def audit_mitigation_runs(config: dict) -> list[MitigationRun]:
                 "render with that setting and audit those renders"
             )
         render = config["render"]
-        runs.append(MitigationRun(m, render["renderer"], int(render["spp"]), tuple(config["scenes"])))
+        scenes = tuple(config["scenes"])
+        runs.append(MitigationRun(m, render["renderer"], int(render["spp"]), scenes))
     return runs
 
 

@@ -241,8 +241,9 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     ...      "partial_low": -0.02, "partial_high": 0.04, "mc_cue": "removed", "psnr": 28.0,
     ...      "psnr_low": 27.0, "psnr_high": 29.0},
     ... ]
-    >>> mitigation_findings(rows)[-1]
-    'Removes the Monte Carlo-specific part: sensor_only (PSNR 28.00 dB [27.00, 29.00] against 30.00 dB [29.00, 31.00] as rendered).'
+    >>> print(mitigation_findings(rows)[-1])  # doctest: +NORMALIZE_WHITESPACE
+    Removes the Monte Carlo-specific part: sensor_only (PSNR 28.00 dB [27.00, 29.00]
+    against 30.00 dB [29.00, 31.00] as rendered).
     """
     chosen = [r for r in rows if r["region"] == region]
     base = next((r for r in chosen if r["mitigation"] == "none"), None)
