@@ -45,20 +45,46 @@ __all__ = [
     "AUDIT_PREFIX",
     "NONE",
     "RESULTS",
+    "TABLE_FORMATS",
     "audit_source",
+    "audit_summary",
+    "audit_teaser",
+    "audit_verdict",
     "aux_store",
+    "claims_tables",
+    "correlation_curve",
+    "correlation_rows",
+    "cross_renderer_figure",
+    "cross_renderer_tables",
+    "estimator_check_fields",
+    "estimator_check_rows",
+    "estimator_field_tables",
+    "estimator_figure",
+    "estimator_tables",
+    "export_dir",
     "ground_truth_store",
+    "import_record",
+    "intervention_margins",
+    "intervention_metrics",
     "is_audit",
     "mitigation_figure",
     "mitigation_rows",
     "mitigation_tables",
     "moment_store",
+    "preview",
     "render_store",
+    "run_figure",
     "run_prefix",
+    "run_tables",
+    "scene_tables",
     "source_key",
     "source_key_pattern",
     "split_source_key",
+    "summary_json",
     "table_paths",
+    "traced_ground_truth",
+    "variance_store",
+    "warped_store",
 ]
 
 RESULTS = "results"
@@ -160,6 +186,11 @@ def ground_truth_store(source: str, scene: str) -> str:
     source, _ = split_source_key(source)
     if is_audit(source):
         return f"{RESULTS}/{source}/ground_truth/{scene}.zarr"
+    return traced_ground_truth(scene)
+
+
+def traced_ground_truth(scene: str) -> str:
+    """A scene's ground truth traced from its spec: ``results/ground_truth/{scene}.zarr``."""
     return f"{RESULTS}/ground_truth/{scene}.zarr"
 
 
@@ -167,6 +198,96 @@ def run_prefix(source: str, estimator: str, transform: str = NONE) -> str:
     """Directory of everything computed from one source's renders after ``transform`` by
     one estimator: ``results/{source}[/{transform}]/{estimator}``."""
     return f"{RESULTS}/{source_key(source, transform)}/{estimator}"
+
+
+def variance_store(source: str, estimator: str, scene: str, spp, transform: str = NONE) -> str:
+    """Both views' variance (Eq. 1):
+    ``results/{source}[/{transform}]/{estimator}/variance/{scene}/spp{spp}.zarr``."""
+    return f"{run_prefix(source, estimator, transform)}/variance/{scene}/spp{spp}.zarr"
+
+
+def warped_store(source: str, estimator: str, scene: str, spp, transform: str = NONE) -> str:
+    """The right view's variance warped to the left (Eq. 2):
+    ``results/{source}[/{transform}]/{estimator}/warped/{scene}/spp{spp}.zarr``."""
+    return f"{run_prefix(source, estimator, transform)}/warped/{scene}/spp{spp}.zarr"
+
+
+def correlation_rows(source: str, estimator: str, scene: str, spp, transform: str = NONE) -> str:
+    """One scene's statistics and controls (Eq. 3):
+    ``results/{source}[/{transform}]/{estimator}/correlation/{scene}/spp{spp}.csv``."""
+    return f"{run_prefix(source, estimator, transform)}/correlation/{scene}/spp{spp}.csv"
+
+
+def correlation_curve(source: str, estimator: str, scene: str, spp, transform: str = NONE) -> str:
+    """One scene's rho against the number of seeds:
+    ``results/{source}[/{transform}]/{estimator}/correlation/{scene}/spp{spp}_curve.csv``."""
+    return f"{run_prefix(source, estimator, transform)}/correlation/{scene}/spp{spp}_curve.csv"
+
+
+def intervention_metrics(source: str, estimator: str, scene: str, transform: str = NONE) -> str:
+    """One scene's intervention metrics (Sec. 3.4):
+    ``results/{source}[/{transform}]/{estimator}/intervention/{scene}.csv``."""
+    return f"{run_prefix(source, estimator, transform)}/intervention/{scene}.csv"
+
+
+def intervention_margins(source: str, estimator: str, scene: str, transform: str = NONE) -> str:
+    """One scene's sampled ground-truth margins of the intervention:
+    ``results/{source}[/{transform}]/{estimator}/intervention/margins/{scene}.csv``."""
+    return f"{run_prefix(source, estimator, transform)}/intervention/margins/{scene}.csv"
+
+
+def run_tables(source: str, estimator: str, name: str, transform: str = NONE) -> list[str]:
+    """A table of one run in every format:
+    ``results/{source}[/{transform}]/{estimator}/tables/{name}.*``."""
+    return table_paths(name, f"{run_prefix(source, estimator, transform)}/tables")
+
+
+def run_figure(source: str, estimator: str, name: str, transform: str = NONE) -> str:
+    """A figure of one run: ``results/{source}[/{transform}]/{estimator}/figures/{name}.png``."""
+    return f"{run_prefix(source, estimator, transform)}/figures/{name}.png"
+
+
+def preview(source: str, scene: str) -> str:
+    """A scene's preview by one renderer: ``results/{source}/previews/{scene}.png``."""
+    return f"{RESULTS}/{source}/previews/{scene}.png"
+
+
+def estimator_check_fields(source: str, scene: str, spp) -> str:
+    """One scene's moment field against the seeds' (``estimators``):
+    ``results/{source}/estimators/{scene}/spp{spp}_fields.csv``."""
+    return f"{RESULTS}/{source}/estimators/{scene}/spp{spp}_fields.csv"
+
+
+def estimator_check_rows(source: str, scene: str, spp) -> str:
+    """One scene's statistics by both estimators (``estimators``):
+    ``results/{source}/estimators/{scene}/spp{spp}.csv``."""
+    return f"{RESULTS}/{source}/estimators/{scene}/spp{spp}.csv"
+
+
+def export_dir(source: str, estimator: str, fmt: str, scene: str) -> str:
+    """One scene exported as files other tools read:
+    ``results/export/{source}/{estimator}/{fmt}/{scene}``."""
+    return f"{RESULTS}/export/{source}/{estimator}/{fmt}/{scene}"
+
+
+def import_record(name: str, frame: str) -> str:
+    """The import record of one frame of an audit: ``results/audit/{name}/import/{frame}.json``."""
+    return f"{RESULTS}/{audit_source(name)}/import/{frame}.json"
+
+
+def audit_teaser(name: str, scene: str) -> str:
+    """One frame's teaser of an audit: ``results/audit/{name}/figures/teaser_{scene}.png``."""
+    return f"{RESULTS}/{audit_source(name)}/figures/teaser_{scene}.png"
+
+
+def audit_verdict(name: str, ext: str) -> str:
+    """An audit's verdict page (``md`` or ``html``): ``results/audit/{name}/verdict.{ext}``."""
+    return f"{RESULTS}/{audit_source(name)}/verdict.{ext}"
+
+
+def audit_summary(name: str) -> str:
+    """An audit's verdict as numbers: ``results/audit/{name}/summary.json``."""
+    return f"{RESULTS}/{audit_source(name)}/summary.json"
 
 
 def mitigation_rows(source: str, estimator: str, scene: str, spp, transform: str = NONE) -> str:
@@ -194,3 +315,43 @@ def mitigation_tables(source: str | None = None) -> list[str]:
     if source is not None and is_audit(source):
         return table_paths("mitigations", f"{RESULTS}/{source}/tables")
     return table_paths("mitigations")
+
+
+def scene_tables() -> list[str]:
+    """The scene summary: ``results/tables/scenes.*``."""
+    return table_paths("scenes")
+
+
+def claims_tables() -> list[str]:
+    """The claims table: ``results/tables/claims.*``."""
+    return table_paths("claims")
+
+
+def summary_json() -> str:
+    """The run's headline numbers: ``results/summary.json``."""
+    return f"{RESULTS}/summary.json"
+
+
+def cross_renderer_tables() -> list[str]:
+    """The renderers side by side: ``results/tables/cross_renderer.*``."""
+    return table_paths("cross_renderer")
+
+
+def cross_renderer_figure() -> str:
+    """The renderers' variance fields: ``results/figures/cross_renderer.png``."""
+    return f"{RESULTS}/figures/cross_renderer.png"
+
+
+def estimator_tables() -> list[str]:
+    """Seeds against moments, every statistic: ``results/tables/estimators.*``."""
+    return table_paths("estimators")
+
+
+def estimator_field_tables() -> list[str]:
+    """Seeds against moments, the fields: ``results/tables/estimator_fields.*``."""
+    return table_paths("estimator_fields")
+
+
+def estimator_figure() -> str:
+    """Seeds against moments: ``results/figures/estimators.png``."""
+    return f"{RESULTS}/figures/estimators.png"

@@ -41,11 +41,15 @@ if AUDIT:
 
 rule audit_teaser:
     input:
-        variance=lambda wc: f"results/audit/{wc.name}/seeds/variance/{wc.scene}/spp{MAIN_SPP}.zarr",
-        warped=lambda wc: f"results/audit/{wc.name}/seeds/warped/{wc.scene}/spp{MAIN_SPP}.zarr",
+        variance=lambda wc: layout.variance_store(
+            layout.audit_source(wc.name), "seeds", wc.scene, MAIN_SPP
+        ),
+        warped=lambda wc: layout.warped_store(
+            layout.audit_source(wc.name), "seeds", wc.scene, MAIN_SPP
+        ),
     output:
         report(
-            "results/audit/{name}/figures/teaser_{scene}.png",
+            layout.audit_teaser("{name}", "{scene}"),
             caption="../report/audit_teaser.rst",
             category="Audit",
             labels={"audit": "{name}", "frame": "{scene}", "figure": "teaser"},
@@ -64,24 +68,25 @@ rule audit_teaser:
 rule audit_verdict:
     input:
         correlations=lambda wc: [
-            f"results/audit/{wc.name}/seeds/correlation/{s}/spp{MAIN_SPP}.csv" for s in SCENES
+            layout.correlation_rows(layout.audit_source(wc.name), "seeds", s, MAIN_SPP)
+            for s in SCENES
         ],
         interventions=lambda wc: [
-            f"results/audit/{wc.name}/seeds/intervention/{s}.csv" for s in SCENES
+            layout.intervention_metrics(layout.audit_source(wc.name), "seeds", s) for s in SCENES
         ],
-        teasers=lambda wc: [f"results/audit/{wc.name}/figures/teaser_{s}.png" for s in SCENES],
+        teasers=lambda wc: [layout.audit_teaser(wc.name, s) for s in SCENES],
         # audit.mitigations: the mitigation table and its figure
         mitigations=mitigation_targets()[:1],
         mitigation_figure=mitigation_targets()[-1:],
     output:
-        md="results/audit/{name}/verdict.md",
+        md=layout.audit_verdict("{name}", "md"),
         html=report(
-            "results/audit/{name}/verdict.html",
+            layout.audit_verdict("{name}", "html"),
             caption="../report/audit_verdict.rst",
             category="1. Claims",
             labels={"audit": "{name}", "table": "verdict"},
         ),
-        summary="results/audit/{name}/summary.json",
+        summary=layout.audit_summary("{name}"),
     params:
         name=lambda wc: wc.name,
         found=AUDIT_FOUND,
@@ -103,7 +108,7 @@ rule export_scene:
     input:
         unpack(export_inputs),
     output:
-        directory("results/export/{renderer}/{estimator}/{format}/{scene}"),
+        directory(layout.export_dir("{renderer}", "{estimator}", "{format}", "{scene}")),
     params:
         scene=lambda wc: wc.scene,
         format=lambda wc: wc.format,

@@ -5,14 +5,11 @@ from stereovar.statistics.claims import claims_digest
 
 rule statistics_table:
     input:
-        correlations=scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
-        curves=scene_files("{run}/correlation/{scene}/spp{spp}_curve.csv"),
+        correlations=scene_files(layout.correlation_rows),
+        curves=scene_files(layout.correlation_curve),
     output:
-        csv="results/{renderer}/{estimator}/tables/statistics.csv",
-        md="results/{renderer}/{estimator}/tables/statistics.md",
-        tex="results/{renderer}/{estimator}/tables/statistics.tex",
-        html=report(
-            "results/{renderer}/{estimator}/tables/statistics.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", "{estimator}", "statistics"),
             caption="../report/statistics.rst",
             category="Tables",
             labels={
@@ -21,11 +18,9 @@ rule statistics_table:
                 "estimator": "{estimator}",
             },
         ),
-        curve_csv="results/{renderer}/{estimator}/tables/seed_curve.csv",
-        curve_md="results/{renderer}/{estimator}/tables/seed_curve.md",
-        curve_tex="results/{renderer}/{estimator}/tables/seed_curve.tex",
-        curve_html=report(
-            "results/{renderer}/{estimator}/tables/seed_curve.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", "{estimator}", "seed_curve"),
+            prefix="curve_",
             caption="../report/seed_curve.rst",
             category="Tables",
             labels={
@@ -49,27 +44,26 @@ rule statistics_table:
 
 rule claims:
     input:
-        correlations=expand(
-            "{run}/correlation/{scene}/spp{spp}.csv", run=RUN, scene=SCENES, spp=MAIN_SPP
-        ),
-        curves=expand(
-            "{run}/correlation/{scene}/spp{spp}_curve.csv", run=RUN, scene=SCENES, spp=MAIN_SPP
-        ),
-        sweep=f"{RUN}/tables/spp_sweep.csv",
-        interventions=expand("{run}/intervention/{scene}.csv", run=INTERVENTION_RUN, scene=SCENES),
+        correlations=[
+            layout.correlation_rows(get_renderer(), get_estimator(), s, MAIN_SPP) for s in SCENES
+        ],
+        curves=[
+            layout.correlation_curve(get_renderer(), get_estimator(), s, MAIN_SPP) for s in SCENES
+        ],
+        sweep=layout.run_tables(get_renderer(), get_estimator(), "spp_sweep")[0],
+        interventions=[
+            layout.intervention_metrics(get_renderer(), INTERVENTION_ESTIMATOR, s) for s in SCENES
+        ],
         # the mitigation table, when mitigations.names asks for one
         mitigations=mitigation_targets()[:1],
     output:
-        csv="results/tables/claims.csv",
-        md="results/tables/claims.md",
-        tex="results/tables/claims.tex",
-        html=report(
-            "results/tables/claims.html",
+        **table_outputs(
+            layout.claims_tables(),
             caption="../report/claims.rst",
             category="1. Claims",
             labels={"table": "Claims of the paper on this run"},
         ),
-        summary="results/summary.json",
+        summary=layout.summary_json(),
     params:
         spp=MAIN_SPP,
         # the paper's claims are package data: a changed file reruns the table
@@ -87,10 +81,10 @@ rule claims:
 
 rule rho_vs_seeds_figure:
     input:
-        "results/{renderer}/{estimator}/tables/seed_curve.csv",
+        layout.run_tables("{renderer}", "{estimator}", "seed_curve")[0],
     output:
         report(
-            "results/{renderer}/{estimator}/figures/rho_vs_seeds.png",
+            layout.run_figure("{renderer}", "{estimator}", "rho_vs_seeds"),
             caption="../report/fig_rho_vs_seeds.rst",
             category="Figures",
             labels={
@@ -112,10 +106,10 @@ rule rho_vs_seeds_figure:
 
 rule statistics_dot_figure:
     input:
-        scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
+        scene_files(layout.correlation_rows),
     output:
         report(
-            "results/{renderer}/{estimator}/figures/statistics_dots.png",
+            layout.run_figure("{renderer}", "{estimator}", "statistics_dots"),
             caption="../report/fig_statistics_dots.rst",
             category="Figures",
             labels={

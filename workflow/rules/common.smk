@@ -40,7 +40,6 @@ from stereovar.experiment import (
     ground_truth_store,
     intervention_renders,
     render_stores as configured_stores,
-    run_prefix,
     scene_spp_pairs,
     seed_stores,
 )
@@ -151,8 +150,6 @@ def get_estimator():
     return config["render"]["estimator"]
 
 
-RUN = run_prefix(get_renderer(), get_estimator())
-INTERVENTION_RUN = run_prefix(get_renderer(), INTERVENTION_ESTIMATOR)
 
 # `renderers: [mitsuba, cycles]` runs the experiment for each renderer (render.renderer is
 # the primary one: the claims table and summary.json); the cross-renderer table and figure
@@ -165,16 +162,10 @@ def renderer_config(renderer):
     return {**config, "render": {**config["render"], "renderer": renderer}}
 
 
-def cross_renderer_inputs(pattern, scenes):
-    """``pattern`` (with ``{run}``, ``{scene}`` and ``{spp}``) per renderer run, as named
-    input lists."""
-    return {
-        r: [
-            pattern.format(run=run_prefix(r, get_estimator()), scene=s, spp=MAIN_SPP)
-            for s in scenes
-        ]
-        for r in RENDERER_RUNS
-    }
+def cross_renderer_inputs(path, scenes):
+    """``path(source, estimator, scene, spp)`` (a :mod:`stereovar.layout` function) of
+    ``scenes`` at the main SPP per renderer run, as named input lists."""
+    return {r: [path(r, get_estimator(), s, MAIN_SPP) for s in scenes] for r in RENDERER_RUNS}
 
 
 def wildcard_renderer(wildcards):
@@ -189,12 +180,12 @@ SOURCE_NAMES = layout.source_key_pattern(RENDERERS, ())
 
 
 def ground_truth_input(wildcards):
-    """The ground truth of the wildcards' scene: traced (``results/ground_truth/``) or, for
-    an audit, imported (``results/audit/{name}/ground_truth/``)."""
+    """The ground truth of the wildcards' scene: traced or, for an audit, imported
+    (:func:`stereovar.layout.ground_truth_store`)."""
     return ground_truth_store(wildcards.renderer, wildcards.scene)
 
 
-# Result paths (stereovar.experiment): renders under results/{renderer}/renders/, everything
+# Result paths (stereovar.layout): renders under results/{renderer}/renders/, everything
 # computed from them under results/{renderer}/{estimator}/; the intervention always uses the
 # seeds estimator, so its results sit under results/{renderer}/seeds/.
 
@@ -239,37 +230,57 @@ def estimator_check_inputs(wildcards):
     }
 
 
-def scene_files(pattern, estimator=None):
-    """Input function: ``pattern`` (with ``{run}``, ``{scene}`` and ``{spp}``) for every scene
-    at the main SPP, in the wildcards' run (or the wildcards' renderer and ``estimator``)."""
+def scene_files(path, estimator=None):
+    """Input function: ``path(source, estimator, scene, spp)`` (a :mod:`stereovar.layout`
+    function) for every scene at the main SPP, in the wildcards' run (or the wildcards'
+    renderer and ``estimator``)."""
 
     def inputs(wildcards):
-        prefix = run_prefix(wildcards.renderer, estimator or wildcards.estimator)
-        return [pattern.format(run=prefix, scene=s, spp=MAIN_SPP) for s in SCENES]
+        run = (wildcards.renderer, estimator or wildcards.estimator)
+        return [path(*run, s, MAIN_SPP) for s in SCENES]
 
     return inputs
 
 
-def sweep_inputs(pattern):
-    """Input function: ``pattern`` (with ``{run}``) for the sweep scene at each sweep SPP,
-    ascending, in the wildcards' run."""
+def scene_results(path, estimator=None):
+    """Input function: ``path(source, estimator, scene)`` (a :mod:`stereovar.layout` function
+    without an SPP: the intervention's) for every scene, in the wildcards' run (or the
+    wildcards' renderer and ``estimator``)."""
 
     def inputs(wildcards):
-        prefix = run_prefix(wildcards.renderer, wildcards.estimator)
-        return [pattern.format(run=prefix, scene=SWEEP_SCENE, spp=spp) for spp in SWEEP_SPP]
+        return [path(wildcards.renderer, estimator or wildcards.estimator, s) for s in SCENES]
 
     return inputs
 
 
-def main_scene_file(pattern, scene=None):
-    """Input function: ``pattern`` (with ``{run}``) for the sweep scene (or ``scene``) at the
-    main SPP, in the wildcards' run."""
+def sweep_inputs(path):
+    """Input function: ``path(source, estimator, scene, spp)`` for the sweep scene at each
+    sweep SPP, ascending, in the wildcards' run."""
 
     def inputs(wildcards):
-        prefix = run_prefix(wildcards.renderer, wildcards.estimator)
-        return pattern.format(run=prefix, scene=scene or SWEEP_SCENE, spp=MAIN_SPP)
+        run = (wildcards.renderer, wildcards.estimator)
+        return [path(*run, SWEEP_SCENE, spp) for spp in SWEEP_SPP]
 
     return inputs
+
+
+def main_scene_file(path, scene=None):
+    """Input function: ``path(source, estimator, scene, spp)`` for the sweep scene (or
+    ``scene``) at the main SPP, in the wildcards' run."""
+
+    def inputs(wildcards):
+        return path(wildcards.renderer, wildcards.estimator, scene or SWEEP_SCENE, MAIN_SPP)
+
+    return inputs
+
+
+def table_outputs(paths, prefix="", **report_args):
+    """Named outputs of one table in every format (:func:`stereovar.layout.table_paths`):
+    ``{prefix}csv``, ``{prefix}md``, ``{prefix}tex`` and ``{prefix}html``, the last in the
+    report with ``report_args`` (caption, category, labels)."""
+    named = {f"{prefix}{ext}": p for ext, p in zip(layout.TABLE_FORMATS, paths, strict=True)}
+    named[f"{prefix}html"] = report(named[f"{prefix}html"], **report_args)
+    return named
 
 
 AUDIT_FOUND = AUDIT_DISCOVERY.summary() if AUDIT else ""
@@ -281,18 +292,20 @@ def export_inputs(wildcards):
     for ``export_scene``."""
     run = run_config(wildcards.renderer)
     stores = estimator_stores(run, wildcards.scene, MAIN_SPP, "seeds")
-    prefix = run_prefix(wildcards.renderer, wildcards.estimator)
+    variance = layout.variance_store(
+        wildcards.renderer, wildcards.estimator, wildcards.scene, MAIN_SPP
+    )
     return {
         **stores,
-        "variance": f"{prefix}/variance/{wildcards.scene}/spp{MAIN_SPP}.zarr",
+        "variance": variance,
         "ground_truth": ground_truth_input(wildcards),
     }
 
 
 def export_targets():
     """``snakemake export``: every scene of this run in every ``export.formats`` format."""
-    prefix = f"results/export/{get_renderer()}/{get_estimator()}"
-    return [f"{prefix}/{fmt}/{s}" for fmt in EXPORT_FORMATS for s in SCENES]
+    run = (get_renderer(), get_estimator())
+    return [layout.export_dir(*run, fmt, s) for fmt in EXPORT_FORMATS for s in SCENES]
 
 
 def scene_spec_path(scene):
@@ -392,16 +405,16 @@ def all_targets():
     if AUDIT:
         return [*render_stores(), *audit_targets(config), *mitigation_targets()]
     shared = [
-        *expand("results/ground_truth/{scene}.zarr", scene=SCENES),
-        *expand("results/tables/scenes.{ext}", ext=["csv", "md", "tex", "html"]),
-        *expand("results/tables/claims.{ext}", ext=["csv", "md", "tex", "html"]),
-        "results/summary.json",
+        *[layout.traced_ground_truth(s) for s in SCENES],
+        *layout.scene_tables(),
+        *layout.claims_tables(),
+        layout.summary_json(),
         *mitigation_targets(),
     ]
     if len(RENDERER_RUNS) > 1:
         shared += [
-            *expand("results/tables/cross_renderer.{ext}", ext=["csv", "md", "tex", "html"]),
-            "results/figures/cross_renderer.png",
+            *layout.cross_renderer_tables(),
+            layout.cross_renderer_figure(),
         ]
     per_renderer = [p for r in RENDERER_RUNS for p in renderer_targets(r)]
     return list(dict.fromkeys([*per_renderer, *shared]))
@@ -409,36 +422,28 @@ def all_targets():
 
 def renderer_targets(renderer):
     """Everything `snakemake all` builds for one renderer."""
-    run = run_prefix(renderer, get_estimator())
-    intervention = run_prefix(renderer, INTERVENTION_ESTIMATOR)
+    run = (renderer, get_estimator())
+    intervention = (renderer, INTERVENTION_ESTIMATOR)
     return [
         # The renders are targets too, so a render store lost after its analysis finished is
         # rebuilt (from the render cache) instead of silently missing.
         *render_stores(renderer),
-        *expand("results/{renderer}/previews/{scene}.png", renderer=renderer, scene=SCENES),
-        *[f"{run}/correlation/{s}/spp{spp}.csv" for s, spp in scene_spp_pairs(config)],
-        *expand(
-            "{run}/tables/{name}.{ext}",
-            run=run,
-            name=["cross_scene", "spp_sweep", "spp_sweep_fit"],
-            ext=["csv", "md", "tex", "html"],
-        ),
-        *expand("{run}/intervention/{scene}.csv", run=intervention, scene=SCENES),
-        *expand(
-            "{run}/tables/intervention.{ext}", run=intervention, ext=["csv", "md", "tex", "html"]
-        ),
-        f"{run}/figures/fig1_teaser.png",
-        f"{run}/figures/fig2_rho_vs_spp.png",
-        f"{run}/figures/fig3_material_scatter.png",
-        f"{intervention}/figures/fig4_intervention_margins.png",
-        f"{run}/figures/rho_vs_seeds.png",
-        f"{run}/figures/statistics_dots.png",
-        *expand(
-            "{run}/tables/{name}.{ext}",
-            run=run,
-            name=["statistics", "seed_curve"],
-            ext=["csv", "md", "tex", "html"],
-        ),
+        *[layout.preview(renderer, s) for s in SCENES],
+        *[layout.correlation_rows(*run, s, spp) for s, spp in scene_spp_pairs(config)],
+        *[
+            p
+            for name in ["cross_scene", "spp_sweep", "spp_sweep_fit"]
+            for p in layout.run_tables(*run, name)
+        ],
+        *[layout.intervention_metrics(*intervention, s) for s in SCENES],
+        *layout.run_tables(*intervention, "intervention"),
+        layout.run_figure(*run, "fig1_teaser"),
+        layout.run_figure(*run, "fig2_rho_vs_spp"),
+        layout.run_figure(*run, "fig3_material_scatter"),
+        layout.run_figure(*intervention, "fig4_intervention_margins"),
+        layout.run_figure(*run, "rho_vs_seeds"),
+        layout.run_figure(*run, "statistics_dots"),
+        *[p for name in ["statistics", "seed_curve"] for p in layout.run_tables(*run, name)],
     ]
 
 
@@ -581,7 +586,7 @@ def preflight():
             )
 
 
-def warn_if_report_is_stale(summary="results/summary.json"):
+def warn_if_report_is_stale(summary=layout.summary_json()):
     """With ``--report``: warn when the stored results were made with another config (the
     report shows whatever tables exist, whichever config made them)."""
     if not any(a == "--report" or a.startswith("--report=") for a in sys.argv):
@@ -608,7 +613,7 @@ def print_summary():
         if summary.exists():
             print("\n" + "\n".join(json.loads(summary.read_text())["summary"]))
         return
-    table = Path("results/tables/claims.md")
+    table = Path(layout.claims_tables()[layout.TABLE_FORMATS.index("md")])
     if table.exists():
         print(f"\n{table}:\n\n{table.read_text()}")
 
@@ -699,16 +704,19 @@ def mitigation_scene_inputs(wildcards):
 
 def mitigation_files(run):
     """The per-scene files one mitigation row is summarised from."""
-    prefix = layout.run_prefix(run.source, MITIGATION_ESTIMATOR, run.transform)
+    estimator = MITIGATION_ESTIMATOR
     files = {
-        "correlation": [f"{prefix}/correlation/{s}/spp{run.spp}.csv" for s in run.scenes],
+        "correlation": [
+            layout.correlation_rows(run.source, estimator, s, run.spp, run.transform)
+            for s in run.scenes
+        ],
         "scene_rows": [
-            layout.mitigation_rows(run.source, MITIGATION_ESTIMATOR, s, run.spp, run.transform)
+            layout.mitigation_rows(run.source, estimator, s, run.spp, run.transform)
             for s in run.scenes
         ],
         # the intervention runs at intervention.spp only
         "intervention": (
-            [f"{prefix}/intervention/{s}.csv" for s in run.scenes]
+            [layout.intervention_metrics(run.source, estimator, s, run.transform) for s in run.scenes]
             if run.spp == INTERVENTION_SPP
             else []
         ),

@@ -4,10 +4,10 @@
 
 rule warp:
     input:
-        variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
+        variance=layout.variance_store("{renderer}", "{estimator}", "{scene}", "{spp}"),
         ground_truth=ground_truth_input,
     output:
-        directory("results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr"),
+        directory(layout.warped_store("{renderer}", "{estimator}", "{scene}", "{spp}")),
     log:
         "logs/{renderer}/{estimator}/warped/{scene}/spp{spp}.log",
     benchmark:
@@ -25,12 +25,12 @@ rule warp:
 
 rule correlation:
     input:
-        variance="results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr",
-        warped="results/{renderer}/{estimator}/warped/{scene}/spp{spp}.zarr",
+        variance=layout.variance_store("{renderer}", "{estimator}", "{scene}", "{spp}"),
+        warped=layout.warped_store("{renderer}", "{estimator}", "{scene}", "{spp}"),
         ground_truth=ground_truth_input,
     output:
-        rows="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}.csv",
-        curve="results/{renderer}/{estimator}/correlation/{scene}/spp{spp}_curve.csv",
+        rows=layout.correlation_rows("{renderer}", "{estimator}", "{scene}", "{spp}"),
+        curve=layout.correlation_curve("{renderer}", "{estimator}", "{scene}", "{spp}"),
     params:
         analysis=config["analysis"],
         controls=config["controls"],

@@ -7,8 +7,8 @@ rule estimator_check:
     input:
         unpack(estimator_check_inputs),
     output:
-        fields="results/{renderer}/estimators/{scene}/spp{spp}_fields.csv",
-        rows="results/{renderer}/estimators/{scene}/spp{spp}.csv",
+        fields=layout.estimator_check_fields("{renderer}", "{scene}", "{spp}"),
+        rows=layout.estimator_check_rows("{renderer}", "{scene}", "{spp}"),
     params:
         analysis=config["analysis"],
         controls=config["controls"],
@@ -27,39 +27,28 @@ rule estimator_check:
 
 rule estimator_tables:
     input:
-        fields=expand(
-            "results/{renderer}/estimators/{scene}/spp{spp}_fields.csv",
-            renderer=get_renderer(),
-            scene=SCENES,
-            spp=VALIDATION_SPP,
-        ),
-        rows=expand(
-            "results/{renderer}/estimators/{scene}/spp{spp}.csv",
-            renderer=get_renderer(),
-            scene=SCENES,
-            spp=VALIDATION_SPP,
-        ),
+        fields=[
+            layout.estimator_check_fields(get_renderer(), s, VALIDATION_SPP) for s in SCENES
+        ],
+        rows=[
+            layout.estimator_check_rows(get_renderer(), s, VALIDATION_SPP) for s in SCENES
+        ],
     output:
-        csv="results/tables/estimators.csv",
-        md="results/tables/estimators.md",
-        tex="results/tables/estimators.tex",
-        html=report(
-            "results/tables/estimators.html",
+        **table_outputs(
+            layout.estimator_tables(),
             caption="../report/estimators.rst",
             category="Estimators",
             labels={"table": "seeds against moments: every statistic"},
         ),
-        fields_csv="results/tables/estimator_fields.csv",
-        fields_md="results/tables/estimator_fields.md",
-        fields_tex="results/tables/estimator_fields.tex",
-        fields_html=report(
-            "results/tables/estimator_fields.html",
+        **table_outputs(
+            layout.estimator_field_tables(),
+            prefix="fields_",
             caption="../report/estimator_fields.rst",
             category="Estimators",
             labels={"table": "seeds against moments: the fields"},
         ),
         figure=report(
-            "results/figures/estimators.png",
+            layout.estimator_figure(),
             caption="../report/fig_estimators.rst",
             category="Estimators",
             labels={"figure": "seeds against moments"},

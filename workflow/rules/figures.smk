@@ -3,11 +3,11 @@
 
 rule teaser_figure:
     input:
-        variance=main_scene_file("{run}/variance/{scene}/spp{spp}.zarr"),
-        warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
+        variance=main_scene_file(layout.variance_store),
+        warped=main_scene_file(layout.warped_store),
     output:
         report(
-            "results/{renderer}/{estimator}/figures/fig1_teaser.png",
+            layout.run_figure("{renderer}", "{estimator}", "fig1_teaser"),
             caption="../report/fig1_teaser.rst",
             category="Figures",
             labels={
@@ -29,10 +29,10 @@ rule teaser_figure:
 
 rule rho_vs_spp_figure:
     input:
-        sweep_inputs("{run}/correlation/{scene}/spp{spp}.csv"),
+        sweep_inputs(layout.correlation_rows),
     output:
         report(
-            "results/{renderer}/{estimator}/figures/fig2_rho_vs_spp.png",
+            layout.run_figure("{renderer}", "{estimator}", "fig2_rho_vs_spp"),
             caption="../report/fig2_rho_vs_spp.rst",
             category="Figures",
             labels={
@@ -54,12 +54,12 @@ rule rho_vs_spp_figure:
 
 rule material_scatter_figure:
     input:
-        variance=main_scene_file("{run}/variance/{scene}/spp{spp}.zarr"),
-        warped=main_scene_file("{run}/warped/{scene}/spp{spp}.zarr"),
+        variance=main_scene_file(layout.variance_store),
+        warped=main_scene_file(layout.warped_store),
         ground_truth=lambda wc: ground_truth_store(wc.renderer, SWEEP_SCENE),
     output:
         report(
-            "results/{renderer}/{estimator}/figures/fig3_material_scatter.png",
+            layout.run_figure("{renderer}", "{estimator}", "fig3_material_scatter"),
             caption="../report/fig3_material_scatter.rst",
             category="Figures",
             labels={
@@ -84,18 +84,18 @@ rule cross_renderer_figure:
         **{
             f"variance_{r}": paths[0]
             for r, paths in cross_renderer_inputs(
-                "{run}/variance/{scene}/spp{spp}.zarr", [SWEEP_SCENE]
+                layout.variance_store, [SWEEP_SCENE]
             ).items()
         },
         **{
             f"correlation_{r}": paths[0]
             for r, paths in cross_renderer_inputs(
-                "{run}/correlation/{scene}/spp{spp}.csv", [SWEEP_SCENE]
+                layout.correlation_rows, [SWEEP_SCENE]
             ).items()
         },
     output:
         report(
-            "results/figures/cross_renderer.png",
+            layout.cross_renderer_figure(),
             caption="../report/fig_cross_renderer.rst",
             category="Figures",
             labels={"figure": "variance fields by renderer"},

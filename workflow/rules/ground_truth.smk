@@ -5,7 +5,7 @@ rule ground_truth:
     input:
         unpack(scene_inputs),
     output:
-        directory("results/ground_truth/{scene}.zarr"),
+        directory(layout.traced_ground_truth("{scene}")),
     params:
         # one ground truth per scene, traced on the Mitsuba-compiled geometry for every
         # renderer (the Cycles compiler builds the same geometry; tests/test_cycles.py)
@@ -27,13 +27,10 @@ rule ground_truth:
 
 rule scene_summary:
     input:
-        expand("results/ground_truth/{scene}.zarr", scene=SCENES),
+        [layout.traced_ground_truth(s) for s in SCENES],
     output:
-        csv="results/tables/scenes.csv",
-        md="results/tables/scenes.md",
-        tex="results/tables/scenes.tex",
-        html=report(
-            "results/tables/scenes.html",
+        **table_outputs(
+            layout.scene_tables(),
             caption="../report/scenes.rst",
             category="Scenes",
             labels={"table": "scene summary"},

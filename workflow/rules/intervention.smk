@@ -6,8 +6,8 @@ rule intervention:
     input:
         unpack(intervention_inputs),
     output:
-        metrics="results/{renderer}/seeds/intervention/{scene}.csv",
-        margins="results/{renderer}/seeds/intervention/margins/{scene}.csv",
+        metrics=layout.intervention_metrics("{renderer}", INTERVENTION_ESTIMATOR, "{scene}"),
+        margins=layout.intervention_margins("{renderer}", INTERVENTION_ESTIMATOR, "{scene}"),
     params:
         **{k: v for k, v in config["intervention"].items() if k not in ("n_seeds", "spp")},
         sensor=config["controls"]["sensor"],
@@ -26,13 +26,10 @@ rule intervention:
 
 rule intervention_table:
     input:
-        scene_files("{run}/intervention/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
+        scene_results(layout.intervention_metrics, estimator=INTERVENTION_ESTIMATOR),
     output:
-        csv="results/{renderer}/seeds/tables/intervention.csv",
-        md="results/{renderer}/seeds/tables/intervention.md",
-        tex="results/{renderer}/seeds/tables/intervention.tex",
-        html=report(
-            "results/{renderer}/seeds/tables/intervention.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", INTERVENTION_ESTIMATOR, "intervention"),
             caption="../report/intervention.rst",
             category="Tables",
             labels={
@@ -54,10 +51,10 @@ rule intervention_table:
 
 rule margin_figure:
     input:
-        scene_files("{run}/intervention/margins/{scene}.csv", estimator=INTERVENTION_ESTIMATOR),
+        scene_results(layout.intervention_margins, estimator=INTERVENTION_ESTIMATOR),
     output:
         report(
-            "results/{renderer}/seeds/figures/fig4_intervention_margins.png",
+            layout.run_figure("{renderer}", INTERVENTION_ESTIMATOR, "fig4_intervention_margins"),
             caption="../report/fig4_intervention_margins.rst",
             category="Figures",
             labels={

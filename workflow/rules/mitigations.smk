@@ -13,9 +13,11 @@ rule render_policy:
     input:
         unpack(scene_inputs),
     output:
-        left=directory("results/{renderer}/{policy}/renders/{scene}/left/spp{spp}/seeds{batch}.zarr"),
+        left=directory(
+            layout.render_store("{renderer}", "{scene}", "left", "{spp}", "{batch}", "{policy}")
+        ),
         right=directory(
-            "results/{renderer}/{policy}/renders/{scene}/right/spp{spp}/seeds{batch}.zarr"
+            layout.render_store("{renderer}", "{scene}", "right", "{spp}", "{batch}", "{policy}")
         ),
     params:
         seeds=lambda wc: batch_seeds(wc.batch),
@@ -43,7 +45,7 @@ rule render_aux:
     input:
         unpack(scene_inputs),
     output:
-        directory("results/{renderer}/renders/{scene}/{view}/aux.zarr"),
+        directory(layout.aux_store("{renderer}", "{scene}", "{view}")),
     params:
         view=lambda wc: wc.view,
         spp=AUX_SPP,
@@ -69,7 +71,9 @@ rule transform:
     input:
         unpack(transform_inputs),
     output:
-        directory("results/{renderer}/{transform}/renders/{scene}/{view}/spp{spp}/seeds{batch}.zarr"),
+        directory(
+            layout.render_store("{renderer}", "{scene}", "{view}", "{spp}", "{batch}", "{transform}")
+        ),
     params:
         transform=lambda wc: wc.transform,
         batch=lambda wc: batch_seeds(wc.batch),
@@ -93,7 +97,7 @@ rule mitigation_scene:
     input:
         unpack(mitigation_scene_inputs),
     output:
-        "results/{renderer}/seeds/mitigation/{scene}/spp{spp}.csv",
+        layout.mitigation_rows("{renderer}", MITIGATION_ESTIMATOR, "{scene}", "{spp}"),
     params:
         analysis=config["analysis"],
         controls=config["controls"],

@@ -6,10 +6,10 @@ rule preview:
         renderer=RENDERER_NAMES,
     input:
         unpack(scene_inputs),
-        ground_truth="results/ground_truth/{scene}.zarr",
+        ground_truth=layout.traced_ground_truth("{scene}"),
     output:
         report(
-            "results/{renderer}/previews/{scene}.png",
+            layout.preview("{renderer}", "{scene}"),
             caption="../report/preview.rst",
             category="Scenes",
             subcategory="Previews",

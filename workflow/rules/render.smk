@@ -9,8 +9,8 @@ rule render:
     input:
         unpack(scene_inputs),
     output:
-        left=directory("results/{renderer}/renders/{scene}/left/spp{spp}/seeds{batch}.zarr"),
-        right=directory("results/{renderer}/renders/{scene}/right/spp{spp}/seeds{batch}.zarr"),
+        left=directory(layout.render_store("{renderer}", "{scene}", "left", "{spp}", "{batch}")),
+        right=directory(layout.render_store("{renderer}", "{scene}", "right", "{spp}", "{batch}")),
     params:
         seeds=lambda wc: batch_seeds(wc.batch),
         spp=lambda wc: int(wc.spp),
@@ -39,7 +39,7 @@ rule render_moments:
     input:
         unpack(scene_inputs),
     output:
-        directory("results/{renderer}/renders/{scene}/{view}/spp{spp}/moments.zarr"),
+        directory(layout.moment_store("{renderer}", "{scene}", "{view}", "{spp}")),
     params:
         view=lambda wc: wc.view,
         spp=lambda wc: int(wc.spp),

@@ -4,13 +4,10 @@
 
 rule cross_scene_table:
     input:
-        scene_files("{run}/correlation/{scene}/spp{spp}.csv"),
+        scene_files(layout.correlation_rows),
     output:
-        csv="results/{renderer}/{estimator}/tables/cross_scene.csv",
-        md="results/{renderer}/{estimator}/tables/cross_scene.md",
-        tex="results/{renderer}/{estimator}/tables/cross_scene.tex",
-        html=report(
-            "results/{renderer}/{estimator}/tables/cross_scene.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", "{estimator}", "cross_scene"),
             caption="../report/cross_scene.rst",
             category="Tables",
             labels={
@@ -34,15 +31,12 @@ rule cross_scene_table:
 
 rule spp_sweep_table:
     input:
-        correlations=sweep_inputs("{run}/correlation/{scene}/spp{spp}.csv"),
-        variances=sweep_inputs("{run}/variance/{scene}/spp{spp}.zarr"),
-        warped=sweep_inputs("{run}/warped/{scene}/spp{spp}.zarr"),
+        correlations=sweep_inputs(layout.correlation_rows),
+        variances=sweep_inputs(layout.variance_store),
+        warped=sweep_inputs(layout.warped_store),
     output:
-        csv="results/{renderer}/{estimator}/tables/spp_sweep.csv",
-        md="results/{renderer}/{estimator}/tables/spp_sweep.md",
-        tex="results/{renderer}/{estimator}/tables/spp_sweep.tex",
-        html=report(
-            "results/{renderer}/{estimator}/tables/spp_sweep.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", "{estimator}", "spp_sweep"),
             caption="../report/spp_sweep.rst",
             category="Tables",
             labels={
@@ -51,11 +45,9 @@ rule spp_sweep_table:
                 "estimator": "{estimator}",
             },
         ),
-        fit_csv="results/{renderer}/{estimator}/tables/spp_sweep_fit.csv",
-        fit_md="results/{renderer}/{estimator}/tables/spp_sweep_fit.md",
-        fit_tex="results/{renderer}/{estimator}/tables/spp_sweep_fit.tex",
-        fit_html=report(
-            "results/{renderer}/{estimator}/tables/spp_sweep_fit.html",
+        **table_outputs(
+            layout.run_tables("{renderer}", "{estimator}", "spp_sweep_fit"),
+            prefix="fit_",
             caption="../report/spp_sweep_fit.rst",
             category="Tables",
             labels={
@@ -81,13 +73,10 @@ rule spp_sweep_table:
 
 rule cross_renderer_table:
     input:
-        **cross_renderer_inputs("{run}/correlation/{scene}/spp{spp}.csv", SCENES),
+        **cross_renderer_inputs(layout.correlation_rows, SCENES),
     output:
-        csv="results/tables/cross_renderer.csv",
-        md="results/tables/cross_renderer.md",
-        tex="results/tables/cross_renderer.tex",
-        html=report(
-            "results/tables/cross_renderer.html",
+        **table_outputs(
+            layout.cross_renderer_tables(),
             caption="../report/cross_renderer.rst",
             category="Tables",
             labels={"table": "cross-renderer comparison"},

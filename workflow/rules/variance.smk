@@ -5,7 +5,7 @@ rule variance:
     input:
         unpack(estimator_inputs),
     output:
-        directory("results/{renderer}/{estimator}/variance/{scene}/spp{spp}.zarr"),
+        directory(layout.variance_store("{renderer}", "{estimator}", "{scene}", "{spp}")),
     params:
         estimator=lambda wc: wc.estimator,
     log:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .. import layout
 from ..errors import StereovarError
 from ..io.images import write_field, write_image
 from ..io.renders import LazyRenders
@@ -39,8 +40,10 @@ def export_targets(config: dict, fmt: str) -> list[str]:
     """The scene directories ``snakemake export`` writes in format ``fmt`` for a validated
     workflow config: ``results/export/{renderer}/{estimator}/{fmt}/{scene}``."""
     render = config["render"]
-    prefix = f"results/export/{render['renderer']}/{render['estimator']}/{fmt}"
-    return [f"{prefix}/{scene}" for scene in config["scenes"]]
+    return [
+        layout.export_dir(render["renderer"], render["estimator"], fmt, scene)
+        for scene in config["scenes"]
+    ]
 
 
 def check_export_targets(targets) -> None:

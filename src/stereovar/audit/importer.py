@@ -53,7 +53,7 @@ from ..io.store import (
     write_file,
     write_zarr,
 )
-from ..layout import RESULTS
+from ..layout import import_record
 from ..rig import VIEWS
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
@@ -79,13 +79,6 @@ RECENT_NS = 2_000_000_000
 """A file last modified less than this many nanoseconds before it is opened is hashed again
 after it is decoded (:func:`read_verified`): file time stamps advance in steps of a few
 milliseconds, so a rewrite that soon after the previous one can leave them as they were."""
-
-
-def import_record(name: str, frame: str) -> str:
-    """The import record of one frame of an audit:
-    ``results/audit/{name}/import/{frame}.json``: the import-settings digest, each file's
-    SHA-256 (of the bytes decoded), size and time stamps, and the stores written."""
-    return f"{RESULTS}/{audit_source(name)}/import/{frame}.json"
 
 
 def audit_spp(settings: dict) -> int:

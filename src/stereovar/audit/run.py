@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import re
 
-from ..experiment import audit_source, ground_truth_store, run_prefix
+from .. import layout
+from ..experiment import audit_source, ground_truth_store
 from ..io.images import image_size
 from ..rig import VIEWS
 from .importer import (
@@ -24,8 +25,6 @@ from .importer import (
     import_settings,
 )
 from .layout import Discovery, discover
-
-TABLE_FORMATS = ("csv", "md", "tex", "html")
 
 
 def discover_audit(settings: dict) -> Discovery:
@@ -107,12 +106,11 @@ def audit_run_config(config: dict, discovery: Discovery) -> dict:
 
 def audit_paths(name: str) -> dict:
     """The verdict page, its summary and the per-frame teaser pattern of an audit."""
-    base = f"results/{audit_source(name)}"
     return {
-        "verdict_md": f"{base}/verdict.md",
-        "verdict_html": f"{base}/verdict.html",
-        "summary": f"{base}/summary.json",
-        "teaser": base + "/figures/teaser_{scene}.png",
+        "verdict_md": layout.audit_verdict(name, "md"),
+        "verdict_html": layout.audit_verdict(name, "html"),
+        "summary": layout.audit_summary(name),
+        "teaser": layout.audit_teaser(name, "{scene}"),
     }
 
 
@@ -122,18 +120,17 @@ def audit_targets(config: dict) -> list[str]:
     and the verdict page with its summary."""
     source = config["render"]["renderer"]
     spp = config["render"]["spp"]
-    run = run_prefix(source, "seeds")
     frames = list(config["scenes"])
     paths = audit_paths(config["audit"]["name"])
     tables = ["statistics", "seed_curve", "cross_scene", "intervention"]
     return [
         *[ground_truth_store(source, f) for f in frames],
         *[import_record(config["audit"]["name"], f) for f in frames],
-        *[f"{run}/correlation/{f}/spp{spp}.csv" for f in frames],
-        *[f"{run}/intervention/{f}.csv" for f in frames],
-        *[f"{run}/tables/{t}.{ext}" for t in tables for ext in TABLE_FORMATS],
-        f"{run}/figures/statistics_dots.png",
-        f"{run}/figures/rho_vs_seeds.png",
+        *[layout.correlation_rows(source, "seeds", f, spp) for f in frames],
+        *[layout.intervention_metrics(source, "seeds", f) for f in frames],
+        *[p for t in tables for p in layout.run_tables(source, "seeds", t)],
+        layout.run_figure(source, "seeds", "statistics_dots"),
+        layout.run_figure(source, "seeds", "rho_vs_seeds"),
         *[paths["teaser"].format(scene=f) for f in frames],
         paths["verdict_md"],
         paths["verdict_html"],
