@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from stereovar.audit.synthetic import write_synthetic_audit
+from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
 
 from .test_workflow import SCENES, TINY, copy_workflow, snakemake
@@ -83,6 +84,7 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     )
     settings["renders"] = "data/renders/{frame}/{view}/seed_{seed}.exr"
     settings["disparity"] = "data/disparity/{frame}.pfm"
+    settings["mitigations"] = ["denoise"]  # from colour alone: an audit has no albedo/normal
     (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings}))
     proc = subprocess.run(
         [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
@@ -105,6 +107,18 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     truth = float(np.mean([f.rho for f in frames]))
     assert corrected["low"] <= truth <= corrected["high"], (corrected, truth)
     assert summary["mc_specific"] is True
+    # audit.mitigations: the audit's mitigation table, figure and verdict-page section
+    base = root / "results/audit/synthetic"
+    mitigations = {(r["mitigation"], r["region"]): r
+                   for r in read_rows(base / "tables/mitigations.csv")}
+    assert set(mitigations) == {("none", "all"), ("denoise", "all")}  # no mask: "all" only
+    assert mitigations[("denoise", "all")]["psnr"] > mitigations[("none", "all")]["psnr"]
+    assert open_dataset(base / "denoise/renders/f00/left/spp0/seeds0-15.zarr").attrs[
+        "transform_aux"] == "none"
+    page = (base / "verdict.md").read_text()
+    assert "## Mitigations" in page and "denoise: intensity-controlled rho" in page
+    assert "figures/mitigations.png" in page and (base / "figures/mitigations.png").is_file()
+    assert summary["mitigations"][-1] in page
     # the glass rows are NaN with the reason, all is computed
     table = read_rows(root / "results/audit/synthetic/seeds/correlation/f00/spp0.csv")
     glass = [r for r in table if r["region"] == "glass"]

@@ -418,3 +418,24 @@ def test_leave_one_out_quality_against_a_loop_and_the_known_noise():
     se = sigma**2 * math.sqrt(2 * (1 + 1 / 5) ** 2 / (6 * 24 * 30 * 3)) * 3
     assert got["mse"] == pytest.approx(sigma**2, abs=se)
     assert got["psnr"] == pytest.approx(-10 * np.log10(got["mse"]), rel=1e-12)
+
+
+@pytest.mark.workflow
+def test_a_render_time_mitigation_is_refused_for_an_audit(tmp_path):
+    """An audit's renders are given: `shared_seed` is refused in one line before any job
+    (tests/test_audit_workflow.py runs `denoise` on a synthetic audit end to end)."""
+    from stereovar.audit.synthetic import write_synthetic_audit
+
+    from .test_workflow import TINY, copy_workflow, snakemake
+
+    root = copy_workflow(tmp_path / "wf", TINY)
+    settings, _ = write_synthetic_audit(root / "data", n_frames=1, width=64, height=48, n_seeds=3)
+    settings["renders"] = "data/renders/{frame}/{view}/seed_{seed}.exr"
+    settings["disparity"] = "data/disparity/{frame}.pfm"
+    refused = snakemake(
+        root, "-n", check=False, config={"audit": {**settings, "mitigations": ["shared_seed"]}}
+    )
+    assert refused.returncode != 0
+    (line,) = [x for x in refused.stderr.splitlines() if "audit.mitigations" in x]
+    assert "shared_seed" in line and "denoise" in line
+    assert not (root / "results").exists()
