@@ -729,6 +729,21 @@ def mitigation_table_inputs(wildcards):
     return [p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths]
 
 
+def image_cost(run):
+    """Samples per pixel behind one mitigated image (``render_spp``: N x SPP when the
+    transform reads the seed mean or variance, which average the N renders) and the SPP of
+    the auxiliary pass it reads once per view (``aux_spp``; 0 without one)."""
+    render_spp, aux_spp = run.spp, 0
+    if run.mitigation.kind == "transform":
+        t = get_transform(run.transform)
+        if {"seed_mean", "seed_var"} & set(t.reads):
+            render_spp *= N_SEEDS
+        wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
+        if wants and wants <= set(source_aux_passes(run.source)):
+            aux_spp = AUX_SPP
+    return {"render_spp": render_spp, "aux_spp": aux_spp}
+
+
 def mitigation_table_params():
     """What the table job needs per row beside the files: name, kind, description, SPP."""
     return [
@@ -737,6 +752,7 @@ def mitigation_table_params():
             "kind": run.mitigation.kind,
             "description": run.mitigation.description,
             "spp": run.spp,
+            **image_cost(run),
             **mitigation_files(run),
         }
         for run in MITIGATION_RUNS

@@ -452,6 +452,7 @@ def mitigations_table_job(runs: list[dict], outputs: dict, *, figure=None) -> li
     loaded = []
     for run in runs:
         entry = {k: run[k] for k in ("mitigation", "kind", "description", "spp")}
+        entry.update({k: run[k] for k in ("render_spp", "aux_spp") if k in run})
         for key in ("correlation", "intervention", "scene_rows"):
             entry[key] = [row for path in run.get(key, []) for row in read_rows(path)]
         loaded.append(entry)

@@ -33,6 +33,8 @@ MITIGATION_COLUMNS = [
     "n_scenes",
     "spp",
     "n_seeds",
+    "render_spp",
+    "aux_spp",
     "rho",
     "rho_low",
     "rho_high",
@@ -141,6 +143,8 @@ def mitigation_table(runs: list[dict]) -> list[dict]:
     ----------
     runs : list of dict
         Per mitigation, in table order: ``mitigation``, ``kind``, ``description``, ``spp``,
+        optionally ``render_spp`` (samples per pixel behind one image; ``spp`` by default)
+        and ``aux_spp`` (the auxiliary pass's; 0 by default),
         ``correlation`` (its scenes' correlation rows), ``intervention`` (its scenes'
         intervention rows; may be empty) and ``scene_rows`` (its scenes' mitigation rows,
         :data:`stereovar.jobs.mitigations.MITIGATION_SCENE_COLUMNS`).
@@ -173,6 +177,8 @@ def mitigation_table(runs: list[dict]) -> list[dict]:
                 "n_scenes": len(scenes),
                 "spp": run["spp"],
                 "n_seeds": n_seeds[0] if len(n_seeds) == 1 else ",".join(map(str, n_seeds)),
+                "render_spp": run.get("render_spp", run["spp"]),
+                "aux_spp": run.get("aux_spp", 0),
                 "description": run["description"],
             }
             for column, method in CORRELATION_METHODS.items():
