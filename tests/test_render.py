@@ -73,8 +73,15 @@ def test_independent_policy_is_the_labelled_seed():
         assert render_seed("s", view, 8, 3) == derive_seed("s", view, 8, 3)
     from stereovar.errors import ConfigError
 
-    with pytest.raises(ConfigError, match="render.seed_policy.*use one of: independent"):
-        render_seed("s", "left", 8, 3, policy="shared")
+    with pytest.raises(ConfigError, match="render.seed_policy.*use one of: independent, shared"):
+        render_seed("s", "left", 8, 3, policy="bogus")
+
+
+def test_shared_policy_gives_both_views_one_seed_apart_from_independent_ones():
+    seeds = {v: render_seed("s", v, 8, 3, policy="shared") for v in VIEWS}
+    assert seeds["left"] == seeds["right"] == derive_seed("shared", "s", 8, 3)
+    assert seeds["left"] not in {derive_seed("s", v, 8, 3) for v in VIEWS}
+    assert render_seed("s", "left", 8, 4, policy="shared") != seeds["left"]
 
 
 def test_render_job_is_bit_identical_and_records_provenance(mi, tmp_path):

@@ -67,7 +67,7 @@ def test_registry_names_and_reads():
 
 
 def test_unknown_transform_names_config_key():
-    with pytest.raises(ConfigError, match="mitigations.transforms.*'blur'.*equalise"):
+    with pytest.raises(ConfigError, match="mitigations.names.*'blur'.*equalise"):
         get_transform("blur")
 
 
