@@ -295,32 +295,20 @@ def test_the_table_summarises_its_inputs_exactly():
                 }
             )
         for condition, value in (("normal", 0.6 + 0.1 * k), ("decorrelated", 0.5)):
-            intervention.append(
-                {
-                    "scene": scene,
-                    "cost": "residual_sad",
-                    "metric": "wta_accuracy",
-                    "region": "all",
-                    "source": "render",
-                    "condition": condition,
-                    "value": value,
-                    "chance": 0.2,
-                    "n_pixels": 100,
-                }
-            )
-            intervention.append(
-                {
-                    "scene": scene,
-                    "cost": "variance_cost",
-                    "metric": "wta_accuracy",
-                    "region": "all",
-                    "source": "render",
-                    "condition": condition,
-                    "value": value,
-                    "chance": 0.2,
-                    "n_pixels": 100,
-                }
-            )
+            for cost in ("residual_sad", "variance_cost"):
+                intervention.append(
+                    {
+                        "scene": scene,
+                        "cost": cost,
+                        "metric": "wta_accuracy",
+                        "region": "all",
+                        "source": "render",
+                        "condition": condition,
+                        "value": value,
+                        "chance": 0.2,
+                        "n_pixels": 100,
+                    }
+                )
     (row,) = mitigation_table(
         [
             {
