@@ -101,6 +101,10 @@ rule mitigation_scene:
     params:
         analysis=config["analysis"],
         controls=config["controls"],
+        # the reference inputs: each view's moment store, or the source's render stores
+        reference_moments=lambda wc: reference_from_moments(
+            layout.split_source_key(wc.renderer)[0]
+        ),
     log:
         "logs/{renderer}/seeds/mitigation/{scene}/spp{spp}.log",
     benchmark:

@@ -249,14 +249,19 @@ def reference_moments(path) -> tuple[np.ndarray, np.ndarray]:
     return np.where(ok, m1, np.nan), np.where(ok, var, np.nan)
 
 
-def _reference(spec):
+def _reference(spec, loaded: dict):
     """``quality(images, seeds, mask)`` against one view's reference: a moment store's path
     (:func:`reference_moments`), or a list of the source's untransformed render stores, whose
-    seeds other than the graded image's give its reference (:func:`leave_one_out_quality`)."""
+    seeds other than the graded image's give its reference (:func:`leave_one_out_quality`).
+    ``loaded`` maps a tuple of render-store paths already read to ``(stack, seeds)``: the
+    untransformed row grades its own renders, which are not read again."""
     from ..statistics.utility import image_quality
 
     if isinstance(spec, (list, tuple)):
-        raw, raw_seeds, _, _ = _view_stack(spec)
+        key = tuple(str(p) for p in spec)
+        if key not in loaded:
+            loaded[key] = _view_stack(spec)[:2]
+        raw, raw_seeds = loaded[key]
         return lambda images, seeds, mask: leave_one_out_quality(
             images, seeds, raw, raw_seeds, mask=mask
         )
@@ -317,9 +322,10 @@ def mitigation_scene_job(
 
     settings, _ = analysis_settings(analysis, controls)
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
-    stacks, attrs, seed_order = {}, {}, {}
+    stacks, attrs, seed_order, loaded = {}, {}, {}, {}
     for view, paths in (("left", left), ("right", right)):
         stacks[view], seeds, _, attrs[view] = _view_stack(paths)
+        loaded[tuple(str(p) for p in paths)] = (stacks[view], seeds)
         order = np.argsort(seeds, kind="stable")
         stacks[view], seed_order[view] = stacks[view][order], seeds[order]
     gl = gt.sel(view="left")
@@ -363,7 +369,7 @@ def mitigation_scene_job(
     for r in residual:
         quantity = "residual_rho_gt" if r["alignment"] == "ground_truth" else "residual_rho_zero"
         add(r["region"], quantity, r["rho"], r["low"], r["high"], r["n_pixels"], r["reason"])
-    refs = {view: _reference(reference[view]) for view in ("left", "right")}
+    refs = {view: _reference(reference[view], loaded) for view in ("left", "right")}
     for region in regions:
         per_view = []
         for view in ("left", "right"):
@@ -408,16 +414,16 @@ def mitigation_scene_job(
 def _pooled_quality(per_view: list[dict]) -> dict:
     """Image quality of several views pooled by pixel count.
 
-    MSE, relative MSE, bias and the reference noise are pixel-weighted means of the views';
-    the relative bias is the pooled bias over the pooled reference mean (each view's
-    reference mean is its bias over its relative bias), and PSNR follows from the pooled
-    MSE (:func:`stereovar.statistics.utility.image_quality`'s peak).
+    MSE, relative MSE, bias, the reference noise and the reference mean are pixel-weighted
+    means of the views'; the relative bias is the pooled bias over the pooled reference mean,
+    and PSNR follows from the pooled MSE (:func:`stereovar.statistics.utility.image_quality`'s
+    peak).
     """
-    from ..statistics.utility import PEAK
+    from ..statistics.utility import NOT_ABOVE_NOISE, PEAK
 
     nan = float("nan")
     weights = np.array([float(q["n_pixels"]) for q in per_view])
-    keys = ("mse", "relative_mse", "bias", "reference_noise")
+    keys = ("mse", "relative_mse", "bias", "reference_noise", "reference_mean")
     if weights.sum() == 0:
         return {
             **dict.fromkeys((*keys, "psnr", "relative_bias"), nan),
@@ -427,15 +433,14 @@ def _pooled_quality(per_view: list[dict]) -> dict:
     w = weights / weights.sum()
     used = [(wi, q) for wi, q in zip(w, per_view, strict=True) if wi > 0]
     out = {k: float(sum(wi * float(q[k]) for wi, q in used)) for k in keys}
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ref = float(sum(wi * float(q["bias"]) / float(q["relative_bias"]) for wi, q in used))
-        out["relative_bias"] = out["bias"] / ref if ref else nan
+    ref = out["reference_mean"]
+    out["relative_bias"] = out["bias"] / ref if ref else nan
     out.update(n_pixels=int(weights.sum()), reason="")
     if out["mse"] > 0:
         out["psnr"] = float(10 * np.log10(PEAK**2 / out["mse"]))
     else:
         out["psnr"] = nan
-        out["reason"] = "corrected MSE not above 0 (the reference's own noise dominates)"
+        out["reason"] = NOT_ABOVE_NOISE
     return out
 
 

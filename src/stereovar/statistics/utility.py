@@ -35,6 +35,7 @@ RESULT_KEYS = (
     "relative_mse",
     "bias",
     "relative_bias",
+    "reference_mean",
     "n_pixels",
     "n_images",
     "reason",
@@ -98,6 +99,7 @@ def image_quality(
     dict
         :data:`RESULT_KEYS`: ``mse`` (corrected), ``mse_raw`` (uncorrected), ``reference_noise``
         (the mean of :math:`V`), ``psnr``, ``relative_mse``, ``bias``, ``relative_bias``,
+        ``reference_mean`` (the mean of :math:`R`),
         ``n_pixels``, ``n_images``, and ``reason``: ``""``, or why ``psnr`` (or everything) is
         NaN: no usable pixel, or a corrected MSE not above 0.
     """
@@ -139,6 +141,7 @@ def image_quality(
         bias=float(diff.mean()),
     )
     mean_r = float(rv.mean())
+    result["reference_mean"] = mean_r
     result["relative_bias"] = result["bias"] / mean_r if mean_r != 0 else nan
     if mse > 0:
         result["psnr"] = 10.0 * math.log10(float(peak) ** 2 / mse)

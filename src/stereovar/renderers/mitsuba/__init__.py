@@ -32,12 +32,16 @@ class MitsubaScene(PreparedScene):
     mi: Any = None
     scene: Any = None
 
-    def _render(self, view, spp, seed, settings: RenderSettings, wrap=None, channels=3):
-        """``render_view`` with the settings' integrator (wrapped by ``wrap`` when given)."""
+    def _render(
+        self, view, spp, seed, settings: RenderSettings, wrap=None, channels=3, integrator=None
+    ):
+        """``render_view`` with the settings' integrator (wrapped by ``wrap`` when given), or
+        with ``integrator`` instead, and the settings' filter and sampler."""
         from .render import render_view
         from .sensor import integrator_dict
 
-        integrator = integrator_dict(settings.integrator, settings.max_depth)
+        if integrator is None:
+            integrator = integrator_dict(settings.integrator, settings.max_depth)
         return render_view(
             self.mi,
             self.scene,
@@ -65,19 +69,9 @@ class MitsubaScene(PreparedScene):
     def render_aux(self, view: str, *, spp: int, seed: int):
         """Albedo and shading normal of ``view`` from Mitsuba's ``aov`` integrator alone (a
         separate cheap pass: wrapping ``path`` in ``aov`` would cost 3-4x every render), with
-        the box filter and the independent sampler."""
-        from .render import render_view
-
-        image = render_view(
-            self.mi,
-            self.scene,
-            self.rig,
-            view,
-            spp=spp,
-            seed=seed,
-            integrator={"type": "aov", "aovs": "albedo:albedo,normal:sh_normal"},
-            channels=None,
-        )
+        the box filter and the independent sampler (the default settings)."""
+        aov = {"type": "aov", "aovs": "albedo:albedo,normal:sh_normal"}
+        image = self._render(view, spp, seed, RenderSettings(), channels=None, integrator=aov)
         return image[..., 0:3], image[..., 3:6]
 
     def trace(self, view: str) -> FirstHits:
