@@ -49,7 +49,9 @@ def test_a_file_replaced_with_the_same_size_and_mtime_is_imported_again(tmp_path
     settings, frames = write_synthetic_audit(tmp_path / "d", render_format="pfm", **SMALL)
     import_audit(settings)
     target = settings["renders"].format(frame="f01", view="R", seed="001")
-    source = settings["renders"].format(frame="f01", view="R", seed="002")
+    source = str(tmp_path / "other.pfm")  # another render of the scene, of the same size
+    replacement = (frames[1].renders["right"][1] * 1.01).astype(np.float32)
+    write_image(source, replacement)
     old = os.stat(target)
     shutil.copyfile(source, target)
     os.utime(target, ns=(old.st_atime_ns, old.st_mtime_ns))
@@ -59,7 +61,7 @@ def test_a_file_replaced_with_the_same_size_and_mtime_is_imported_again(tmp_path
     report = import_audit(settings)
     assert [f.name for f in report.frames if f.imported] == ["f01"]
     ds = open_dataset(RIGHT_F01)
-    np.testing.assert_array_equal(ds["radiance"].values[1], frames[1].renders["right"][2])
+    np.testing.assert_array_equal(ds["radiance"].values[1], replacement)
     assert recorded()[target] == file_sha256(target) == file_sha256(source)
     assert ds.attrs["source_sha256"] == [file_sha256(p) for p in ds.attrs["source_files"]]
     # and with nothing changed since, nothing is imported
@@ -86,12 +88,12 @@ def test_a_file_replaced_while_it_is_imported_is_refused(tmp_path, monkeypatch, 
     if kind == "render":
         target = settings["renders"].format(frame="f00", view="L", seed="002")
         spare = tmp_path / "spare.exr"
-        write_image(spare, frames[0].renders["left"][2] * 3.0)
+        write_image(spare, frames[0].renders["left"][2] * 1.01)  # another render
         name = "read_image"
     else:
         target = settings["disparity"].format(frame="f00")
         spare = tmp_path / "spare.pfm"
-        write_field(spare, frames[0].disparity * 1.5)
+        write_field(spare, frames[0].disparity + 0.01)  # another estimate
         name = "read_field"
     replacement = spare.read_bytes()
     real = getattr(importer, name)

@@ -35,6 +35,9 @@ def audit_of(root, fmt):
     settings = yaml.safe_load(
         (root / f"results/export/mitsuba/seeds/{fmt}/{SCENES[0]}/audit.yaml").read_text()
     )["audit"]
+    # 4 seeds at 2 SPP: seed means too noisy for the photometric sign check to settle
+    # the convention (the export's own, known); go on with it, as a team would
+    settings["sign_check"] = "warn"
     snakemake(root, "-j2", "all", config={**ROUND, "audit": settings})
     return f"results/audit/{settings['name']}/seeds"
 

@@ -3,6 +3,7 @@ files (a named pipe, a device), damaged files whose library prints its own diagn
 header that claims another size than the frame's other files, and renders too flat for the
 photometric sign check to tell the two disparity signs apart."""
 
+import json
 import os
 import struct
 import threading
@@ -12,8 +13,8 @@ import cv2
 import numpy as np
 import pytest
 
-from stereovar.audit.importer import import_audit
-from stereovar.audit.sign import MIN_PIXELS, SAME, sign_check
+from stereovar.audit.importer import import_audit, import_record
+from stereovar.audit.sign import CLEARLY_BETTER, CLOSER, MIN_PIXELS, SAME, sign_check
 from stereovar.audit.synthetic import synthetic_frame, write_synthetic_audit
 from stereovar.errors import AuditError, ImageError
 from stereovar.io import images
@@ -313,14 +314,44 @@ def test_sign_check_reasons_for_few_pixels_and_for_no_clear_winner():
     # unrelated right image: both signs are equally bad
     check = sign_check(left, rng.uniform(0.5, 2.0, (8, 40, 3)), d, sign=-1)
     assert not check.conclusive and check.same_fraction < 0.01
-    assert check.reason == "neither sign matches clearly better"
+    assert check.reason.startswith(
+        "neither sign matches clearly better (the declared one is closer at "
+    )
+    assert check.wins[1] <= 0.5 <= check.wins[2]
     # the right image is the left one moved by the declared sign: conclusive, no reason
     moved = np.roll(left, -2, axis=1)
     check = sign_check(left, moved, d, sign=-1)
     assert check.conclusive and check.error == 0.0 and check.reason == ""
 
 
-def test_import_of_dark_one_channel_8_bit_png_warns_the_sign_check_is_inconclusive(
+def test_noisy_seed_means_settle_the_sign_pixel_by_pixel():
+    # a smooth texture under noise: both median errors are large and close, but the
+    # declared sign is closer at most pixels; a disparity of noise is closer at about half
+    rng = np.random.default_rng(3)
+    height, width = 64, 96
+    x = np.arange(width + 8)
+    texture = 1.0 + 0.5 * np.sin(x / 2.0)[None, :, None] * np.ones((height, 1, 3))
+    left = texture[:, 4 : 4 + width] + rng.normal(0, 0.7, (height, width, 3))
+    right = texture[:, 7 : 7 + width] + rng.normal(0, 0.7, (height, width, 3))
+    d = np.full((height, width), 3.0)  # x_R = x_L - 3
+    check = sign_check(left, right, d, sign=-1)
+    assert check.error > CLEARLY_BETTER * check.opposite_error  # the ratio cannot tell
+    assert check.conclusive and not check.opposite_wins and check.wins[1] > CLOSER
+    # the share against a brute-force count over the pixels both warps compare
+    closer = untied = 0
+    for yy in range(height):
+        for xx in range(3, width - 3):
+            lum = left[yy, xx].mean()
+            e, e_opp = abs(right[yy, xx - 3].mean() - lum), abs(right[yy, xx + 3].mean() - lum)
+            closer += e < e_opp
+            untied += e != e_opp
+    assert check.wins[0] == pytest.approx(closer / untied, rel=1e-12)
+    noise = rng.uniform(10.0, 30.0, (height, width))  # a disparity that is none
+    check = sign_check(left, right, noise, sign=-1)
+    assert not check.conclusive and check.wins[1] <= CLOSER
+
+
+def test_dark_one_channel_8_bit_png_stops_the_import_unless_sign_check_warn(
     tmp_path, monkeypatch
 ):
     monkeypatch.chdir(tmp_path)
@@ -333,13 +364,23 @@ def test_import_of_dark_one_channel_8_bit_png_warns_the_sign_check_is_inconclusi
             assert cv2.imwrite(npy.replace(".npy", ".png"), codes)  # (H, W) uint8: grey
             os.remove(npy)
     png = {**settings, "renders": settings["renders"].replace(".npy", ".png")}
-    report = import_audit({**png, "transfer": "linear", "scale": 400.0})
-    sign_lines = [w for w in report.warnings if "sign check" in w]
-    assert len(sign_lines) == 1
-    assert sign_lines[0].startswith(
+    png.update(transfer="linear", scale=400.0)
+    with pytest.raises(AuditError) as err:
+        import_audit(png)
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.startswith(
         "frame f00: the sign check is inconclusive: the two signs' warps agree at "
     )
-    assert sign_lines[0].endswith(
+    assert "set audit.sign_check: warn to go on with convention conventional" in message
+    assert not os.path.exists("results/audit/synthetic/ground_truth/f00.zarr")
+    report = import_audit({**png, "sign_check": "warn"})
+    sign_lines = [f for f in report.flags if f["kind"] == "sign_check"]
+    assert len(sign_lines) == 1 and sign_lines[0]["frame"] == "f00"
+    assert sign_lines[0]["text"].endswith(
         "so neither sign can match better (median error 0.0% declared, 0.0% opposite); "
-        "audit.convention: conventional is taken as given"
+        "audit.convention: conventional is taken as given (audit.sign_check: warn)"
     )
+    record = json.loads(open(import_record("synthetic", "f00")).read())
+    assert sign_lines[0] in record["found"]["warnings"]
+    assert record["found"]["sign"]["conclusive"] is False

@@ -318,6 +318,20 @@ class _Reads:
         return value
 
 
+WARNING_KINDS = {
+    "sign_check": "sign check inconclusive",
+    "transfer": "PNG transfer assumed",
+    "quantisation": "variance quantised",
+    "clipped": "clipped pixels",
+    "glass_ids": "glass ids match nothing",
+}
+"""Kinds of import warnings (each a flagged row of the verdict page) and their labels."""
+
+CLIPPED_WARNING = 0.001
+"""Share of a view's valid pixels at full scale in some render (PNG) above which the
+import warns: a clipped pixel's variance is cut off."""
+
+
 @dataclass
 class FrameReport:
     """What importing one frame found (in a dry run: that it would be imported)."""
@@ -329,7 +343,23 @@ class FrameReport:
     outside: int = 0
     valid: int = 0
     floored: dict = field(default_factory=dict)
+    clipped: dict = field(default_factory=dict)
+    """View to the share of its valid pixels at full scale in some render (PNG only)."""
     sign: dict = field(default_factory=dict)
+    n_seeds: int = 0
+
+    def facts(self) -> dict:
+        """What the import found, as JSON for the frame's :func:`import_record`."""
+        return {
+            "valid": self.valid,
+            "invalid_disparity": self.invalid_disparity,
+            "outside": self.outside,
+            "nonfinite_pixels": self.nonfinite_pixels,
+            "floored": self.floored,
+            "clipped": self.clipped,
+            "sign": self.sign,
+            "n_seeds": self.n_seeds,
+        }
 
 
 @dataclass
@@ -340,6 +370,10 @@ class ImportReport:
     discovery: Discovery
     frames: list
     warnings: list = field(default_factory=list)
+    """The warnings' texts, in order."""
+    flags: list = field(default_factory=list)
+    """The warnings as ``{"kind", "frame", "text"}`` (``kind`` one of
+    :data:`WARNING_KINDS`; ``frame`` None for the whole audit)."""
     seconds: dict = field(default_factory=dict)
     """Wall-clock seconds per phase (``hash`` of unchanged frames, ``ground truth``,
     ``decode`` (each including its files' hashes), ``sign check``, ``write``), summed over
@@ -348,6 +382,13 @@ class ImportReport:
     """Nothing was written: :attr:`frames` that are ``imported`` would be."""
     temporaries: list = field(default_factory=list)
     """Temporaries of killed imports removed (in a dry run: that would be)."""
+
+    def warn(self, kind: str, text: str, frame: str | None = None) -> None:
+        """Add a warning of a :data:`WARNING_KINDS` kind."""
+        if kind not in WARNING_KINDS:
+            raise ValueError(f"unknown warning kind {kind!r}; use one of {list(WARNING_KINDS)}")
+        self.warnings.append(text)
+        self.flags.append({"kind": kind, "frame": frame, "text": text})
 
     @contextmanager
     def timed(self, phase: str):
@@ -528,6 +569,43 @@ def _seed_mean(stack: np.ndarray, n_nonfinite) -> np.ndarray:
         return np.nanmean(np.where(np.isfinite(stack), stack, np.nan), axis=0)
 
 
+def _check_distinct(stack: np.ndarray, frame: str, view: str, paths: list) -> None:
+    """Refuse renders of one view that are identical across seeds: the renderer was given
+    one seed for them, and their variance is 0 (one line naming the seed settings)."""
+    groups: dict = {}
+    for k in range(stack.shape[0]):  # a sample of rows first, full equality to confirm
+        key = hashlib.blake2b(np.ascontiguousarray(stack[k, ::7]).data, digest_size=16)
+        groups.setdefault(key.digest(), []).append(k)
+    same = []
+    for members in groups.values():
+        first = members[0]
+        twins = [k for k in members[1:] if np.array_equal(stack[k], stack[first], equal_nan=True)]
+        if twins:
+            same.append([first, *twins])
+    if not same:
+        return
+    n = stack.shape[0]
+    which = (
+        f"all {n} renders are identical"
+        if len(same[0]) == n
+        else f"{sum(len(g) for g in same)} of its {n} renders are copies of one another "
+        f"(e.g. {Path(paths[same[0][0]]).name} and {Path(paths[same[0][1]]).name})"
+    )
+    raise AuditError(
+        f"frame {frame}, view {view}: {which}: the renderer was given the same seed, so there "
+        "is no Monte Carlo variance to measure; render each seed with its own sampler seed "
+        "(Cycles: scene.cycles.seed, Mitsuba: mi.render(..., seed=...), Kubric and "
+        "BlenderProc: the Cycles seed of each render) and import again"
+    )
+
+
+def _clipped_fraction(stack: np.ndarray, valid: np.ndarray, scale: float) -> float:
+    """Fraction of ``valid`` pixels at a PNG's full scale (``scale`` after decoding) in some
+    render and channel: their variance is cut off."""
+    clipped = (stack >= np.float32(scale)).any(axis=(0, 3))
+    return float((clipped & valid).sum() / max(int(valid.sum()), 1))
+
+
 def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     """Fraction of ``valid`` pixels whose N renders are identical in every channel (their
     estimated variance is 0: quantisation floored it)."""
@@ -565,7 +643,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     transfer, scale = settings["transfer"], settings["scale"]
     sign = CONVENTIONS[settings["convention"]]
     source = audit_source(settings["name"])
-    fr = FrameReport(frame.name, True)
+    fr = FrameReport(frame.name, True, n_seeds=frame.n_seeds)
     reads = _Reads()
     with report.timed("ground truth"):
         gt, gt_files = _frame_ground_truth(settings, frame, sign, source, fr, reads)
@@ -576,9 +654,13 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         with report.timed("decode"):
             images, n_bad = _decode_view(paths, size, pool, transfer, scale, reads)
         fr.nonfinite_pixels[view] = int(n_bad.sum())
+        _check_distinct(images, frame.name, view, paths)
         means[view] = _seed_mean(images, n_bad)
+        valid = gt["valid"].sel(view=view).values
         if any(_is_png8(p) for p in paths):
-            fr.floored[view] = _floored_fraction(images, gt["valid"].sel(view=view).values)
+            fr.floored[view] = _floored_fraction(images, valid)
+        if any(image_format(p) == "png" for p in paths):
+            fr.clipped[view] = _clipped_fraction(images, valid, scale)
         datasets[view] = render_dataset(
             images,
             view=view,
@@ -619,11 +701,22 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             tmp = staged.enter_context(atomic_path(stores[key]))
             write_zarr(ds, tmp, chunk_dims={"seed": 1} if key in VIEWS else None)
     for view, fraction in fr.floored.items():
-        report.warnings.append(
+        report.warn(
+            "quantisation",
             f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "
             f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
-            "identical); export 16-bit PNG or EXR for an audit that can see small variance"
+            "identical); export 16-bit PNG or EXR for an audit that can see small variance",
+            frame.name,
         )
+    for view, fraction in fr.clipped.items():
+        if fraction > CLIPPED_WARNING:
+            report.warn(
+                "clipped",
+                f"frame {frame.name}, {view}: {100 * fraction:.1f}% of the valid pixels are "
+                "at the PNG's full scale in some render, where the variance is cut off; "
+                "export EXR (or lower the exposure) so bright pixels keep their noise",
+                frame.name,
+            )
     return fr, {str(p): reads.records[str(p)] for p in frame.files()}
 
 
@@ -680,14 +773,32 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
             f"{100 * check.error:.1f}% under the declared {rel[sign]}; set audit.convention: "
             f"{other}"
         )
+    convention = settings.get("convention") or "conventional"
+    errors = (
+        f"median error {100 * check.error:.1f}% declared, "
+        f"{100 * check.opposite_error:.1f}% opposite"
+    )
+    if not check.conclusive and settings.get("sign_check", "stop") != "warn":
+        raise AuditError(
+            f"frame {frame.name}: the sign check is inconclusive: {check.reason} ({errors}), "
+            "so the disparity may be wrong (another convention, a wrong file or channel); "
+            "check audit.disparity or audit.depth and audit.convention, or set "
+            f"audit.sign_check: warn to go on with convention {convention} taken as given"
+        )
     if not check.conclusive:
-        report.warnings.append(
-            f"frame {frame.name}: the sign check is inconclusive: {check.reason} (median error "
-            f"{100 * check.error:.1f}% declared, {100 * check.opposite_error:.1f}% opposite); "
-            f"audit.convention: {settings.get('convention') or 'conventional'} is taken as given"
+        report.warn(
+            "sign_check",
+            f"frame {frame.name}: the sign check is inconclusive: {check.reason} ({errors}); "
+            f"audit.convention: {convention} is taken as given (audit.sign_check: warn)",
+            frame.name,
         )
     gt.attrs.update(check.attrs())
-    fr.sign = {"error": check.error, "opposite_error": check.opposite_error}
+    fr.sign = {
+        "error": check.error,
+        "opposite_error": check.opposite_error,
+        "conclusive": check.conclusive,
+        "reason": check.reason,
+    }
 
 
 def check_settings(settings: dict) -> None:
@@ -709,9 +820,10 @@ def check_settings(settings: dict) -> None:
 def _png_transfer_warning(settings: dict, frames, report: ImportReport) -> None:
     pngs = [p for f in frames for v in VIEWS for p in f.renders[v].values()]
     if not settings["transfer"] and any(image_format(p) == "png" for p in pngs):
-        report.warnings.append(
+        report.warn(
+            "transfer",
             "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
-            "linear or srgb to say how they were written"
+            "linear or srgb to say how they were written",
         )
 
 
@@ -731,7 +843,8 @@ def _import_and_record(
     for path, token in (tokens or {}).items():
         if path in records and token is not None:
             records[path] = {**records[path], "token": token}
-    _write_record(settings, frame.name, records, stores)
+    flags = [f for f in report.flags if f["frame"] in (None, frame.name)]
+    _write_record(settings, frame.name, records, stores, {**fr.facts(), "warnings": flags})
     return fr
 
 
@@ -853,14 +966,17 @@ def import_frame(
     return report
 
 
-def _write_record(settings: dict, frame: str, files: dict, stores: dict) -> None:
-    """Write a frame's :func:`import_record` atomically (not again when unchanged)."""
+def _write_record(settings: dict, frame: str, files: dict, stores: dict, found: dict) -> None:
+    """Write a frame's :func:`import_record` atomically (not again when unchanged):
+    ``found`` is what the import found (:meth:`FrameReport.facts` and its ``warnings``),
+    which the verdict page shows."""
     record = {
         "audit": settings["name"],
         "frame": frame,
         "settings": settings_digest(settings),
         "files": files,
         "stores": stores,
+        "found": found,
     }
     text = json.dumps(record, indent=1)
     path = Path(import_record(settings["name"], frame))
