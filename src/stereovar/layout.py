@@ -275,6 +275,18 @@ def import_record(name: str, frame: str) -> str:
     return f"{RESULTS}/{audit_source(name)}/import/{frame}.json"
 
 
+def audit_seeding(name: str, frame: str) -> str:
+    """One frame's cross-view residual correlations of an audit (do the views share their
+    random streams?): ``results/audit/{name}/seeding/{frame}.csv``."""
+    return f"{RESULTS}/{audit_source(name)}/seeding/{frame}.csv"
+
+
+def audit_thumbnail(name: str, frame: str) -> str:
+    """One frame's thumbnail (a render and the disparity, to see that the right files were
+    read): ``results/audit/{name}/figures/thumbnail_{frame}.png``."""
+    return f"{RESULTS}/{audit_source(name)}/figures/thumbnail_{frame}.png"
+
+
 def audit_teaser(name: str, scene: str) -> str:
     """One frame's teaser of an audit: ``results/audit/{name}/figures/teaser_{scene}.png``."""
     return f"{RESULTS}/{audit_source(name)}/figures/teaser_{scene}.png"

@@ -39,6 +39,50 @@ if AUDIT:
             "../scripts/audit_import.py"
 
 
+def audit_frame_inputs(wildcards):
+    """One imported frame's render stores (every seed of each view) and ground truth."""
+    source = layout.audit_source(wildcards.name)
+    return {
+        **seed_stores(run_config(source), wildcards.scene, MAIN_SPP),
+        "ground_truth": layout.ground_truth_store(source, wildcards.scene),
+    }
+
+
+# Do the two views share their random streams? The per-seed residuals' cross-view
+# correlation at zero disparity and at the ground-truth disparity.
+rule audit_seeding:
+    input:
+        unpack(audit_frame_inputs),
+    output:
+        layout.audit_seeding("{name}", "{scene}"),
+    params:
+        analysis=config["analysis"],
+        controls=config["controls"],
+    log:
+        "logs/audit/{name}/seeding/{scene}.log",
+    benchmark:
+        "benchmarks/audit/{name}/seeding/{scene}.tsv"
+    conda:
+        ENV
+    script:
+        "../scripts/audit_seeding.py"
+
+
+# One render and the disparity per frame: the reader sees that the right files were read.
+rule audit_thumbnail:
+    input:
+        unpack(audit_frame_inputs),
+    output:
+        layout.audit_thumbnail("{name}", "{scene}"),
+    log:
+        "logs/audit/{name}/figures/thumbnail_{scene}.log",
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/audit_thumbnail.py"
+
+
 rule audit_teaser:
     input:
         variance=lambda wc: layout.variance_store(
@@ -75,6 +119,9 @@ rule audit_verdict:
             layout.intervention_metrics(layout.audit_source(wc.name), "seeds", s) for s in SCENES
         ],
         teasers=lambda wc: [layout.audit_teaser(wc.name, s) for s in SCENES],
+        thumbnails=lambda wc: [layout.audit_thumbnail(wc.name, s) for s in SCENES],
+        seeding=lambda wc: [layout.audit_seeding(wc.name, s) for s in SCENES],
+        imports=lambda wc: [layout.import_record(wc.name, s) for s in SCENES],
         # audit.mitigations: the mitigation table and its figure
         mitigations=mitigation_targets()[:1],
         mitigation_figure=mitigation_targets()[-1:],

@@ -292,3 +292,270 @@ def as_table(rows: list[dict]) -> list[dict]:
             }
         )
     return out
+
+
+SHARED_STREAMS = 0.05
+"""The views share their random streams when the per-seed residuals' cross-view correlation
+at zero disparity has a 95% interval above this (independent seeds give 0; the same seed in
+both views gives the share of each pixel's noise that the two views' paths have in common)."""
+
+
+def seeding_summary(rows: list[dict], alignment: str, region: str = "all") -> tuple:
+    """Mean over frames of the residual correlation at one alignment (``zero`` or
+    ``ground_truth``; :func:`stereovar.jobs.audit.seeding_job` rows), with the frames'
+    block-bootstrap intervals combined (:func:`~stereovar.statistics.across.combined_interval`)."""
+    chosen = [r for r in rows if r["alignment"] == alignment and r["region"] == region]
+    return combined_interval(
+        [_f(r["rho"]) for r in chosen], [_f(r["low"]) for r in chosen],
+        [_f(r["high"]) for r in chosen],
+    )
+
+
+def seeding_finding(rows: list[dict]) -> dict:
+    """Do the two views share their random streams? From the residual correlation at zero
+    disparity (:func:`seeding_summary`) against :data:`SHARED_STREAMS`.
+
+    Returns
+    -------
+    dict
+        ``shared`` (True, False, or None when undefined), ``zero`` and ``ground_truth``
+        (value, low, high) and ``text``, one plain-language sentence.
+
+    Examples
+    --------
+    >>> rows = [{"alignment": "zero", "region": "all", "rho": 0.3, "low": 0.2, "high": 0.4},
+    ...         {"alignment": "ground_truth", "region": "all", "rho": 0.1, "low": 0.0,
+    ...          "high": 0.2}]
+    >>> seeding_finding(rows)["shared"]
+    True
+    """
+    zero = seeding_summary(rows, "zero")
+    gt = seeding_summary(rows, "ground_truth")
+
+    def iv(t):
+        if not _ok(t[0]):
+            return "n/a"
+        if not _ok(t[1], t[2]):
+            return f"{t[0]:.3f} (no interval)"
+        return f"{t[0]:.3f} [{t[1]:.3f}, {t[2]:.3f}]"
+
+    if not _ok(zero[0], zero[1]):
+        shared, text = None, (
+            "Whether the two views share their random streams cannot be told on these frames "
+            f"(residual correlation at zero disparity {iv(zero)})."
+        )
+    elif zero[1] > SHARED_STREAMS:
+        shared, text = True, (
+            "The two views share their random streams: the per-seed noise of the left and "
+            f"right renders correlates at zero disparity, {iv(zero)} (at the ground-truth "
+            f"disparity {iv(gt)}), where independent seeds give 0. This is what the same "
+            "sampler seed in both views does (Cycles seed 0, the default of Kubric, "
+            "BlenderProc and Infinigen); a network can match the noise itself."
+        )
+    else:
+        shared, text = False, (
+            "The two views' random streams are independent: the per-seed noise does not "
+            f"correlate across views at zero disparity, {iv(zero)} (at the ground-truth "
+            f"disparity {iv(gt)})."
+        )
+    return {"shared": shared, "zero": zero, "ground_truth": gt, "text": text}
+
+
+def seeding_rows(rows: list[dict]) -> list[dict]:
+    """:data:`VERDICT_COLUMNS` rows of the residual correlation over frames, per region."""
+    out = []
+    for region in ("all", "non_glass", "glass"):
+        for alignment, label in (
+            ("zero", "residual rho at zero disparity"),
+            ("ground_truth", "residual rho at the ground-truth disparity"),
+        ):
+            value, low, high = seeding_summary(rows, alignment, region)
+            if region != "all" and not _ok(value):
+                continue
+            out.append(
+                {
+                    "quantity": label,
+                    "region": region,
+                    "value": value,
+                    "low": low,
+                    "high": high,
+                    "note": "shared random streams" if alignment == "zero" else "seeding",
+                }
+            )
+    return out
+
+
+NULL_OFF = 0.1
+"""A null warp is flagged when its 95% interval excludes 0 and its value is at least this
+far from 0."""
+
+EDGE = 0.02
+"""A point estimate within this fraction of its interval's width from an end of the interval
+(or outside it) is flagged: a few bootstrap tiles decide it."""
+
+FLAG_LABELS = {
+    "control": "control off its expected value",
+    "corrected_above_1": "corrected rho above 1",
+    "edge_of_interval": "estimate at the edge of its interval",
+}
+"""Kinds of flags the verdict raises on its own numbers (beside the import's warnings)."""
+
+
+def control_flags(rows: list[dict], correlations: list[dict]) -> list[dict]:
+    """Flags on the verdict's own numbers: a shifted or flipped null warp whose interval is
+    away from 0 (by at least :data:`NULL_OFF`), no warp correlating as much as the warp, a
+    corrected :math:`\\rho` above 1, and a frame's point estimate at the edge of (or outside)
+    its bootstrap interval.
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`verdict_rows`.
+    correlations : list of dict
+        The frames' correlation rows (``scene``, ``region``, ``method``, ``rho``,
+        ``boot_low``, ``boot_high``, ``rho_corrected``).
+
+    Returns
+    -------
+    list of dict
+        ``{"kind", "frame", "text"}``, ``kind`` one of :data:`FLAG_LABELS`.
+
+    Examples
+    --------
+    >>> rows = [{"quantity": "null: disparity shifted", "region": "all", "value": 0.368,
+    ...          "low": 0.185, "high": 0.551, "note": ""}]
+    >>> control_flags(rows, [])[0]["kind"]
+    'control'
+    """
+    flags = []
+    for r in rows:
+        if not r["quantity"].startswith("null:") or not _ok(r["value"], r["low"], r["high"]):
+            continue
+        if r["quantity"].startswith("null: no warp"):
+            # smooth fields correlate unwarped when disparities are small: flagged only
+            # when the warp adds nothing
+            warp = _find(rows, "Pearson rho after", r["region"])
+            off = _ok(warp["value"]) and r["value"] >= warp["value"]
+        else:
+            off = (r["low"] > 0 or r["high"] < 0) and abs(r["value"]) >= NULL_OFF
+        if off:
+            flags.append({
+                "kind": "control",
+                "frame": None,
+                "text": (
+                    f"{r['quantity']} ({r['region']}) is {r['value']:.3f} [{r['low']:.3f}, "
+                    f"{r['high']:.3f}], not about 0: the variance fields correlate without the "
+                    "right alignment (smooth or intensity-driven structure, or quantisation), "
+                    "so part of rho is not the cross-view cue; read rho against it"
+                ),
+            })
+    for r in rows:
+        if r["quantity"].startswith("attenuation-corrected") and _ok(r["value"]) and (
+            r["value"] > 1
+        ):
+            flags.append({
+                "kind": "corrected_above_1",
+                "frame": None,
+                "text": (
+                    f"the attenuation-corrected rho ({r['region']}) is {r['value']:.3f}, above "
+                    "1: the split-half reliabilities are underestimated (few seeds, heavy "
+                    "tails); read it as about 1, not as a value"
+                ),
+            })
+    for c in correlations:
+        if c.get("method") not in ("warp", "partial"):
+            continue
+        value, low, high = _f(c.get("rho")), _f(c.get("boot_low")), _f(c.get("boot_high"))
+        if not _ok(value, low, high) or high <= low:
+            continue
+        margin = EDGE * (high - low)
+        if value - low < margin or high - value < margin:
+            what = "Pearson rho" if c["method"] == "warp" else "intensity-controlled rho"
+            flags.append({
+                "kind": "edge_of_interval",
+                "frame": c.get("scene"),
+                "text": (
+                    f"frame {c.get('scene')}, {c['region']}: {what} {value:.3f} lies at the "
+                    f"edge of its bootstrap interval [{low:.3f}, {high:.3f}]: a few tiles "
+                    "decide it; give more frames or a smaller analysis.bootstrap.tile"
+                ),
+            })
+    return flags
+
+
+LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#808080"}
+"""Traffic-light colours of the decision."""
+
+
+def decision(result: dict, seeding: dict, flags: list[dict], mitigations: list[str]) -> dict:
+    """The page's opening: a traffic light and two or three sentences (what was found, how
+    sure, what to do).
+
+    Red: a moderate or strong Monte Carlo-specific cue, a variance-matching cue beyond a
+    camera, or views that share their random streams. Amber: a weak cue, a result that
+    cannot be tested, or a verdict with flags. Green: none of these.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`verdict`.
+    seeding : dict
+        :func:`seeding_finding`.
+    flags : list of dict
+        The import's warnings and :func:`control_flags`.
+    mitigations : list of str
+        :func:`stereovar.statistics.mitigations.mitigation_findings` of the audit's own
+        mitigation table (empty when ``audit.mitigations`` is not set).
+
+    Returns
+    -------
+    dict
+        ``light`` (a :data:`LIGHTS` key), ``headline`` and ``sentences``.
+    """
+    mc, word = result["mc_specific"], result["strength"]
+    strong = mc is True and word in ("strong", "moderate")
+    red = strong or result.get("matching_cue") is True or seeding.get("shared") is True
+    if red:
+        light = "red"
+    elif mc is None or (mc is True) or flags:
+        light = "amber"
+    else:
+        light = "green"
+    if mc is True:
+        found = f"These renders carry a {word} Monte Carlo-specific cross-view variance cue"
+    elif mc is False:
+        found = "No Monte Carlo-specific cross-view variance cue was detected in these renders"
+    else:
+        found = "Whether these renders carry a Monte Carlo-specific cue cannot be told"
+    if seeding.get("shared") is True:
+        found += ", and the two views share their random streams"
+    headline = found + "."
+    sure = (
+        "The finding rests on the intensity-controlled correlation's 95% interval (a real "
+        "camera's noise leaves it at 0)"
+        + (" and on the residual correlation at zero disparity" if seeding.get("shared") else "")
+        + (
+            f"; {len(flags)} flag{'s' * (len(flags) != 1)} below "
+            f"qualif{'ies' if len(flags) == 1 else 'y'} it."
+            if flags
+            else "; no check raised a flag."
+        )
+    )
+    if mitigations:
+        do = (
+            "Measured on these renders (audit.mitigations): " + mitigations[-1]
+            if not mitigations[-1].startswith("No mitigation")
+            else "None of the mitigations measured on these renders removes the Monte "
+            "Carlo-specific part; see the Mitigations section."
+        )
+    elif red or mc is True:
+        do = (
+            "Before training a stereo network on them, measure which mitigation removes the "
+            "cue and at what image quality: set audit.mitigations: [denoise, denoise_sensor, "
+            "equalise, sensor_only] and run the audit again."
+        )
+    else:
+        do = "Nothing needs mitigating for this cue before training."
+    if seeding.get("shared") is True:
+        do += " Render each view with its own sampler seed (Cycles: scene.cycles.seed)."
+    return {"light": light, "headline": headline, "sentences": [sure, do]}

@@ -105,3 +105,55 @@ def preview_figure(left, right, gt: xr.Dataset, *, title: str = "", spp: int | N
     if title:
         fig.suptitle(title)
     return fig
+
+
+def thumbnail_figure(render, gt: xr.Dataset, *, title: str = ""):
+    """One imported frame at a glance: a render of the left view, its disparity and, with a
+    material mask, the glass region: the reader of an audit sees that the right files (and
+    channels) were read.
+
+    Parameters
+    ----------
+    render : numpy.ndarray, shape (H, W, 3)
+        Linear RGB (one seed of the left view).
+    gt : xarray.Dataset
+        The frame's ground truth (imported: ``disparity``, ``valid``, ``glass``).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    g = gt.sel(view="left")
+    masked = gt.attrs.get("material_mask", "none") != "none"
+    height, width = g.sizes["y"], g.sizes["x"]
+    panels = 3 if masked else 2
+    fig, axes = plt.subplots(
+        1, panels, figsize=(3.6 * panels, 3.6 * height / width + 0.9), constrained_layout=True
+    )
+    axes[0].imshow(to_display(render), interpolation="nearest")
+    axes[0].set_title("left render (seed 0)", fontsize="medium")
+    valid = g["valid"].transpose("y", "x").values
+    disp = np.where(valid, g["disparity"].transpose("y", "x").values, np.nan)
+    cmap = plt.get_cmap("viridis").with_extremes(bad="#808080")
+    im = axes[1].imshow(np.ma.masked_invalid(disp), cmap=cmap, interpolation="nearest")
+    axes[1].set_title(f"left disparity [px] ({100 * valid.mean():.0f}% valid)", fontsize="medium")
+    fig.colorbar(im, ax=axes[1], shrink=0.8)
+    if masked:
+        glass = g["glass"].transpose("y", "x").values.astype(bool)
+        shade = to_display(render) * 0.35
+        shade[glass] = (0.77, 0.31, 0.32)
+        axes[2].imshow(shade, interpolation="nearest")
+        axes[2].set_title(f"glass ({100 * glass.mean():.1f}% of pixels)", fontsize="medium")
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+    if title:
+        fig.suptitle(title, fontsize="medium")
+    return fig

@@ -133,3 +133,20 @@ def run_of(rows: list[dict]) -> dict:
         if values:
             out[key] = values[0]
     return out
+
+
+def view_stack(paths) -> tuple:
+    """Every render of one view's stores: ``(stack (N, H, W, 3), seed indices, sampler
+    seeds, attrs of the first store)``."""
+    import numpy as np
+
+    from ..io.store import load_store
+
+    stacks, seeds, samplers, attrs = [], [], [], None
+    for path in paths:
+        ds = load_store(path, "render store", ["radiance"])
+        stacks.append(ds["radiance"].transpose("seed", "y", "x", "channel").values)
+        seeds += [int(s) for s in ds["seed"].values]
+        samplers += [int(s) for s in ds["sampler_seed"].values]
+        attrs = attrs or dict(ds.attrs)
+    return np.concatenate(stacks), np.asarray(seeds), np.asarray(samplers), attrs

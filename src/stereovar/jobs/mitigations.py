@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from ..errors import StereovarError
-from .common import log
+from .common import log, view_stack
 
 
 def aux_job(spec, out, *, view, spp, renderer="mitsuba", variant="auto", threads=None, **rig):
@@ -52,21 +52,6 @@ def aux_job(spec, out, *, view, spp, renderer="mitsuba", variant="auto", threads
     )
     write_dataset(ds, out)
     log.info("%s %s: albedo and normal at spp %d in %.2f s", name, view, int(spp), elapsed)
-
-
-def _view_stack(paths) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
-    """Every render of one view's stores: ``(stack (N, H, W, 3), seed indices, sampler
-    seeds, attrs of the first store)``."""
-    from ..io.store import load_store
-
-    stacks, seeds, samplers, attrs = [], [], [], None
-    for path in paths:
-        ds = load_store(path, "render store", ["radiance"])
-        stacks.append(ds["radiance"].transpose("seed", "y", "x", "channel").values)
-        seeds += [int(s) for s in ds["seed"].values]
-        samplers += [int(s) for s in ds["sampler_seed"].values]
-        attrs = attrs or dict(ds.attrs)
-    return np.concatenate(stacks), np.asarray(seeds), np.asarray(samplers), attrs
 
 
 def seed_moments(stack) -> tuple[np.ndarray, np.ndarray]:
@@ -126,7 +111,7 @@ def transform_job(
     from ..transforms import TransformInputs, check_reads, get_transform
 
     t = get_transform(transform)
-    stack, seeds, samplers, attrs = _view_stack(renders)
+    stack, seeds, samplers, attrs = view_stack(renders)
     wanted = [int(s) for s in batch]
     missing = sorted(set(wanted) - set(seeds.tolist()))
     if missing:
@@ -260,7 +245,7 @@ def _reference(spec, loaded: dict):
     if isinstance(spec, (list, tuple)):
         key = tuple(str(p) for p in spec)
         if key not in loaded:
-            loaded[key] = _view_stack(spec)[:2]
+            loaded[key] = view_stack(spec)[:2]
         raw, raw_seeds = loaded[key]
         return lambda images, seeds, mask: leave_one_out_quality(
             images, seeds, raw, raw_seeds, mask=mask
@@ -324,7 +309,7 @@ def mitigation_scene_job(
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
     stacks, attrs, seed_order, loaded = {}, {}, {}, {}
     for view, paths in (("left", left), ("right", right)):
-        stacks[view], seeds, _, attrs[view] = _view_stack(paths)
+        stacks[view], seeds, _, attrs[view] = view_stack(paths)
         loaded[tuple(str(p) for p in paths)] = (stacks[view], seeds)
         order = np.argsort(seeds, kind="stable")
         stacks[view], seed_order[view] = stacks[view][order], seeds[order]

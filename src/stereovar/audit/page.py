@@ -1,0 +1,237 @@
+"""The audit's verdict page: a decision first, then the import's facts, then the details.
+
+:func:`page_sections` puts what :mod:`stereovar.audit.verdict` computed in reading order:
+
+1. banners (an inconclusive sign check the audit went on with, ``audit.sign_check: warn``);
+2. the decision: a traffic light and two or three sentences (what was found, how sure,
+   what to do; :func:`stereovar.audit.verdict.decision`);
+3. the import's facts: frames, seeds and files, each frame's sign check and valid pixels,
+   and every warning and flag as a row of its own;
+4. one thumbnail per frame (a render and the disparity), so the reader sees that the right
+   files were read;
+5. the details: the verdict paragraph, the seeding finding, the table with intervals, the
+   mitigations and the teasers.
+
+:func:`to_markdown_page` and :func:`to_html_page` write the same sections; the HTML page is
+self-contained (its own stylesheet, images by relative path).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from pathlib import Path
+
+from ..io.tables import to_html, to_markdown
+from .importer import WARNING_KINDS
+from .verdict import FLAG_LABELS, LIGHTS, VERDICT_COLUMNS
+
+FACT_COLUMNS = [
+    "frame",
+    "seeds",
+    "files",
+    "valid_px",
+    "invalid_disparity_px",
+    "outside_px",
+    "nonfinite_render_px",
+    "sign_check",
+    "clipped",
+]
+"""Columns of the import-facts table (one row per frame)."""
+
+FLAG_COLUMNS = ["flag", "frame", "what"]
+"""Columns of the flags table (one row per warning or flag)."""
+
+_CSS = """
+.light { display: flex; gap: 1em; align-items: flex-start; border: 1px solid #ccc;
+  border-radius: 6px; padding: 0.8em 1em; margin: 1em 0; max-width: 60em; }
+.light .dot { flex: none; width: 2.2em; height: 2.2em; border-radius: 50%; }
+.light p { margin: 0.3em 0; }
+.light .headline { font-size: 1.15em; font-weight: bold; }
+.banner { background: #fff3cd; border: 1px solid #e6a700; border-radius: 6px;
+  padding: 0.6em 1em; margin: 0.6em 0; max-width: 60em; }
+.thumbs { display: flex; flex-wrap: wrap; gap: 1em; }
+.thumbs figure { margin: 0; }
+p, li { max-width: 60em; }
+"""
+
+
+def _sign_fact(sign: dict) -> str:
+    if not sign:
+        return ""
+    text = (
+        f"{100 * sign['error']:.1f}% declared vs {100 * sign['opposite_error']:.1f}% opposite"
+    )
+    return text + ("" if sign.get("conclusive", True) else " (inconclusive)")
+
+
+def import_facts(records: list[dict]) -> list[dict]:
+    """One :data:`FACT_COLUMNS` row per frame from the frames' import records
+    (``found``: :meth:`stereovar.audit.importer.FrameReport.facts`)."""
+    rows = []
+    for record in records:
+        found = record.get("found") or {}
+        clipped = found.get("clipped") or {}
+        rows.append(
+            {
+                "frame": record.get("frame", ""),
+                "seeds": found.get("n_seeds", math.nan),
+                "files": len(record.get("files") or {}),
+                "valid_px": found.get("valid", math.nan),
+                "invalid_disparity_px": found.get("invalid_disparity", math.nan),
+                "outside_px": found.get("outside", math.nan),
+                "nonfinite_render_px": sum((found.get("nonfinite_pixels") or {}).values()),
+                "sign_check": _sign_fact(found.get("sign") or {}),
+                "clipped": ", ".join(f"{v} {100 * f:.2f}%" for v, f in clipped.items()) or "n/a",
+            }
+        )
+    return rows
+
+
+def import_flags(records: list[dict]) -> list[dict]:
+    """The import's warnings of every frame, each once (a warning of the whole audit, such
+    as the PNG transfer, is repeated in every frame's record)."""
+    seen, out = set(), []
+    for record in records:
+        for flag in (record.get("found") or {}).get("warnings", []):
+            if flag["text"] not in seen:
+                seen.add(flag["text"])
+                out.append(flag)
+    return out
+
+
+def _label(kind: str) -> str:
+    return WARNING_KINDS.get(kind) or FLAG_LABELS.get(kind) or kind
+
+
+def flag_rows(flags: list[dict]) -> list[dict]:
+    """:data:`FLAG_COLUMNS` rows of the flags."""
+    return [
+        {"flag": _label(f["kind"]), "frame": f.get("frame") or "all", "what": f["text"]}
+        for f in flags
+    ]
+
+
+def page_sections(
+    *,
+    name: str,
+    found: str,
+    decision: dict,
+    result: dict,
+    seeding: dict,
+    records: list[dict],
+    flags: list[dict],
+    table: list[dict],
+    caption: str,
+    mitigations: list[str],
+    thumbnails: list[str],
+    figures: list[str],
+) -> dict:
+    """Everything the page shows, in reading order (see the module docstring).
+
+    ``thumbnails`` and ``figures`` are paths relative to the page.
+    """
+    banners = [f["text"] for f in flags if f["kind"] == "sign_check"]
+    return {
+        "title": f"Audit {name}: verdict",
+        "banners": banners,
+        "decision": decision,
+        "found": found,
+        "facts": import_facts(records),
+        "flags": flag_rows(flags),
+        "thumbnails": thumbnails,
+        "verdict": result["text"],
+        "seeding": seeding["text"],
+        "table": table,
+        "caption": caption,
+        "mitigations": mitigations,
+        "figures": figures,
+    }
+
+
+def to_markdown_page(s: dict) -> str:
+    """The page as Markdown."""
+    d = s["decision"]
+    lines = [f"# {s['title']}", ""]
+    lines += [f"> **Warning.** {b}" for b in s["banners"]] + ([""] if s["banners"] else [])
+    lines += [
+        f"**{d['light'].upper()}: {d['headline']}** " + " ".join(d["sentences"]),
+        "",
+        "## What was imported",
+        "",
+        f"{s['found']}.",
+        "",
+        to_markdown(s["facts"], FACT_COLUMNS),
+        "",
+    ]
+    if s["flags"]:
+        lines += ["### Warnings and flags", "", to_markdown(s["flags"], FLAG_COLUMNS), ""]
+    else:
+        lines += ["No warnings or flags.", ""]
+    lines += [f"![{Path(t).stem}]({t})" for t in s["thumbnails"]] + [""]
+    lines += [
+        "## Details",
+        "",
+        f"**Verdict.** {s['verdict']}",
+        "",
+        f"**Seeding.** {s['seeding']}",
+        "",
+        to_markdown(s["table"], VERDICT_COLUMNS, caption=s["caption"]),
+        "",
+    ]
+    if s["mitigations"]:
+        lines += ["## Mitigations", "", *[f"- {f}" for f in s["mitigations"]], ""]
+    lines += [f"![{Path(f).stem}]({f})" for f in s["figures"]] + [""]
+    return "\n".join(lines)
+
+
+def _table_html(rows: list[dict], columns: list[str], caption: str = "") -> str:
+    """The ``<table>`` of :func:`~stereovar.io.tables.to_html`'s page."""
+    page = to_html(rows, columns, caption=caption)
+    return page[page.index("<body>") + len("<body>") : page.index("</body>")].strip()
+
+
+def _figure(path: str) -> str:
+    p = html.escape(path)
+    return (
+        f'<figure><img src="{p}" alt="{html.escape(Path(path).stem)}" style="max-width:100%">'
+        f"<figcaption>{html.escape(Path(path).stem)}</figcaption></figure>"
+    )
+
+
+def to_html_page(s: dict) -> str:
+    """The page as one self-contained HTML document."""
+    d = s["decision"]
+    e = html.escape
+    body = [f"<h1>{e(s['title'])}</h1>"]
+    body += [f'<div class="banner"><b>Warning.</b> {e(b)}</div>' for b in s["banners"]]
+    body.append(
+        f'<div class="light" id="decision"><div class="dot" title="{e(d["light"])}" '
+        f'style="background:{LIGHTS[d["light"]]}"></div><div>'
+        f'<p class="headline">{e(d["headline"])}</p>'
+        + "".join(f"<p>{e(x)}</p>" for x in d["sentences"])
+        + "</div></div>"
+    )
+    body += [
+        "<h2>What was imported</h2>",
+        f"<p>{e(s['found'])}.</p>",
+        _table_html(s["facts"], FACT_COLUMNS),
+    ]
+    if s["flags"]:
+        body += ["<h3>Warnings and flags</h3>", _table_html(s["flags"], FLAG_COLUMNS)]
+    else:
+        body.append("<p>No warnings or flags.</p>")
+    body.append('<div class="thumbs">' + "".join(map(_figure, s["thumbnails"])) + "</div>")
+    body += [
+        "<h2>Details</h2>",
+        f"<p><b>Verdict.</b> {e(s['verdict'])}</p>",
+        f"<p><b>Seeding.</b> {e(s['seeding'])}</p>",
+        _table_html(s["table"], VERDICT_COLUMNS, s["caption"]),
+    ]
+    if s["mitigations"]:
+        items = "".join(f"<li>{e(f)}</li>" for f in s["mitigations"])
+        body.append(f"<h2>Mitigations</h2>\n<ul>{items}</ul>")
+    body += [_figure(f) for f in s["figures"]]
+    page = to_html([], ["quantity"], caption=s["title"])
+    head = page[: page.index("<body>")].replace("</style>", _CSS + "</style>", 1)
+    return head + "<body>\n" + "\n".join(body) + "\n</body>\n</html>\n"
