@@ -39,15 +39,6 @@ if AUDIT:
             "../scripts/audit_import.py"
 
 
-def audit_frame_inputs(wildcards):
-    """One imported frame's render stores (every seed of each view) and ground truth."""
-    source = layout.audit_source(wildcards.name)
-    return {
-        **seed_stores(run_config(source), wildcards.scene, MAIN_SPP),
-        "ground_truth": layout.ground_truth_store(source, wildcards.scene),
-    }
-
-
 # Do the two views share their random streams? The per-seed residuals' cross-view
 # correlation at zero disparity and at the ground-truth disparity.
 rule audit_seeding:

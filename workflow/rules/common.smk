@@ -217,6 +217,15 @@ def intervention_inputs(wildcards):
     }
 
 
+def audit_frame_inputs(wildcards):
+    """One imported frame's render stores (every seed of each view) and ground truth."""
+    source = layout.audit_source(wildcards.name)
+    return {
+        **seed_stores(run_config(source), wildcards.scene, MAIN_SPP),
+        "ground_truth": layout.ground_truth_store(source, wildcards.scene),
+    }
+
+
 def estimator_check_inputs(wildcards):
     """One scene's moment stores, its ``validation.n_seeds`` seed renders at the same SPP
     and its ground truth (``estimator_check``)."""
