@@ -555,9 +555,25 @@ def _glass(settings: dict, frame: Frame, reads: _Reads):
                 "list them (e.g. glass_ids: [3, 7])"
             )
         path = gt["segmentation"][VIEWS[0]]
-        seg = reads(read_field, path)
-        return np.isin(np.rint(seg).astype(np.int64), ids), f"segmentation {path}"
-    return None, None
+        seg = np.rint(reads(read_field, path)).astype(np.int64)
+        glass = np.isin(seg, ids)
+        return glass, f"segmentation {path}", _unmatched_ids(seg, ids, path)
+    return None, None, None
+
+
+def _unmatched_ids(seg: np.ndarray, ids: list, path) -> str | None:
+    """The warning for ``audit.glass_ids`` that match no pixel of a segmentation map."""
+    present, counts = np.unique(seg, return_counts=True)
+    missing = [i for i in ids if i not in present]
+    if not missing:
+        return None
+    order = np.argsort(-counts, kind="stable")[:8]
+    largest = ", ".join(f"{int(present[k])} ({int(counts[k])} px)" for k in order)
+    return (
+        f"audit.glass_ids {missing} match no pixel of {path}"
+        + (" (so there is no glass region)" if len(missing) == len(ids) else "")
+        + f"; the ids it holds, largest first: {largest}; fix audit.glass_ids"
+    )
 
 
 def _seed_mean(stack: np.ndarray, n_nonfinite) -> np.ndarray:
@@ -646,7 +662,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     fr = FrameReport(frame.name, True, n_seeds=frame.n_seeds)
     reads = _Reads()
     with report.timed("ground truth"):
-        gt, gt_files = _frame_ground_truth(settings, frame, sign, source, fr, reads)
+        gt, gt_files = _frame_ground_truth(settings, frame, sign, source, fr, reads, report)
     datasets, means, view_files = {}, {}, {}
     for view in VIEWS:
         labels = list(frame.renders[view])
@@ -720,11 +736,15 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     return fr, {str(p): reads.records[str(p)] for p in frame.files()}
 
 
-def _frame_ground_truth(settings, frame: Frame, sign, source, fr: FrameReport, reads: _Reads):
+def _frame_ground_truth(
+    settings, frame: Frame, sign, source, fr: FrameReport, reads: _Reads, report: ImportReport
+):
     """The frame's ground-truth dataset (its ``scene_digest`` and ``source_sha256`` are set
     once every file is read) and its files; fills the disparity counts of ``fr``."""
     disparity = _disparity(settings, frame, reads)
-    glass, glass_source = _glass(settings, frame, reads)
+    glass, glass_source, unmatched = _glass(settings, frame, reads)
+    if unmatched:
+        report.warn("glass_ids", f"frame {frame.name}: {unmatched}", frame.name)
     gt_files = [str(p) for paths in frame.ground_truth.values() for p in paths.values()]
     gt, counts = imported_ground_truth(
         disparity[VIEWS[0]],
