@@ -6,12 +6,13 @@ interpolation and view-dependent shading; with the opposite sign it does not. Th
 warps with the declared convention and with the opposite one and stops when the opposite
 one matches clearly better (:func:`sign_check`), before any statistic is computed.
 
-Noise in the seed means (few seeds, low SPP) raises both errors alike, so beside the ratio
-of the two median errors the check counts, pixel by pixel, which sign matches better: the
-declared sign is settled when it matches better at more than half of the pixels where the
-two differ, with a 95% tile-bootstrap interval above :data:`CLOSER` (:attr:`SignCheck.wins`). A
-disparity that is no disparity at all (another channel read as depth, say) matches with
-neither sign, and the two sides win about equally often.
+Noise in the seed means (few seeds, low SPP) raises both errors alike. Beside the ratio of
+the two median errors the check counts, pixel by pixel, at which share of the pixels the
+declared sign matches better, with a 95% tile-bootstrap interval (:attr:`SignCheck.wins`),
+and reports it with an inconclusive check. The share does not settle the sign: a disparity
+that is no disparity at all (another channel read as depth, say) still gives shares well
+off one half on textured images (measured: 0.66 [0.60, 0.73] on a synthetic frame with
+random disparities of 20-40 px), as noisy renders with the right disparity do.
 
 The check can only tell the signs apart where the right image differs between the two
 matches: where it is flat (black, saturated, or made flat by 8-bit quantisation of a dark
@@ -42,11 +43,6 @@ luminance (floored at this value, as in :func:`median_relative_error`)."""
 FLAT = 0.5
 """When the two warps agree at this fraction of the pixels compared under both signs or
 more, an inconclusive check is put down to a flat image."""
-
-CLOSER = 0.55
-"""The declared sign is settled pixel by pixel when the lower end of the interval of the
-share of pixels at which it matches better exceeds this (:func:`paired_wins`): a disparity
-that is none still gives a share a little off one half, from image edges and texture."""
 
 TILE = 16
 """Side of the bootstrap tiles of the paired comparison (px)."""
@@ -141,16 +137,14 @@ class SignCheck:
 
     @property
     def conclusive(self) -> bool:
-        """Whether one sign matches clearly better than the other: the opposite one
-        (:attr:`opposite_wins`), or the declared one, by the ratio of the median errors
-        (:data:`CLEARLY_BETTER`) or pixel by pixel (:attr:`wins` above :data:`CLOSER`)."""
+        """Whether one sign matches clearly better than the other (:data:`CLEARLY_BETTER`)."""
         if self.opposite_wins:
             return True
-        if self.n_pixels < MIN_PIXELS or not math.isfinite(self.error):
-            return False
-        if not self.error >= CLEARLY_BETTER * self.opposite_error:
-            return True
-        return bool(self.wins[1] > CLOSER)
+        return (
+            self.n_pixels >= MIN_PIXELS
+            and math.isfinite(self.error)
+            and not self.error >= CLEARLY_BETTER * self.opposite_error
+        )
 
     @property
     def reason(self) -> str:
