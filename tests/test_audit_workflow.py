@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from stereovar.audit.synthetic import write_synthetic_audit
+from stereovar.io.images import write_field
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
 
@@ -171,3 +172,53 @@ def test_export_to_a_symbolic_link_is_refused_and_a_real_one_reported(exported, 
     )
     for scene in SCENES:
         assert (exported / f"results/export/mitsuba/seeds/exr/{scene}/audit.yaml").is_file()
+
+
+def test_a_masked_audit_has_its_c_sigma_line_and_opens_with_the_decision(tmp_path):
+    # the README's recommended set-up: a glass mask per frame
+    root = copy_workflow(tmp_path / "wf", TINY)
+    settings, frames = write_synthetic_audit(
+        root / "data", n_frames=2, width=96, height=64, n_seeds=8
+    )
+    mask = np.zeros((64, 96), np.uint8)
+    mask[16:40, 30:70] = 255
+    for k in range(2):
+        write_field(root / f"data/mask_f{k:02d}.png", mask)
+    settings.update(
+        renders="data/renders/{frame}/{view}/seed_{seed}.exr",
+        disparity="data/disparity/{frame}.pfm",
+        glass_mask="data/mask_{frame}.png",
+    )
+    snakemake(root, "-j2", "all", config={**TINY, "audit": settings})
+    base = root / "results/audit/synthetic"
+    summary = yaml.safe_load((base / "summary.json").read_text())
+    rows = {(r["quantity"], r["region"]): r for r in summary["rows"]}
+    # the C_sigma line against the intervention CSVs: mean over frames of accuracy - chance
+    lifts = {}
+    for source, label in (("render", "renders"), ("sensor", "simulated camera frames")):
+        per_frame = [
+            r["value"] - r["chance"]
+            for k in range(2)
+            for r in read_rows(base / f"seeds/intervention/f{k:02d}.csv")
+            if (r["cost"], r["metric"], r["condition"], r["region"], r["source"])
+            == ("variance_cost", "wta_accuracy", "normal", "all", source)
+        ]
+        assert len(per_frame) == 2
+        line = rows[(f"C_sigma WTA accuracy minus chance, {label}", "all")]
+        assert line["value"] == pytest.approx(np.mean(per_frame), abs=1e-4)  # page rounding
+        assert np.isfinite(line["low"]) and np.isfinite(line["high"])
+        lifts[source] = line
+    assert summary["matching_cue"] is not None
+    # and the regions, from the mask
+    regions = {r["region"] for r in read_rows(base / "seeds/intervention/f00.csv")}
+    assert regions == {"all", "non_glass", "glass"}
+    # the page: the decision first, then what was imported, a thumbnail per frame
+    page = (base / "verdict.html").read_text()
+    order = [page.index(s) for s in ('id="decision"', "What was imported", "Details")]
+    assert order == sorted(order)
+    assert summary["light"] in ("red", "amber", "green") and summary["decision"]
+    for k in range(2):
+        assert f'src="figures/thumbnail_f{k:02d}.png"' in page
+        assert (base / f"figures/thumbnail_f{k:02d}.png").stat().st_size > 0
+    assert summary["shared_streams"] is False  # independent synthetic noise
+    assert "residual rho at zero disparity" in page

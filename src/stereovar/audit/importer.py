@@ -546,7 +546,7 @@ def _glass(settings: dict, frame: Frame, reads: _Reads):
     gt = frame.ground_truth
     if "glass_mask" in gt:
         path = gt["glass_mask"][VIEWS[0]]
-        return reads(read_field, path) > 0, f"glass mask {path}"
+        return reads(read_field, path) > 0, f"glass mask {path}", None
     if "segmentation" in gt:
         ids = settings["glass_ids"]
         if not ids:
