@@ -125,6 +125,8 @@ def intervention_job(
             row["n_pixels"],
             f" [{row['reason']}]" if row["reason"] else "",
         )
+    if not no_mask:  # Fig. 4 shows Table 3's regions: no margin sample of `all` beside them
+        result.margins[:] = [m for m in result.margins if m["region"] != "all"]
     for sample in result.margins:
         sample["scene"] = scene
     run = {"renderer": attrs.get("renderer", ""), "estimator": ESTIMATOR}
