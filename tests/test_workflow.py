@@ -141,7 +141,8 @@ def test_run_produces_ground_truth_previews_and_tables(workdir):
     for scene in SCENES:
         rows = (workdir / f"{RUN}/intervention/{scene}.csv").read_text().splitlines()
         assert rows[0].startswith("scene,spp,n_seeds,max_disparity,window,block,source,cost,metric")
-        assert len(rows) == 1 + 5 * 2 * 2 * 2  # render and sensor sources
+        # 5 metrics x 3 regions (all, non_glass, glass) x 2 conditions x render and sensor
+        assert len(rows) == 1 + 5 * 3 * 2 * 2
         margins = (workdir / f"{RUN}/intervention/margins/{scene}.csv").read_text()
         assert margins.startswith("scene,cost,region,condition,seed,y,x,margin")
     for name in ("cross_scene", "spp_sweep", "spp_sweep_fit", "intervention"):
