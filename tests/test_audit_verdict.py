@@ -337,3 +337,16 @@ def test_control_flags_reach_the_page():
     flags = control_flags([row("null: disparity shifted", 0.368, 0.185, 0.551)], [])
     html, md = page_of([], flags)
     assert "control off its expected value" in html and flags[0]["text"] in md
+
+
+def test_the_opening_quotes_its_numbers_with_intervals_and_controls():
+    rows = [
+        row("intensity-controlled rho", 0.6128, 0.5666, 0.6589),
+        row("Pearson rho after the warp (Eq. 3)", 0.5501, 0.4843, 0.6158),
+        row("camera baseline: simulated sensor, same N", 0.6905, 0.6798, 0.7012),
+    ]
+    seeding = {"shared": True, "zero": (0.3, 0.2, 0.4)}
+    sure = decision(verdict_result(True), seeding, [], [], rows)["sentences"][0]
+    assert "intensity-controlled rho is 0.613 [0.567, 0.659]" in sure
+    assert "0.550 [0.484, 0.616] is beside 0.691 [0.680, 0.701] for a simulated camera" in sure
+    assert "zero disparity is 0.300 [0.200, 0.400], where independent seeds give 0" in sure

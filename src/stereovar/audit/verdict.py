@@ -487,7 +487,17 @@ LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#80
 """Traffic-light colours of the decision."""
 
 
-def decision(result: dict, seeding: dict, flags: list[dict], mitigations: list[str]) -> dict:
+def _interval(r: dict) -> str:
+    if not _ok(r["value"]):
+        return "n/a"
+    if not _ok(r["low"], r["high"]):
+        return f"{r['value']:.3f} (no interval)"
+    return f"{r['value']:.3f} [{r['low']:.3f}, {r['high']:.3f}]"
+
+
+def decision(
+    result: dict, seeding: dict, flags: list[dict], mitigations: list[str], rows=()
+) -> dict:
     """The page's opening: a traffic light and two or three sentences (what was found, how
     sure, what to do).
 
@@ -506,6 +516,9 @@ def decision(result: dict, seeding: dict, flags: list[dict], mitigations: list[s
     mitigations : list of str
         :func:`stereovar.statistics.mitigations.mitigation_findings` of the audit's own
         mitigation table (empty when ``audit.mitigations`` is not set).
+    rows : list of dict
+        :func:`verdict_rows`: the numbers the sentences quote, each with its interval and
+        its control.
 
     Returns
     -------
@@ -530,10 +543,20 @@ def decision(result: dict, seeding: dict, flags: list[dict], mitigations: list[s
     if seeding.get("shared") is True:
         found += ", and the two views share their random streams"
     headline = found + "."
+    partial, pearson = _find(rows, "intensity-controlled"), _find(rows, "Pearson rho after")
+    camera = _find(rows, "camera baseline: simulated")
+    zero = seeding.get("zero") or (math.nan, math.nan, math.nan)
     sure = (
-        "The finding rests on the intensity-controlled correlation's 95% interval (a real "
-        "camera's noise leaves it at 0)"
-        + (" and on the residual correlation at zero disparity" if seeding.get("shared") else "")
+        f"How sure: the intensity-controlled rho is {_interval(partial)} (95% interval), "
+        "where a real camera's noise gives about 0; the raw Pearson rho "
+        f"{_interval(pearson)} is beside {_interval(camera)} for a simulated camera"
+        + (
+            ", and the residual correlation at zero disparity is "
+            + _interval(dict(zip(("value", "low", "high"), zero, strict=True)))
+            + ", where independent seeds give 0"
+            if seeding.get("shared")
+            else ""
+        )
         + (
             f"; {len(flags)} flag{'s' * (len(flags) != 1)} below "
             f"qualif{'ies' if len(flags) == 1 else 'y'} it."

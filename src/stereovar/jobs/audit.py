@@ -157,7 +157,7 @@ def verdict_job(
         from ..statistics.mitigations import mitigation_findings
 
         findings = mitigation_findings(read_rows(mitigations))
-    opening = decision(result, shared, flags, findings)
+    opening = decision(result, shared, flags, findings, rows)
     lines = summary_lines(name, found, rows, result)
     lines.insert(0, f"{opening['light'].upper()}: {opening['headline']}")
     lines.append(f"  seeding: {shared['text']}")
