@@ -69,6 +69,7 @@ IMPORT_KEYS = (
     "baseline_m",
     "glass_ids",
     "spp",
+    "sign_check",
 )
 """``audit:`` settings that change what a frame imports to (a change re-imports it)."""
 
@@ -117,7 +118,7 @@ def import_settings(settings: dict) -> dict:
 
     Each one not given takes the value the import uses for it (the schema's default:
     ``convention: conventional``, ``scale: 1``, ``disparity_scale: 256``, ``glass_ids: []``,
-    ``spp: 0``); numbers are floats (``scale: 1`` and ``scale: 1.0`` are one import). The
+    ``spp: 0``, ``sign_check: stop``); numbers are floats (``scale: 1`` and ``scale: 1.0`` are one import). The
     settings as written and the same settings with the schema's defaults filled in (the
     workflow's) so give one :func:`settings_digest`.
 
@@ -148,6 +149,7 @@ def import_settings(settings: dict) -> dict:
         "baseline_m": baseline or None,
         "glass_ids": [int(i) for i in settings.get("glass_ids") or []],
         "spp": audit_spp(settings),
+        "sign_check": settings.get("sign_check") or "stop",
     }
 
 
