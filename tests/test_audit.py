@@ -13,7 +13,7 @@ from stereovar.audit.ground_truth import (
     imported_ground_truth,
     left_right_occlusion,
 )
-from stereovar.audit.importer import import_audit, import_record, sha256
+from stereovar.audit.importer import QUANTISED_WARNING, import_audit, import_record, sha256
 from stereovar.audit.layout import discover
 from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import shift_rows, synthetic_frame, write_synthetic_audit
@@ -206,7 +206,9 @@ def test_png8_warns_and_reports_the_floored_fraction(tmp_path, monkeypatch):
     same = (stacks["left"] == stacks["left"][:1]).all(axis=(0, 3))
     valid = frames[0].valid
     fraction = (same & valid).sum() / valid.sum()
-    assert f"floors the variance to 0 at {100 * fraction:.1f}% of the valid pixels" in text
+    assert report.frames[0].floored["left"] == pytest.approx(fraction, abs=1e-12)
+    warned = f"floors the variance to 0 at {100 * fraction:.1f}% of the valid pixels" in text
+    assert warned == (fraction >= QUANTISED_WARNING)
     again = import_audit({**png, "transfer": "srgb", "name": "explicit"})
     assert not any("decoded as sRGB" in w for w in again.warnings)
 

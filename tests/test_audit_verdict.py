@@ -264,8 +264,9 @@ def test_the_png_transfer_assumption_reaches_the_page(tmp_path, monkeypatch):
 
 def test_variance_quantisation_reaches_the_page(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    settings, frames, codes = png_audit(tmp_path, divisor=2.0, transfer=True)
-    import_audit(settings)
+    # dark: noise below one 8-bit step at many pixels (the sign check may not tell then)
+    settings, frames, codes = png_audit(tmp_path, divisor=30.0, transfer=True)
+    import_audit({**settings, "sign_check": "warn"})
     flags = assert_on_page(record_of(), "quantisation")
     # the share against a count: valid left pixels whose 8-bit codes agree in every seed
     valid = frames[0].valid

@@ -118,9 +118,9 @@ def import_settings(settings: dict) -> dict:
 
     Each one not given takes the value the import uses for it (the schema's default:
     ``convention: conventional``, ``scale: 1``, ``disparity_scale: 256``, ``glass_ids: []``,
-    ``spp: 0``, ``sign_check: stop``); numbers are floats (``scale: 1`` and ``scale: 1.0`` are one import). The
-    settings as written and the same settings with the schema's defaults filled in (the
-    workflow's) so give one :func:`settings_digest`.
+    ``spp: 0``, ``sign_check: stop``); numbers are floats (``scale: 1`` and ``scale: 1.0``
+    are one import). The settings as written and the same settings with the schema's
+    defaults filled in (the workflow's) so give one :func:`settings_digest`.
 
     Parameters
     ----------
@@ -328,6 +328,10 @@ WARNING_KINDS = {
     "glass_ids": "glass ids match nothing",
 }
 """Kinds of import warnings (each a flagged row of the verdict page) and their labels."""
+
+QUANTISED_WARNING = 0.001
+"""Share of a view's valid pixels whose renders are all identical (8-bit PNG) from which the
+import warns: quantisation floored their variance to 0."""
 
 CLIPPED_WARNING = 0.001
 """Share of a view's valid pixels at full scale in some render (PNG) above which the
@@ -719,6 +723,8 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             tmp = staged.enter_context(atomic_path(stores[key]))
             write_zarr(ds, tmp, chunk_dims={"seed": 1} if key in VIEWS else None)
     for view, fraction in fr.floored.items():
+        if fraction < QUANTISED_WARNING:
+            continue
         report.warn(
             "quantisation",
             f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "

@@ -53,6 +53,8 @@ _CSS = """
 .thumbs { display: flex; flex-wrap: wrap; gap: 1em; }
 .thumbs figure { margin: 0; }
 p, li { max-width: 60em; }
+.flags td { white-space: normal; vertical-align: top; }
+.flags td.col2 { min-width: 30em; max-width: 60em; }
 """
 
 
@@ -218,7 +220,10 @@ def to_html_page(s: dict) -> str:
         _table_html(s["facts"], FACT_COLUMNS),
     ]
     if s["flags"]:
-        body += ["<h3>Warnings and flags</h3>", _table_html(s["flags"], FLAG_COLUMNS)]
+        body += [
+            "<h3>Warnings and flags</h3>",
+            f'<div class="flags">{_table_html(s["flags"], FLAG_COLUMNS)}</div>',
+        ]
     else:
         body.append("<p>No warnings or flags.</p>")
     body.append('<div class="thumbs">' + "".join(map(_figure, s["thumbnails"])) + "</div>")
