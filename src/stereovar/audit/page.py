@@ -36,8 +36,11 @@ FACT_COLUMNS = [
     "nonfinite_render_px",
     "sign_check",
     "clipped",
+    "quantised",
 ]
-"""Columns of the import-facts table (one row per frame)."""
+"""Columns of the import-facts table (one row per frame): ``clipped`` is the share of a
+view's valid pixels at a PNG's full scale in some render, ``quantised`` the share whose
+8-bit renders are all identical (PNG only; ``n/a`` for float formats)."""
 
 FLAG_COLUMNS = ["flag", "frame", "what"]
 """Columns of the flags table (one row per warning or flag)."""
@@ -74,6 +77,7 @@ def import_facts(records: list[dict]) -> list[dict]:
     for record in records:
         found = record.get("found") or {}
         clipped = found.get("clipped") or {}
+        floored = found.get("floored") or {}
         rows.append(
             {
                 "frame": record.get("frame", ""),
@@ -85,6 +89,8 @@ def import_facts(records: list[dict]) -> list[dict]:
                 "nonfinite_render_px": sum((found.get("nonfinite_pixels") or {}).values()),
                 "sign_check": _sign_fact(found.get("sign") or {}),
                 "clipped": ", ".join(f"{v} {100 * f:.2f}%" for v, f in clipped.items()) or "n/a",
+                "quantised": ", ".join(f"{v} {100 * f:.2f}%" for v, f in floored.items())
+                or "n/a",
             }
         )
     return rows
