@@ -36,6 +36,7 @@ import numpy as np
 
 from ..errors import AuditError, ImageError
 from ..experiment import audit_source, batch_label, ground_truth_store, render_store
+from ..io.channels import ROLES
 from ..io.contracts import config_digest
 from ..io.images import (
     image_format,
@@ -70,6 +71,7 @@ IMPORT_KEYS = (
     "glass_ids",
     "spp",
     "sign_check",
+    "channels",
 )
 """``audit:`` settings that change what a frame imports to (a change re-imports it)."""
 
@@ -118,9 +120,9 @@ def import_settings(settings: dict) -> dict:
 
     Each one not given takes the value the import uses for it (the schema's default:
     ``convention: conventional``, ``scale: 1``, ``disparity_scale: 256``, ``glass_ids: []``,
-    ``spp: 0``, ``sign_check: stop``); numbers are floats (``scale: 1`` and ``scale: 1.0``
-    are one import). The settings as written and the same settings with the schema's
-    defaults filled in (the workflow's) so give one :func:`settings_digest`.
+    ``spp: 0``, ``sign_check: stop``, ``channels: {}``); numbers are floats (``scale: 1``
+    and ``scale: 1.0`` are one import). The settings as written and the same settings with
+    the schema's defaults filled in (the workflow's) so give one :func:`settings_digest`.
 
     Parameters
     ----------
@@ -135,7 +137,8 @@ def import_settings(settings: dict) -> dict:
     Raises
     ------
     AuditError
-        A number that is not one (one line).
+        A number that is not one, or an ``audit.channels`` entry that is not a role and a
+        channel name (one line).
     """
     views = settings.get("views") or {}
     focal, baseline = _number(settings, "focal_px", None), _number(settings, "baseline_m", None)
@@ -150,7 +153,30 @@ def import_settings(settings: dict) -> dict:
         "glass_ids": [int(i) for i in settings.get("glass_ids") or []],
         "spp": audit_spp(settings),
         "sign_check": settings.get("sign_check") or "stop",
+        "channels": _channels(settings),
     }
+
+
+def _channels(settings: dict) -> dict:
+    """``audit.channels``, checked: role (:data:`~stereovar.io.channels.ROLES`) to the
+    EXR channel (for ``render``, the layer) that holds it."""
+    given = settings.get("channels") or {}
+    if not isinstance(given, dict):
+        raise AuditError(
+            f"audit.channels is {given!r}; give a mapping of role to channel name, e.g. "
+            "{depth: ViewLayer.Depth.Z}"
+        )
+    for role, name in given.items():
+        if role not in ROLES:
+            raise AuditError(
+                f"audit.channels has the unknown role {role!r}; use {', '.join(ROLES)}"
+            )
+        if not isinstance(name, str) or not name:
+            raise AuditError(
+                f"audit.channels.{role} is {name!r}, not a channel name; give the EXR "
+                "channel's name (e.g. ViewLayer.Depth.Z) or leave it out"
+            )
+    return {role: given[role] for role in ROLES if role in given}
 
 
 def settings_digest(settings: dict) -> str:
@@ -521,9 +547,13 @@ def _is_png8(path) -> bool:
 
 def _disparity(settings: dict, frame: Frame, reads: _Reads) -> dict:
     gt = frame.ground_truth
+    channels = settings["channels"]
     if "disparity" in gt:
-        scale = settings["disparity_scale"]
-        return {v: reads(read_field, p, png_scale=scale) for v, p in gt["disparity"].items()}
+        scale, channel = settings["disparity_scale"], channels.get("disparity")
+        return {
+            v: reads(read_field, p, png_scale=scale, role="disparity", channel=channel)
+            for v, p in gt["disparity"].items()
+        }
     focal, baseline = settings["focal_px"], settings["baseline_m"]
     if not (focal and baseline):
         raise AuditError(
@@ -531,14 +561,22 @@ def _disparity(settings: dict, frame: Frame, reads: _Reads) -> dict:
             "(d = f B / z); set both, or give audit.disparity"
         )
     return {
-        v: disparity_from_depth(reads(read_field, p), focal_px=focal, baseline_m=baseline)
+        v: disparity_from_depth(
+            reads(read_field, p, role="depth", channel=channels.get("depth")),
+            focal_px=focal,
+            baseline_m=baseline,
+        )
         for v, p in gt["depth"].items()
     }
 
 
 def _depth(settings: dict, frame: Frame, disparity: dict, reads: _Reads) -> dict:
     if "depth" in frame.ground_truth:
-        return {v: reads(read_field, p) for v, p in frame.ground_truth["depth"].items()}
+        channel = settings["channels"].get("depth")
+        return {
+            v: reads(read_field, p, role="depth", channel=channel)
+            for v, p in frame.ground_truth["depth"].items()
+        }
     focal, baseline = settings["focal_px"], settings["baseline_m"]
     if focal and baseline:
         return {
@@ -552,7 +590,9 @@ def _glass(settings: dict, frame: Frame, reads: _Reads):
     gt = frame.ground_truth
     if "glass_mask" in gt:
         path = gt["glass_mask"][VIEWS[0]]
-        return reads(read_field, path) > 0, f"glass mask {path}", None
+        channel = settings["channels"].get("glass_mask")
+        mask = reads(read_field, path, role="glass_mask", channel=channel)
+        return mask > 0, f"glass mask {path}", None
     if "segmentation" in gt:
         ids = settings["glass_ids"]
         if not ids:
@@ -561,7 +601,9 @@ def _glass(settings: dict, frame: Frame, reads: _Reads):
                 "list them (e.g. glass_ids: [3, 7])"
             )
         path = gt["segmentation"][VIEWS[0]]
-        seg = np.rint(reads(read_field, path)).astype(np.int64)
+        channel = settings["channels"].get("segmentation")
+        seg = np.rint(reads(read_field, path, role="segmentation", channel=channel))
+        seg = seg.astype(np.int64)
         glass = np.isin(seg, ids)
         return glass, f"segmentation {path}", _unmatched_ids(seg, ids, path)
     return None, None, None
@@ -635,13 +677,18 @@ def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     return float((same & valid).sum() / max(int(valid.sum()), 1))
 
 
-def _decode_view(paths: list, size: tuple, pool, transfer, scale, reads: _Reads) -> tuple:
+def _decode_view(
+    paths: list, size: tuple, pool, transfer, scale, reads: _Reads, channel=None
+) -> tuple:
     """Decode one view's renders into one ``(n, H, W, 3)`` float32 stack, each file straight
-    into its slice by a worker thread, which also counts its NaN/Inf pixels."""
+    into its slice by a worker thread, which also counts its NaN/Inf pixels; ``channel``:
+    ``audit.channels.render``, the EXR layer of the render."""
     stack = np.empty((len(paths), *size, 3), dtype=np.float32)
 
     def one(k):
-        image = reads(read_image, paths[k], transfer=transfer, scale=scale, out=stack[k])
+        image = reads(
+            read_image, paths[k], transfer=transfer, scale=scale, out=stack[k], channel=channel
+        )
         if np.isfinite(image.sum(dtype=np.float64)):  # one pass when every value is finite
             return 0
         return int((~np.isfinite(image)).any(axis=-1).sum())

@@ -7,8 +7,11 @@ through :func:`read_image` and :func:`read_field`; the export writes ours throug
 line naming the file and the fix, for anything it cannot read.
 
 Libraries: OpenEXR through the ASWF ``OpenEXR`` bindings (the reference implementation: half
-and float channels, Blender's multilayer channel names, header-only reads, multithreaded
-decoding; ``imageio`` needs the FreeImage plugin, a separate binary download, for EXR);
+and float channels, multi-part files, header-only reads, multithreaded decoding; ``imageio``
+needs the FreeImage plugin, a separate binary download, for EXR); an EXR's channels are read
+across all its parts (Blender 5 writes each pass of a multilayer file as a part) and picked
+by what their names mean (:mod:`stereovar.io.channels`: ``ViewLayer.Depth.Z`` is depth,
+``ViewLayer.Combined`` the render), or as ``audit.channels`` names them;
 PNG through OpenCV (the only maintained reader and writer of 16-bit RGB PNG on PyPI; Pillow
 reduces 48-bit RGB to 8 bit); PFM, a plain header and raw float32 rows stored bottom to top,
 by hand; NPY and NPZ through numpy.
@@ -31,14 +34,13 @@ import numpy as np
 
 from ..errors import ImageError
 from ..renderers.quiet import silenced
+from .channels import field_channel, render_channels, unique_channels
 
 FORMATS = ("exr", "pfm", "png", "npy", "npz")
 """File formats by extension (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``)."""
 
 TRANSFERS = ("linear", "srgb")
 """Transfer functions of integer images: stored values are linear, or sRGB-encoded."""
-
-_EXR_FIELD_CHANNELS = ("Z", "depth", "disparity", "Y", "R", "V")
 
 _KINDS = {
     stat.S_IFIFO: "a named pipe",
@@ -183,8 +185,13 @@ def _header_size(f, fmt, path) -> tuple[int, int]:
         import OpenEXR
 
         with OpenEXR.File(f, header_only=True) as exr:
-            lo, hi = exr.header()["dataWindow"]
-        return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
+            sizes = {_window_size(part.header["dataWindow"]): part.name() for part in exr.parts}
+        if len(sizes) > 1:
+            parts = ", ".join(f"{name or 'unnamed'} {w}x{h}" for (h, w), name in sizes.items())
+            raise ImageError(
+                f"{path}: its parts differ in size ({parts}); export every pass at one resolution"
+            )
+        return next(iter(sizes))
     if fmt == "pfm":
         _, width, height, _, _ = _pfm_header(f)
         return height, width
@@ -206,6 +213,12 @@ def _header_size(f, fmt, path) -> tuple[int, int]:
 # --------------------------------------------------------------------------------------------
 # PFM
 # --------------------------------------------------------------------------------------------
+
+
+def _window_size(window) -> tuple[int, int]:
+    """``(height, width)`` of an EXR data window ``(min, max)``, both inclusive."""
+    lo, hi = window
+    return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
 
 
 def _pfm_header(f):
@@ -258,59 +271,41 @@ def write_pfm(path, array) -> None:
 
 
 def _exr_channels(path) -> dict:
-    import OpenEXR
+    """Every channel of an EXR across all its parts: name to its ``(H, W)`` pixels.
 
-    with OpenEXR.File(str(path), separate_channels=True) as f:
-        return {name: ch.pixels for name, ch in f.channels().items()}
-
-
-def _exr_rgb(path) -> np.ndarray:
-    """R, G and B (or one grey channel) of an EXR, from plain or layered channel names
-    (Blender's multilayer files: ``ViewLayer.Combined.R``).
-
-    The file is read with the bindings' channel grouping, so an RGB(A) layer is decoded
-    straight into one interleaved ``(H, W, 3|4)`` array.
+    A multi-part file whose parts repeat a channel name (a multi-view file: one part per pass
+    and view) is refused (:func:`~stereovar.io.channels.unique_channels`).
     """
     import OpenEXR
 
-    with OpenEXR.File(str(path)) as f:
-        channels = {name: ch.pixels for name, ch in f.channels().items()}
-    # grouped names: "RGB"/"RGBA" (no layer) or "<layer>" ("ViewLayer.Combined")
-    rgb = {
-        ("" if name in ("RGB", "RGBA") else name): a
-        for name, a in channels.items()
-        if a.ndim == 3 and a.shape[-1] in (3, 4)
-    }
-    if len(rgb) > 1:
-        combined = [k for k in rgb if k.split(".")[-1] in ("Combined", "rgba", "")]
-        if len(combined) != 1:
-            raise ImageError(
-                f"{path}: several RGB layers ({', '.join(sorted(rgb))}); export one layer "
-                "per file (the combined pass)"
-            )
-        rgb = {combined[0]: rgb[combined[0]]}
-    if rgb:
-        return next(iter(rgb.values()))[..., :3]
-    if len(channels) == 1:
-        grey = next(iter(channels.values()))
-        if grey.ndim == 2:
-            return grey
-    raise ImageError(
-        f"{path}: no R, G, B channels (has {', '.join(sorted(channels))}); write an RGB image"
-    )
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        parts = [
+            (part.header.get("view"), {name: ch.pixels for name, ch in part.channels.items()})
+            for part in f.parts
+            if len(part.channels) == len(part.header["channels"])
+        ]
+        if len(parts) != len(f.parts) or not parts:  # the bindings drop an unreadable part
+            raise ValueError("its pixel data cannot be decoded")
+    unique_channels(((view, list(channels)) for view, channels in parts), path)
+    return {name: pixels for _, channels in parts for name, pixels in channels.items()}
 
 
-def _exr_field(channels: dict, path) -> np.ndarray:
-    if len(channels) == 1:
-        return next(iter(channels.values()))
-    by_last = {name.rpartition(".")[2]: name for name in channels}
-    for name in _EXR_FIELD_CHANNELS:
-        if name in by_last:
-            return channels[by_last[name]]
-    raise ImageError(
-        f"{path}: {len(channels)} channels ({', '.join(sorted(channels))}) and none of "
-        f"{', '.join(_EXR_FIELD_CHANNELS)}; write the field as one channel"
-    )
+def _exr_rgb(path, channel: str | None = None) -> np.ndarray:
+    """The render of an EXR: ``(H, W, 3)`` from the R, G and B of its render layer (plain,
+    Blender's ``ViewLayer.Combined``, Kubric's ``rgba``, BlenderProc's ``colors``), or
+    ``(H, W)`` from its one grey channel; ``channel`` names the layer
+    (:func:`~stereovar.io.channels.render_channels`)."""
+    channels = _exr_channels(path)
+    picked = render_channels(channels, path, channel)
+    if len(picked) == 1:
+        return channels[picked[0]]
+    return np.stack([channels[c] for c in picked], axis=-1)
+
+
+def _exr_field(channels: dict, path, role: str | None = None, channel: str | None = None):
+    """The one channel of ``channels`` holding ``role``
+    (:func:`~stereovar.io.channels.field_channel`)."""
+    return channels[field_channel(channels, role, path, channel)]
 
 
 def _png(path) -> tuple[np.ndarray, int]:
@@ -365,21 +360,31 @@ def _decoded(path, decode):
 
 
 def read_image(
-    path, *, transfer: str | None = None, scale: float = 1.0, out: np.ndarray | None = None
+    path,
+    *,
+    transfer: str | None = None,
+    scale: float = 1.0,
+    out: np.ndarray | None = None,
+    channel: str | None = None,
 ) -> np.ndarray:
     """One render as float32 linear RGB, shape ``(H, W, 3)``.
 
     Parameters
     ----------
     path : path-like
-        ``.exr`` (half or float, RGB(A) or one grey channel), ``.pfm``, ``.png`` (8 or 16
-        bit), ``.npy`` or ``.npz`` (``(H, W, 3)``, ``(H, W, 4)`` or ``(H, W)``).
+        ``.exr`` (half or float, the R, G, B of its render layer or one grey channel, from
+        any part), ``.pfm``, ``.png`` (8 or 16 bit), ``.npy`` or ``.npz`` (``(H, W, 3)``,
+        ``(H, W, 4)`` or ``(H, W)``).
     transfer : {"linear", "srgb"}, optional, keyword-only
         How PNG values encode radiance (default ``srgb``); float formats are linear.
     scale : float, keyword-only
         Radiance of a PNG value of 1 (full scale) after the transfer function.
     out : numpy.ndarray, float32, shape (H, W, 3), optional, keyword-only
         Decode into this array (e.g. one slice of a stack of renders) instead of a new one.
+    channel : str, optional, keyword-only
+        EXR only (``audit.channels.render``): the layer whose R, G, B are the render
+        (``ViewLayer.Combined``), or one grey channel; default: picked by name
+        (:func:`~stereovar.io.channels.render_channels`).
 
     Returns
     -------
@@ -398,7 +403,7 @@ def read_image(
 
     def decode():
         if fmt == "exr":
-            return _exr_rgb(path)
+            return _exr_rgb(path, channel)
         if fmt == "pfm":
             return read_pfm(path)
         if fmt == "png":
@@ -425,23 +430,42 @@ def read_image(
     return out
 
 
-def read_field(path, *, png_scale: float | None = None) -> np.ndarray:
+def read_field(
+    path,
+    *,
+    png_scale: float | None = None,
+    role: str | None = None,
+    channel: str | None = None,
+) -> np.ndarray:
     """One scalar field (disparity, depth, a mask or a segmentation map) as float32 (H, W).
 
     Parameters
     ----------
     path : path-like
-        ``.exr`` (one channel, or ``Z``/``depth``/``disparity``/``Y``/``R``), ``.pfm``
-        (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, first channel),
-        ``.npy`` or ``.npz``.
+        ``.exr`` (its one channel, or the channel holding ``role``, from any part),
+        ``.pfm`` (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, first
+        channel), ``.npy`` or ``.npz``.
     png_scale : float, optional, keyword-only
         Divide PNG values by this (KITTI disparity: 256); default 1 (raw integer values).
+    role : {"depth", "disparity", "segmentation", "glass_mask"}, optional, keyword-only
+        What the field is, to pick an EXR's channel by name
+        (:func:`~stereovar.io.channels.field_channel`: ``ViewLayer.Depth.Z`` is depth,
+        ``ViewLayer.Combined.R`` never is); default: the one channel whose name means a
+        field.
+    channel : str, optional, keyword-only
+        EXR only (``audit.channels``): the channel's name.
+
+    Raises
+    ------
+    ImageError
+        The file cannot be read, or no channel, or more than one, holds ``role`` (one line
+        listing the channels and naming the fix).
     """
     fmt = image_format(path)
 
     def decode():
         if fmt == "exr":
-            return _exr_field(_exr_channels(path), path)
+            return _exr_field(_exr_channels(path), path, role, channel)
         if fmt == "pfm":
             return read_pfm(path)
         if fmt == "png":
