@@ -378,3 +378,27 @@ def test_audit_channels_are_checked_by_the_schema_and_the_import(tmp_path):
     )
     with pytest.raises(AuditError, match=r"audit\.channels\.depth is 3, not a channel name"):
         import_settings({**good, "channels": {"depth": 3}})
+
+
+def test_audit_reads_renders_from_the_layer_audit_channels_names(tmp_path, monkeypatch):
+    # each render written with two view layers: refused until audit.channels.render names one
+    monkeypatch.chdir(tmp_path)
+    settings, frames = write_synthetic_audit(
+        tmp_path / "d", n_frames=1, width=48, height=32, n_seeds=3
+    )
+    for view, letter in (("left", "L"), ("right", "R")):
+        for s, image in enumerate(frames[0].renders[view]):
+            path = settings["renders"].format(frame="f00", view=letter, seed=f"{s:03d}")
+            write_parts(path, {
+                "Front.Combined": planes("Front.Combined", image),
+                "Back.Combined": planes("Back.Combined", np.full_like(image, 0.5)),
+            })
+    with pytest.raises(ImageError) as err:
+        import_audit(settings)
+    assert "audit.channels: {render: <one of them>}" in one_line(err)
+    import_audit({**settings, "channels": {"render": "Front.Combined"}})
+    stored = open_dataset("results/audit/synthetic/renders/f00/right/spp0/seeds0-2.zarr")
+    np.testing.assert_array_equal(
+        stored["radiance"].transpose("seed", "y", "x", "channel").values,
+        frames[0].renders["right"],
+    )

@@ -721,7 +721,10 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         labels = list(frame.renders[view])
         paths = view_files[view] = [str(p) for p in frame.renders[view].values()]
         with report.timed("decode"):
-            images, n_bad = _decode_view(paths, size, pool, transfer, scale, reads)
+            images, n_bad = _decode_view(
+                paths, size, pool, transfer, scale, reads,
+                channel=settings["channels"].get("render"),
+            )
         fr.nonfinite_pixels[view] = int(n_bad.sum())
         _check_distinct(images, frame.name, view, paths)
         means[view] = _seed_mean(images, n_bad)
