@@ -1,5 +1,6 @@
 """The Cycles renderer (render.renderer: cycles) against the renderer-neutral ground truth and
-against Mitsuba, at tiny sizes.
+against Mitsuba, at tiny sizes; and its frames as Blender itself writes them, audited against
+the native measurement.
 
 bpy wheels exist for CPython 3.11 only: on 3.11 these tests run (``make test`` installs the
 ``cycles`` extra) and a missing bpy fails them; on other versions the module is skipped.
@@ -238,3 +239,281 @@ def test_two_renderers_run_end_to_end_and_are_compared(tmp_path):
     assert attrs["renderer"] == "cycles" and '"denoise": false' in attrs["renderer_options"]
     assert attrs["cycles_pixel_filter"] == "BOX 1 px" and attrs["cycles_device"] == "CPU"
     assert planned_jobs(root, "all") == {}
+
+
+AUDIT_SPP, AUDIT_SEEDS = 16, 8
+AUDITED = {
+    "scenes": ["lambertian"],
+    "resolution": {"width": WIDTH, "height": HEIGHT},
+    # right camera to the image-right: x_R = x_L - d, the audit's default convention
+    "rig": {"baseline_m": BASELINE, "convention": "conventional"},
+    "render": {
+        "renderer": "cycles",
+        "spp": AUDIT_SPP,
+        "n_seeds": AUDIT_SEEDS,
+        "seeds_per_job": AUDIT_SEEDS,
+        "max_depth": 4,
+        "spp_sweep": {"scene": "lambertian", "spp": [AUDIT_SPP]},
+    },
+    "preview": {"spp": 4},
+    "mitigations": {"names": []},
+}
+BLENDER_PARTS = {
+    "ViewLayer.Combined": {"ViewLayer.Combined"},  # R, G, B, A: the bindings group them
+    "ViewLayer.Depth": {"ViewLayer.Depth.Z"},
+    "ViewLayer.Object Index": {"ViewLayer.Object Index.X"},
+}
+"""What Blender 5 writes to an OPEN_EXR_MULTILAYER file with the Combined, Depth and Object
+Index passes: one part per pass, each channel named view layer, pass, channel."""
+
+
+def blender_file_output(path, *, spp: int, seed: int) -> None:
+    """What a data team's bpy script does once the camera is placed: set its sampler, keep
+    the colour linear, turn on the Depth (Z) and Object Index passes and let Blender write
+    the render as a float multilayer OpenEXR (lossless ZIP, Blender's default codec;
+    ``dither_intensity`` left at Blender's default, which only touches 8-bit output)."""
+    scene = bpy.context.scene
+    c = scene.cycles
+    c.samples, c.seed, c.use_animated_seed = spp, seed, False
+    c.use_denoising = c.use_adaptive_sampling = False
+    scene.view_settings.view_transform, scene.view_settings.look = "Standard", "None"
+    layer = scene.view_layers["ViewLayer"]
+    layer.use_pass_combined = layer.use_pass_z = layer.use_pass_object_index = True
+    out = scene.render.image_settings
+    out.media_type, out.file_format = "MULTI_LAYER_IMAGE", "OPEN_EXR_MULTILAYER"
+    out.color_depth, out.exr_codec = "32", "ZIP"
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+
+
+def blender_focal_px(width: int) -> float:
+    """The focal length in pixels a team reads off its Blender camera (sensor width fit)."""
+    camera = bpy.context.scene.camera.data
+    assert camera.type == "PERSP" and camera.sensor_fit in ("AUTO", "HORIZONTAL")
+    return camera.lens / camera.sensor_width * width
+
+
+@pytest.mark.workflow
+def test_renders_blender_wrote_audit_to_the_native_verdict(tmp_path):
+    """The same frames measured natively (render.renderer: cycles through the workflow) and
+    audited from the files Blender itself writes: a multilayer EXR per render (Combined,
+    Depth and Object Index passes) and the Depth pass as disparity f B / z in a PFM, with
+    the same scene, rig, seeds and settings.
+
+    Float32 EXR is lossless and Blender dithers only 8-bit output, so the audit reads the
+    native pixels bit for bit. Blender's Depth pass is planar depth at the first hit of the
+    pixel-centre ray (the same for every seed), so f B / z is the ground-truth disparity to
+    float32 rounding (1e-4 px). The audit's valid pixels are the native ones, its
+    intervention rows equal, and its statistics and verdict rows differ only through that
+    rounding of the warp's disparity.
+    """
+    import OpenEXR
+    import yaml
+
+    from stereovar import layout
+    from stereovar.audit.verdict import verdict, verdict_rows
+    from stereovar.io.images import read_image, write_field
+    from stereovar.io.renders import LazyRenders
+    from stereovar.io.store import open_dataset
+    from stereovar.io.tables import read_rows
+    from stereovar.jobs.common import prepare_scene
+    from stereovar.renderers.cycles.settings import cycles_seed
+    from stereovar.renderers.quiet import silenced
+
+    from .test_audit_workflow import NUMBERS
+    from .test_workflow import copy_workflow, snakemake
+
+    scene_name, spp = "lambertian", AUDIT_SPP
+    root = copy_workflow(tmp_path / "wf", AUDITED)
+    spec = {**lambertian_spec(), "name": scene_name}
+    (root / f"scenes/{scene_name}.yaml").write_text(yaml.safe_dump(spec))
+    native_rows = layout.correlation_rows("cycles", "seeds", scene_name, spp)
+    native_intervention = layout.intervention_metrics("cycles", "seeds", scene_name)
+    snakemake(root, "-j2", native_rows, native_intervention)
+    gt = open_dataset(root / layout.ground_truth_store("cycles", scene_name))
+    native = {
+        view: sorted((root / f"results/cycles/renders/{scene_name}/{view}").rglob("seeds*.zarr"))
+        for view in ("left", "right")
+    }
+
+    # the team's frames: the same scene, rig, seeds and settings, saved by Blender
+    prepared = prepare_scene(
+        root / f"scenes/{scene_name}.yaml",
+        renderer="cycles",
+        threads=2,
+        width=WIDTH,
+        height=HEIGHT,
+        baseline_m=BASELINE,
+        convention="conventional",
+    )
+    settings = RenderSettings(max_depth=4)
+    team = root / "team"
+    layer = bpy.context.scene.view_layers["ViewLayer"]
+    depth = {}
+    try:
+        for view, letter in (("left", "L"), ("right", "R")):
+            (stored,) = native[view]
+            sampler_seeds = open_dataset(stored)["sampler_seed"].values
+            assert len(sampler_seeds) == AUDIT_SEEDS
+            images = LazyRenders([stored])
+            for k, (seed, image) in enumerate(zip(sampler_seeds, images, strict=True)):
+                # places the camera and sets every setting, as the workflow's render job did
+                again = prepared.render(view, spp=spp, seed=int(seed), settings=settings)
+                np.testing.assert_array_equal(again, image)
+                path = team / letter / f"seed_{k}.exr"
+                with silenced(1):  # Blender's per-render lines
+                    blender_file_output(path, spp=spp, seed=cycles_seed(seed))
+                exr = OpenEXR.File(str(path))
+                parts = {p.name(): set(p.channels) for p in exr.parts}
+                assert parts == BLENDER_PARTS, parts
+                header = exr.parts[0].header
+                assert str(header["compression"]).endswith("ZIP_COMPRESSION")
+                combined = exr.parts[0].channels["ViewLayer.Combined"].pixels
+                assert combined.dtype == np.float32 and combined.shape == (HEIGHT, WIDTH, 4)
+                z = exr.parts[1].channels["ViewLayer.Depth.Z"].pixels
+                index = exr.parts[2].channels["ViewLayer.Object Index.X"].pixels
+                if view in depth:  # the pixel-centre first hit, whatever the seed
+                    np.testing.assert_array_equal(z, depth[view][0])
+                depth[view] = (z, index)
+                # float32 multilayer EXR is lossless: the native pixels, bit for bit
+                np.testing.assert_array_equal(read_image(path), image)
+    finally:
+        layer.use_pass_z = layer.use_pass_object_index = False
+
+    focal = blender_focal_px(WIDTH)
+    assert focal == pytest.approx(gt.attrs["focal_px"], rel=1e-6)
+    u = (np.arange(WIDTH) + 0.5 - WIDTH / 2) / focal
+    v = (np.arange(HEIGHT) + 0.5 - HEIGHT / 2) / focal
+    ray_length = np.sqrt(1 + u[None, :] ** 2 + v[:, None] ** 2)  # per unit planar depth
+    for view, letter in (("left", "L"), ("right", "R")):
+        z, index = (a.astype(np.float64) for a in depth[view])
+        truth = gt.sel(view=view)
+        # the first hit of the pixel-centre ray: Cycles' own geometry render, exactly
+        np.testing.assert_array_equal(z, prepared.geometry(view)["depth"])
+        # the same object as the ground truth's trace (Mitsuba's geometry) but where a
+        # centre ray grazes an edge and the two ray tracers part (1 right pixel here)
+        same = truth.valid.values & (np.rint(index) - 1 == truth.shape_index.values)
+        assert (truth.valid.values & ~same).sum() <= 2
+        planar = truth.depth.values
+        rel = np.abs(z - planar)[same] / planar[same]
+        as_distance = np.abs(z * ray_length - planar)[same] / planar[same]
+        # planar depth (z along the camera axis), not the distance along the ray
+        assert rel.max() < 1e-3 and as_distance.max() > 0.2, (rel.max(), as_distance.max())
+        disparity = focal * BASELINE / z  # d = f B / z
+        here = same & ~truth.occluded.values
+        error = np.abs(disparity - truth.disparity.values)[here]
+        print(
+            f"{view}: Depth.Z vs planar depth largest relative difference {rel.max():.1e} "
+            f"(as ray distance {as_distance.max():.2f}); f B / z vs ground-truth disparity "
+            f"largest {error.max():.1e} px on {here.sum()} non-occluded pixels; "
+            f"{(truth.valid.values & ~same).sum()} pixels hit another object"
+        )
+        assert error.max() < 1e-3
+        (team / "disparity").mkdir(exist_ok=True)
+        write_field(team / "disparity" / f"{letter}.pfm", disparity.astype(np.float32))
+
+    audit = {
+        "name": "blender",
+        "renders": "team/{view}/seed_{seed}.exr",
+        "frame": scene_name,
+        "views": {"left": "L", "right": "R"},
+        "disparity": "team/disparity/{view}.pfm",
+        "convention": "conventional",  # the photometric sign check runs (sign_check: stop)
+        "spp": spp,
+    }
+    snakemake(root, "-j2", "all", config={**AUDITED, "audit": audit})
+    base = root / "results/audit/blender"
+    imported = open_dataset(base / f"ground_truth/{scene_name}.zarr")
+    # the photometric sign check ran (sign_check: stop) and settled the declared convention
+    check = {k: imported.attrs[f"sign_check_{k}"] for k in ("error", "opposite_error")}
+    assert imported.attrs["convention"] == "conventional" and imported.attrs["disparity_sign"] == -1
+    assert check["opposite_error"] > 2 * check["error"], check
+    left = imported.sel(view="left")
+    assert (left.valid.values == gt.valid.sel(view="left").values).all()
+    # how far the audit's warp disparity is from the native one: the tolerance below
+    eps = float(
+        np.abs(left.disparity.values - gt.disparity.sel(view="left").values)[
+            left.valid.values
+        ].max()
+    )
+    assert eps < 5e-4
+    for view in ("left", "right"):  # the imported stores hold the native pixels
+        (store,) = sorted((base / f"renders/{scene_name}/{view}").rglob("seeds*.zarr"))
+        np.testing.assert_array_equal(
+            np.stack(list(LazyRenders([store]))), np.stack(list(LazyRenders(native[view])))
+        )
+
+    # Eq. 3 and the verdict, native against audited. The variance fields are the same bits;
+    # only the warp's disparity differs, by at most eps px. Bilinear warping moves each
+    # warped value by at most eps times the difference of two neighbouring pixels, so the
+    # statistics and their interval bounds move by a few eps at most: 2 eps is allowed, 4 eps
+    # for the attenuation-corrected rho (divided by sqrt(reliabilities), about 0.6 here).
+    # The intervention searches whole-pixel disparities: its rows are equal.
+    run = f"{base.relative_to(root)}/seeds"
+    audited = {
+        "correlation": read_rows(root / f"{run}/correlation/{scene_name}/spp{spp}.csv"),
+        "intervention": read_rows(root / f"{run}/intervention/{scene_name}.csv"),
+    }
+    natively = {
+        "correlation": read_rows(root / native_rows),
+        "intervention": read_rows(root / native_intervention),
+    }
+    ours = {(r["method"]): r for r in natively["correlation"] if r["region"] == "all"}
+    theirs = {(r["method"]): r for r in audited["correlation"] if r["region"] == "all"}
+    assert ours.keys() == theirs.keys()
+    worst = 0.0
+    for method, n in ours.items():
+        a = theirs[method]
+        assert (a["n_pixels"], a["mean_a"]) == (n["n_pixels"], n["mean_a"]), method
+        for col in NUMBERS:
+            if col == "mean_a" or np.isnan(float(n[col])):
+                assert np.isnan(float(a[col])) == np.isnan(float(n[col])), (method, col)
+                continue
+            tol = (4 if col == "rho_corrected" else 2) * eps
+            diff = abs(float(a[col]) - float(n[col]))
+            assert diff <= tol, (method, col, n[col], a[col])
+            worst = max(worst, diff)
+
+    def lifts(rows):
+        return {
+            (r["source"], r["cost"], r["metric"], r["condition"]): (r["value"], r["n_pixels"])
+            for r in rows
+            if r["region"] == "all"
+        }
+
+    assert lifts(audited["intervention"]) == lifts(natively["intervention"])
+    native_verdict = verdict_rows(natively["correlation"], natively["intervention"])
+    audit_verdict = verdict_rows(audited["correlation"], audited["intervention"])
+    summary = yaml.safe_load((base / "summary.json").read_text())
+    page = {r["quantity"]: r for r in summary["rows"] if r["region"] == "all"}
+    # region all: the audit has no material mask, so no glass or non_glass rows
+    native_all, audit_all = (
+        [r for r in rows if r["region"] == "all"] for rows in (native_verdict, audit_verdict)
+    )
+    for n, a in zip(native_all, audit_all, strict=True):
+        assert n["quantity"] == a["quantity"]
+        tol = (4 if n["quantity"].startswith("attenuation") else 2) * eps
+        for col in ("value", "low", "high"):
+            assert a[col] == pytest.approx(n[col], abs=tol), (n["quantity"], col)
+            assert page[n["quantity"]][col] == pytest.approx(n[col], abs=5e-5 + tol)
+    expected = verdict(native_verdict)
+    assert summary["mc_specific"] is expected["mc_specific"] is True
+    assert summary["strength"] == expected["strength"]
+    assert summary["matching_cue"] == expected["matching_cue"]
+
+    def row(rows, quantity):
+        r = next(r for r in rows if r["quantity"].startswith(quantity) and r["region"] == "all")
+        return f"{r['value']:.6f} [{r['low']:.6f}, {r['high']:.6f}]"
+
+    for quantity in ("Pearson", "intensity-controlled", "C_sigma WTA accuracy minus chance, r"):
+        print(
+            f"{quantity}: native {row(native_verdict, quantity)}, "
+            f"audit {row(audit_verdict, quantity)}"
+        )
+    print(
+        f"verdict: {expected['strength']} Monte Carlo-specific cue "
+        f"(mc_specific {summary['mc_specific']}, matching cue {summary['matching_cue']}, "
+        f"light {summary['light']}); sign check: median error {check['error']:.3f} declared, "
+        f"{check['opposite_error']:.3f} opposite; warp disparity within {eps:.1e} px; largest "
+        f"row difference {worst:.1e} (tolerance {2 * eps:.1e})"
+    )
