@@ -13,8 +13,11 @@ Every :class:`~stereovar.errors.StereovarError` is printed as one line,
 from __future__ import annotations
 
 import argparse
+import contextvars
+import re
 import sys
 
+from . import errors as error_classes
 from .errors import StereovarError
 
 PROG = "stereovar"
@@ -113,11 +116,363 @@ def _project_root():
 
 
 def _snakemake(args: list, root) -> int:
+    """Run ``snakemake ARGS`` in ``root``; its output goes to the terminal, or, while a
+    command has set :data:`_MONITOR` (``stereovar audit``), through that monitor."""
     import subprocess
 
     cmd = [sys.executable, "-m", "snakemake", *args]
+    monitor = _MONITOR.get()
+    if monitor is not None:
+        return monitor.run(cmd, root)
     print("stereovar: running " + " ".join(cmd[1:]), file=sys.stderr)
     return subprocess.run(cmd, cwd=root, check=False).returncode
+
+
+#: The :class:`_AuditMonitor` that :func:`_snakemake` runs Snakemake through, if any.
+_MONITOR: contextvars.ContextVar = contextvars.ContextVar("stereovar_monitor", default=None)
+
+#: The stages ``stereovar audit`` reports, in order, and the workflow rules of each. A rule
+#: named nowhere counts as ``statistics``; ``all`` (the target, no work) counts nowhere.
+AUDIT_STAGES = {
+    "import": ("audit_import",),
+    "statistics": (
+        "variance",
+        "warp",
+        "correlation",
+        "statistics_table",
+        "cross_scene_table",
+        "spp_sweep_table",
+        "statistics_dot_figure",
+        "rho_vs_seeds_figure",
+        "audit_teaser",
+        "audit_thumbnail",
+    ),
+    "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
+    "intervention": ("intervention", "intervention_table", "margin_figure"),
+    "mitigations": (
+        "render_policy",
+        "render_aux",
+        "transform",
+        "mitigation_scene",
+        "mitigations_table",
+        "mitigations",
+    ),
+    "verdict": ("audit_verdict",),
+}
+_STAGE_OF = {rule: stage for stage, rules in AUDIT_STAGES.items() for rule in rules}
+
+# What the monitor reads in Snakemake's output, the only account of the run Snakemake gives
+# without a logger plugin installed: the "Job stats:" table (jobs planned per rule), each job's
+# header ("rule X:" or "localrule X:", then "jobid: N"), "Finished jobid: N (Rule: X)"
+# (Snakemake 9; "Finished job N." before it), "Error in rule X:" blocks with the job's
+# "log:", "Nothing to be done", and the jobs' own log lines ("<date> <time> LEVEL message",
+# stereovar.jobs.common.run_job), whose errors are one "error: ..." line.
+_STAMP = r"\d{4}-\d\d-\d\d[ T]\d\d:\d\d:\d\d(?:[,.]\d+)?"
+_STATS_ROW = re.compile(r"(\S+)\s+(\d+)")
+_JOB_HEADER = re.compile(r"(?:local)?(?:rule|checkpoint) (\S+):")
+_JOB_ID = re.compile(r"\s+jobid: (\d+)")
+_RENDERER = re.compile(r"\s+wildcards: (?:.*, )?renderer=([^,\s]+).*")
+_FINISHED = re.compile(r"Finished jobid: (\d+)(?: \(Rule: ([^)\s]+)\))?|Finished job (\d+)\.")
+_FAILED = re.compile(r"Error in rule (\S+):")
+_FAILED_LOG = re.compile(r"\s+log: (.*?)(?: \(check log file\(s\) for error details\))?")
+_JOB_LINE = re.compile(rf"{_STAMP} ([A-Z]+) (.*)")
+_EXCEPTION = re.compile(r"(\w*(?:Error|Exception))(?: in (?:rule \S+ in )?(?:file|line) .*)?:")
+#: Exceptions Snakemake raises to say that a job failed (the job's own error is in its log).
+_JOB_FAILED = ("RuleException", "CalledProcessError")
+
+
+def _job_error(line: str) -> str | None:
+    """The message of a job's ``ERROR`` log line (without its ``error:``), else None."""
+    match = _JOB_LINE.fullmatch(line.rstrip("\n"))
+    if not match or match.group(1) != "ERROR":
+        return None
+    message = match.group(2).strip()
+    return message[len("error:") :].strip() if message.startswith("error:") else message
+
+
+def _log_error(path) -> str | None:
+    """The first error line of a job's log file, else its last line; None without one."""
+    from pathlib import Path
+
+    try:
+        lines = Path(path).read_text(errors="replace").splitlines()
+    except OSError:
+        return None
+    errors = [m for m in map(_job_error, lines) if m]
+    last = [line.strip() for line in lines if line.strip()]
+    return errors[0] if errors else (last[-1] if last else None)
+
+
+class _AuditMonitor:
+    """Snakemake's run of an audit: its whole output goes to ``log`` (and, ``verbose``, live
+    to stderr); the monitor follows it and prints one line per stage on stderr (``import:
+    ... done``), and after the run the failed jobs' one-line errors (:meth:`errors`).
+
+    Stages advance in :data:`AUDIT_STAGES` order: a stage is done when every job the
+    "Job stats:" table planned for its rules has finished and the stages before it are done.
+    A job on a mitigated copy of the audit's renders (wildcard ``renderer``
+    ``<source>/<mitigation>``: its variance, warp, correlation, intervention) counts as
+    ``mitigations``, from the moment it starts (until then, as its rule's stage).
+    """
+
+    def __init__(self, log, *, import_label: str, source: str = "", verbose: bool = False):
+        from collections import Counter, deque
+
+        self.log, self.import_label, self.verbose = log, import_label, verbose
+        self.planned: dict = {}  # stage: jobs
+        self.finished: Counter = Counter()  # stage: jobs
+        self.rule_of: dict = {}  # job id: rule
+        self.stage_of: dict = {}  # job id: stage, for jobs not in their rule's
+        self.source = source  # the audit's renderer wildcard, audit/<name>
+        self.failed: list = []  # {"rule", "logs"} per "Error in rule" block
+        self.job_errors: list = []  # the jobs' ERROR lines in the output
+        self.tail: deque = deque(maxlen=500)
+        self.stats = None  # None, "reading", "read"
+        self.nothing = False  # "Nothing to be done"
+        self.total = None  # jobs planned, all rules
+        self.shown: list = []  # stages whose line is complete
+        self.open = None  # the stage whose line is printed, not yet ended
+        self._rule = None
+        self._job = None
+        self._block = None
+
+    # -- running ------------------------------------------------------------------------------
+
+    def run(self, cmd: list, root) -> int:
+        import os
+        import subprocess
+
+        header = "stereovar: running " + " ".join(cmd[1:]) + "\n"
+        self.log.write(header)
+        if self.verbose:
+            sys.stderr.write(header)
+        env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONIOENCODING": "utf-8"}
+        proc = subprocess.Popen(
+            cmd,
+            cwd=root,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            encoding="utf-8",
+            errors="replace",
+            bufsize=1,
+        )
+        try:
+            for line in proc.stdout:
+                self.log.write(line)
+                self.log.flush()
+                if self.verbose:
+                    sys.stderr.write(line)
+                    sys.stderr.flush()
+                self.feed(line)
+        except KeyboardInterrupt:  # Snakemake got it too: let it stop, keep what it says
+            self.log.writelines(proc.stdout)
+        finally:
+            proc.stdout.close()
+            rc = proc.wait()
+        return rc
+
+    def feed(self, line: str) -> None:
+        """Follow one line of Snakemake's output."""
+        line = line.rstrip("\n")
+        self.tail.append(line)
+        if self.stats == "reading":
+            row = _STATS_ROW.fullmatch(line.strip())
+            if row and row.group(1) == "total" or not line.strip():
+                self.stats = "read"
+                self.total = int(row.group(2)) if row else None
+                self._planned()
+            elif row and row.group(1) != "job":
+                stage = self._stage(row.group(1))
+                if stage:
+                    self.planned[stage] = self.planned.get(stage, 0) + int(row.group(2))
+            return
+        if self._block is not None:
+            if line[:1].isspace():
+                logs = _FAILED_LOG.fullmatch(line)
+                if logs:
+                    self._block["logs"] += [p for p in logs.group(1).split(", ") if p]
+                return
+            self._block = None
+        message = _job_error(line)
+        if message:
+            if message not in self.job_errors:
+                self.job_errors.append(message)
+        elif line == "Job stats:" and self.stats is None:
+            self.stats = "reading"
+        elif line.startswith("Nothing to be done"):
+            self.nothing = True
+        elif match := _JOB_HEADER.fullmatch(line):
+            self._rule, self._job = match.group(1), None
+        elif (match := _JOB_ID.fullmatch(line)) and self._rule:
+            self._job = match.group(1)
+            self.rule_of[self._job] = self._rule
+        elif (match := _RENDERER.fullmatch(line)) and self._job:
+            self._mitigated(self._job, match.group(1))
+        elif match := _FINISHED.match(line):
+            jobid = match.group(1) or match.group(3)
+            stage = self.stage_of.get(jobid) or self._stage(
+                match.group(2) or self.rule_of.get(jobid)
+            )
+            if stage:
+                self.finished[stage] += 1
+                if self.stats:
+                    self.planned[stage] = max(self.planned.get(stage, 0), self.finished[stage])
+                    self._advance()
+        elif match := _FAILED.fullmatch(line):
+            self._block = {"rule": match.group(1), "logs": []}
+            self.failed.append(self._block)
+
+    def _mitigated(self, jobid: str, renderer: str) -> None:
+        """A job on a mitigated copy of the renders counts as ``mitigations``."""
+        stage = self._stage(self.rule_of[jobid])
+        if (
+            not self.source
+            or not renderer.startswith(self.source + "/")
+            or stage in (None, "mitigations")
+        ):
+            return
+        self.stage_of[jobid] = "mitigations"
+        if self.stats:
+            self.planned[stage] = self.planned.get(stage, 1) - 1
+            self.planned["mitigations"] = self.planned.get("mitigations", 0) + 1
+            self._advance()
+
+    @staticmethod
+    def _stage(rule):
+        if not rule or rule == "all":
+            return None
+        return _STAGE_OF.get(rule, "statistics")
+
+    # -- progress lines -----------------------------------------------------------------------
+
+    def _label(self, stage: str) -> str:
+        if stage == "import":
+            return self.import_label
+        return stage
+
+    def _print(self, text: str, end: str = "\n") -> None:
+        if not self.verbose:
+            print(text, end=end, file=sys.stderr, flush=True)
+
+    def _begin(self, stage: str) -> None:
+        self.open = stage
+        self._print(f"{self._label(stage)} ... ", end="")
+
+    def _end(self, word: str) -> None:
+        self._print(word)
+        self.shown.append(self.open)
+        self.open = None
+
+    def _planned(self) -> None:
+        """The table is read: an audit whose import is up to date says so first."""
+        if not self.planned.get("import"):
+            self._print(f"{self.import_label} ... up to date")
+            self.shown.append("import")
+        self._advance()
+
+    def _advance(self, final: bool = False) -> None:
+        for stage in AUDIT_STAGES:
+            if stage in self.shown or not self.planned.get(stage):
+                continue
+            if self.open != stage:
+                self._begin(stage)
+            if not final and self.finished[stage] < self.planned[stage]:
+                return
+            n = self.finished[stage]
+            self._end(
+                "done" if stage in ("import", "verdict") else f"done ({n} job{'s' * (n != 1)})"
+            )
+
+    def finish(self, rc: int) -> None:
+        """End the progress lines after Snakemake exited with ``rc``."""
+        if rc == 0:
+            if self.nothing and not self.stats:
+                self._print(f"{self.import_label} ... up to date")
+            if self.nothing or self.total == 0:  # --until prints a table of no jobs
+                self._print("Nothing to be done: every result is up to date")
+                return
+            if not self.stats:  # no table read: report what finished
+                self.planned = dict(self.finished)
+            self._advance(final=True)
+            return
+        failed = {self._stage(job["rule"]) for job in self.failed}
+        if self.open:
+            self._end("failed" if self.open in failed else "stopped")
+        for stage in AUDIT_STAGES:
+            if stage in failed and stage not in self.shown:
+                self.open = stage
+                self._end("failed")
+
+    # -- errors -------------------------------------------------------------------------------
+
+    def job_logs(self) -> list:
+        """The log files of the jobs that failed."""
+        return list(dict.fromkeys(p for job in self.failed for p in job["logs"]))
+
+    def errors(self, rc: int) -> list:
+        """One line per distinct error of a failed run: each failed job's error line (from
+        its log file, else from the output), else Snakemake's own (an exception it raised
+        before or between jobs), else its exit status."""
+        messages = []
+        for job in self.failed:
+            message = next(filter(None, map(_log_error, job["logs"])), None)
+            messages.append(message or f"rule {job['rule']} failed")
+        if self.failed and not any(map(_log_error, self.job_logs())):
+            messages = self.job_errors or messages
+        if not messages:
+            messages = [self._exception() or f"snakemake stopped with exit status {rc}"]
+        return list(dict.fromkeys(messages))
+
+    def _exception(self) -> str | None:
+        lines = list(self.tail)
+        for k, line in enumerate(lines):
+            match = _EXCEPTION.fullmatch(line.strip())
+            if not match or match.group(1) in _JOB_FAILED:
+                continue
+            rest = [text.strip() for text in lines[k + 1 :] if text.strip()]
+            if rest and "did not complete successfully" not in rest[0]:
+                ours = isinstance(getattr(error_classes, match.group(1), None), type)
+                return rest[0] if ours else f"{match.group(1)}: {rest[0]}"
+        return None
+
+
+def _audit_log(root, name: str):
+    """A new file for the whole Snakemake output of one ``stereovar audit``,
+    ``logs/audit/<name>/stereovar-audit-<time>.log`` under ``root`` (never one that exists)."""
+    import time
+
+    folder = root / "logs" / "audit" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    stem = f"stereovar-audit-{time.strftime('%Y%m%d-%H%M%S')}"
+    for k in range(1, 1000):
+        path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
+        try:
+            return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (closed by caller)
+        except FileExistsError:
+            continue
+    raise StereovarError(f"{folder}: cannot create a new log file there")
+
+
+def _import_warnings(root, name: str, frames) -> list:
+    """The ``warning:`` lines of the audit's import logs (rule ``audit_import``'s
+    ``logs/audit/<name>/import/<frame>.log``), each once."""
+    warnings = []
+    for frame in frames:
+        path = root / "logs" / "audit" / name / "import" / f"{frame}.log"
+        try:
+            lines = path.read_text(errors="replace").splitlines()
+        except OSError:
+            continue
+        for line in lines:
+            match = _JOB_LINE.fullmatch(line)
+            text = (match.group(2) if match else line).strip()
+            if text.startswith("warning:"):
+                text = text[len("warning:") :].strip()
+                if text not in warnings:
+                    warnings.append(text)
+    return warnings
 
 
 def _workflow_config(root, files) -> dict:
@@ -133,9 +488,11 @@ def _workflow_config(root, files) -> dict:
 
 def _cmd_audit(args: argparse.Namespace) -> int:
     import json
+    import os
     from pathlib import Path
 
-    from .audit.run import audit_paths
+    from .audit.run import audit_paths, discover_audit
+    from .layout import audit_source
     from .schema import load_yaml
 
     root = _project_root()
@@ -149,23 +506,53 @@ def _cmd_audit(args: argparse.Namespace) -> int:
             f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
             "convention; see the README's 'Audit your own renders')"
         )
-    # The whole config, as the workflow will see it, before any file is read; the import is
-    # the workflow's (one audit_import job per frame).
+    # The whole config, as the workflow will see it, before any file is read; then the
+    # files, found (not read) as the workflow finds them; the import is the workflow's (one
+    # audit_import job per frame).
     settings = _workflow_config(root, [config])["audit"]
+    name = settings["name"]
+    discovery = discover_audit(settings)
     command = ["-j", str(args.cores), "all", "--configfile", str(config.resolve())]
     if args.import_only:
         command += ["--until", "audit_import"]
-    rc = _snakemake(command, root)
+    log_path, log = _audit_log(root, name)
+    shown_log = os.path.relpath(log_path)
+    monitor = _AuditMonitor(
+        log,
+        import_label=f"import: {discovery.summary()}",
+        source=audit_source(name),
+        verbose=args.verbose,
+    )
+    token = _MONITOR.set(monitor)
+    try:
+        rc = _snakemake(command, root)
+    finally:
+        _MONITOR.reset(token)
+        log.close()
+    monitor.finish(rc)
+    paths = audit_paths(name)
+    summary = root / paths["summary"]
+    lines = json.loads(summary.read_text())["summary"] if rc == 0 and not args.import_only else []
+    # the import's warnings, each once: those the verdict's summary does not already say
+    for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
+        if not any(warning in line for line in lines):
+            print(f"warning: {warning}", file=sys.stderr)
     if rc != 0:
+        for message in monitor.errors(rc):
+            print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+        jobs = monitor.job_logs()
+        print(
+            f"log: {shown_log}" + (f" (the failed job's: {', '.join(jobs)})" if jobs else ""),
+            file=sys.stderr,
+        )
         return rc
-    paths = audit_paths(settings["name"])
     if args.import_only:
         records = root / Path(paths["summary"]).parent / "import"
-        print(f"imported {settings['name']}: one record per frame in {records}")
-        return 0
-    summary = root / paths["summary"]
-    print("\n".join(json.loads(summary.read_text())["summary"]))
-    print(f"verdict page: {summary.parent / 'verdict.html'}")
+        print(f"imported {name}: one record per frame in {records}")
+    else:
+        print("\n".join(lines))
+        print(f"verdict page: {summary.parent / 'verdict.html'}")
+    print(f"log: {shown_log}")
     return 0
 
 
@@ -201,7 +588,11 @@ def _register_audit(subparsers) -> None:
         help="audit renders made elsewhere for the cross-view variance cue",
         description="Import N >= 2 renders per view of stereo frames and their ground truth "
         "(the audit: section of CONFIG), run every statistic, control and the intervention on "
-        "them, and print the verdict's summary; the page is results/audit/<name>/verdict.html.",
+        "them, and print the verdict's summary; the page is results/audit/<name>/verdict.html. "
+        "Prints one line per stage (import, statistics, controls, intervention, mitigations, "
+        "verdict) and the import's warnings; Snakemake's whole output goes to a log file whose "
+        "path is printed (-v shows it live). A failed job: its one-line error, the log's "
+        "path and a non-zero exit status.",
     )
     audit.add_argument("config", metavar="CONFIG", help="YAML config with an audit: section")
     audit.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
@@ -209,6 +600,13 @@ def _register_audit(subparsers) -> None:
         "--import-only",
         action="store_true",
         help="run only the import jobs (one per frame: decode, check, sign-check, store)",
+    )
+    audit.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="show Snakemake's whole output live (it always goes to "
+        "logs/audit/<name>/stereovar-audit-<time>.log)",
     )
     audit.set_defaults(func=_cmd_audit)
     export = subparsers.add_parser(
