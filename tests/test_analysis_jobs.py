@@ -209,7 +209,9 @@ def test_intervention_job_and_table(tmp_path, caplog):
     # D defaults to the largest ground-truth disparity plus the margin.
     assert {r["max_disparity"] for r in rows} == {D + 4}
     stored = read_rows(tmp_path / "iv.csv")
-    assert len(stored) == 20 and stored[0]["scene"] == "synth"
+    # 5 metrics x 3 regions (all, non_glass, glass) x 2 conditions
+    assert len(stored) == 30 and stored[0]["scene"] == "synth"
+    assert {r["region"] for r in stored} == {"all", "non_glass", "glass"}
     samples = read_rows(tmp_path / "margins.csv")
     groups = {(s["cost"], s["region"], s["condition"]) for s in samples}
     assert {s["scene"] for s in samples} == {"synth"} and len(groups) >= 4
