@@ -90,6 +90,23 @@ def correlation_summary(rows: list[dict], method: str, region: str) -> tuple:
     )
 
 
+def _interval(value, low, high) -> str:
+    """``value [low, high]`` to 3 decimals (``n/a``; ``(no interval)``)."""
+    if not _ok(value):
+        return "n/a"
+    if not _ok(low, high):
+        return f"{value:.3f} (no interval)"
+    return f"{value:.3f} [{low:.3f}, {high:.3f}]"
+
+
+def _row(quantity: str, region: str, value, low, high, note: str) -> dict:
+    """One :data:`VERDICT_COLUMNS` row."""
+    return {
+        "quantity": quantity, "region": region, "value": value, "low": low, "high": high,
+        "note": note,
+    }
+
+
 def _reason(rows, region) -> str:
     reasons = {str(r.get("reason") or "") for r in rows if r["region"] == region} - {""}
     return "; ".join(sorted(reasons))
@@ -131,28 +148,11 @@ def verdict_rows(correlations: list[dict], intervention: list[dict]) -> list[dic
             if region != "all" and not _ok(value):
                 continue
             why = "" if _ok(value) else _reason(correlations, region)
-            out.append(
-                {
-                    "quantity": label,
-                    "region": region,
-                    "value": value,
-                    "low": low,
-                    "high": high,
-                    "note": why or note,
-                }
-            )
+            out.append(_row(label, region, value, low, high, why or note))
     for source, label in (("render", "renders"), ("sensor", "simulated camera frames")):
         value, low, high = wta_lift(intervention, source)
-        out.append(
-            {
-                "quantity": f"C_sigma WTA accuracy minus chance, {label}",
-                "region": "all",
-                "value": value,
-                "low": low,
-                "high": high,
-                "note": "intervention (Sec. 3.4)",
-            }
-        )
+        quantity = f"C_sigma WTA accuracy minus chance, {label}"
+        out.append(_row(quantity, "all", value, low, high, "intervention (Sec. 3.4)"))
     return out
 
 
@@ -248,11 +248,7 @@ def summary_lines(name: str, found: str, rows: list[dict], result: dict) -> list
 
     def fmt(label):
         r = _find(rows, label)
-        if not _ok(r["value"]):
-            return "n/a"
-        if not _ok(r["low"], r["high"]):
-            return f"{r['value']:.3f} (no interval)"
-        return f"{r['value']:.3f} [{r['low']:.3f}, {r['high']:.3f}]"
+        return _interval(r["value"], r["low"], r["high"])
 
     lift = _find(rows, "C_sigma WTA accuracy minus chance, renders")
     camera = _find(rows, "C_sigma WTA accuracy minus chance, simulated")
@@ -333,11 +329,7 @@ def seeding_finding(rows: list[dict]) -> dict:
     gt = seeding_summary(rows, "ground_truth")
 
     def iv(t):
-        if not _ok(t[0]):
-            return "n/a"
-        if not _ok(t[1], t[2]):
-            return f"{t[0]:.3f} (no interval)"
-        return f"{t[0]:.3f} [{t[1]:.3f}, {t[2]:.3f}]"
+        return _interval(*t)
 
     if not _ok(zero[0], zero[1]):
         shared, text = None, (
@@ -372,16 +364,8 @@ def seeding_rows(rows: list[dict]) -> list[dict]:
             value, low, high = seeding_summary(rows, alignment, region)
             if region != "all" and not _ok(value):
                 continue
-            out.append(
-                {
-                    "quantity": label,
-                    "region": region,
-                    "value": value,
-                    "low": low,
-                    "high": high,
-                    "note": "shared random streams" if alignment == "zero" else "seeding",
-                }
-            )
+            note = "shared random streams" if alignment == "zero" else "seeding"
+            out.append(_row(label, region, value, low, high, note))
     return out
 
 
@@ -487,14 +471,6 @@ LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#80
 """Traffic-light colours of the decision."""
 
 
-def _interval(r: dict) -> str:
-    if not _ok(r["value"]):
-        return "n/a"
-    if not _ok(r["low"], r["high"]):
-        return f"{r['value']:.3f} (no interval)"
-    return f"{r['value']:.3f} [{r['low']:.3f}, {r['high']:.3f}]"
-
-
 def decision(
     result: dict, seeding: dict, flags: list[dict], mitigations: list[str], rows=()
 ) -> dict:
@@ -543,16 +519,19 @@ def decision(
     if seeding.get("shared") is True:
         found += ", and the two views share their random streams"
     headline = found + "."
+    def iv(r):
+        return _interval(r["value"], r["low"], r["high"])
+
     partial, pearson = _find(rows, "intensity-controlled"), _find(rows, "Pearson rho after")
     camera = _find(rows, "camera baseline: simulated")
     zero = seeding.get("zero") or (math.nan, math.nan, math.nan)
     sure = (
-        f"How sure: the intensity-controlled rho is {_interval(partial)} (95% interval), "
+        f"How sure: the intensity-controlled rho is {iv(partial)} (95% interval), "
         "where a real camera's noise gives about 0; the raw Pearson rho "
-        f"{_interval(pearson)} is beside {_interval(camera)} for a simulated camera"
+        f"{iv(pearson)} is beside {iv(camera)} for a simulated camera"
         + (
             ", and the residual correlation at zero disparity is "
-            + _interval(dict(zip(("value", "low", "high"), zero, strict=True)))
+            + _interval(*zero)
             + ", where independent seeds give 0"
             if seeding.get("shared")
             else ""
