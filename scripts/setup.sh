@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
-# `pip install -e ".[test,cycles,mitigations]"` (skipped while pyproject.toml is unchanged;
-# the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn).
+# `pip install -e ".[test,cycles,mitigations,probe]"` (skipped while pyproject.toml is unchanged;
+# the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn;
+# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB).
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
 # Environment:
@@ -124,9 +125,9 @@ want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("py
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else
-    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations]\")"
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations]" \
-        || die "pip install -e \".[test,cycles,mitigations]\" failed (see the pip output above)"
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations,probe]\")"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations,probe]" \
+        || die "pip install -e \".[test,cycles,mitigations,probe]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
 fi
 

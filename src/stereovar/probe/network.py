@@ -1,0 +1,192 @@
+"""The learned matcher: MC-CNN "fast" (Žbontar & LeCun, JMLR 2016, Sec. 3.2).
+
+A siamese network maps a grey image to one unit feature vector per pixel; the matching score
+of a left pixel and a right pixel is the dot product (cosine similarity) of their features.
+Four 3x3 convolutions with 64 feature maps, ReLU between them and none after the last, see a
+9x9 patch; no padding, so a feature map is 8 pixels narrower and shorter than its image and
+feature :math:`(y, x)` belongs to image pixel :math:`(y + 4, x + 4)`.
+
+Importing this module imports PyTorch (the ``probe`` extra).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+__all__ = [
+    "FEATURES",
+    "KERNEL",
+    "LAYERS",
+    "MatchingNet",
+    "border",
+    "dense_features",
+    "score_volume",
+    "wta_disparity",
+]
+
+FEATURES = 64
+"""Feature maps of every layer (MC-CNN fast)."""
+LAYERS = 4
+"""Convolutions."""
+KERNEL = 3
+"""Kernel side."""
+
+
+def border(layers: int = LAYERS, kernel: int = KERNEL) -> int:
+    """Pixels lost on each side by the unpadded convolutions: ``layers * (kernel - 1) / 2``.
+
+    Examples
+    --------
+    >>> border()
+    4
+    """
+    return int(layers) * (int(kernel) - 1) // 2
+
+
+class MatchingNet(nn.Module):
+    """MC-CNN fast: a 9x9 grey patch to a unit feature vector.
+
+    .. math::
+
+        f(P) = \\frac{g(P)}{\\lVert g(P) \\rVert_2}, \\quad
+        g = c_4 \\circ \\mathrm{ReLU} \\circ c_3 \\circ \\mathrm{ReLU} \\circ c_2 \\circ
+            \\mathrm{ReLU} \\circ c_1, \\qquad
+        s(p_L, p_R) = \\langle f(P_L), f(P_R) \\rangle,
+
+    with :math:`c_i` a 3x3 convolution to 64 maps (Žbontar & LeCun 2016, Sec. 3.2).
+
+    Parameters
+    ----------
+    features, layers, kernel : int, keyword-only
+
+    Examples
+    --------
+    >>> net = MatchingNet()
+    >>> sum(p.numel() for p in net.parameters())
+    111424
+    >>> tuple(net(torch.zeros(1, 1, 9, 9)).shape)
+    (1, 64, 1, 1)
+    """
+
+    def __init__(self, *, features: int = FEATURES, layers: int = LAYERS, kernel: int = KERNEL):
+        super().__init__()
+        modules: list[nn.Module] = []
+        for i in range(int(layers)):
+            modules.append(nn.Conv2d(1 if i == 0 else features, features, kernel))
+            if i < layers - 1:
+                modules.append(nn.ReLU())
+        self.body = nn.Sequential(*modules)
+        self.features = int(features)
+        self.layers = int(layers)
+        self.kernel = int(kernel)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """Unit features of a batch of grey images (B, 1, H, W) -> (B, F, H - 8, W - 8)."""
+        return F.normalize(self.body(x), dim=1)
+
+
+@torch.no_grad()
+def dense_features(net: MatchingNet, image) -> torch.Tensor:
+    """Features of every pixel of one grey image, computed once.
+
+    Parameters
+    ----------
+    net : MatchingNet
+    image : numpy.ndarray, shape (H, W)
+        A network input (:func:`stereovar.probe.inputs.network_input`).
+
+    Returns
+    -------
+    torch.Tensor, shape (F, H - 2b, W - 2b)
+        With :math:`b` = :func:`border`.
+    """
+    x = torch.as_tensor(np.ascontiguousarray(image, dtype=np.float32))[None, None]
+    return net.eval()(x)[0]
+
+
+@torch.no_grad()
+def score_volume(feat_left, feat_right, *, sign: int, max_disparity: int) -> torch.Tensor:
+    """The learned matching score of every left pixel and disparity.
+
+    .. math::
+
+        S(x, y, d) = \\langle f_L(x, y), f_R(x + s d, y) \\rangle, \\qquad
+        d = 0, \\dots, D,
+
+    and :math:`-\\infty` where :math:`x + s d` leaves the feature map.
+
+    Parameters
+    ----------
+    feat_left, feat_right : torch.Tensor, shape (F, h, w)
+    sign : {1, -1}, keyword-only
+        :math:`s`, the ground truth's ``disparity_sign`` (right pixel at :math:`x + s d`).
+    max_disparity : int, keyword-only
+
+    Returns
+    -------
+    torch.Tensor, shape (D + 1, h, w)
+
+    Examples
+    --------
+    >>> f = torch.nn.functional.normalize(torch.randn(8, 3, 10), dim=0)
+    >>> s = score_volume(f[:, :, :-2], f[:, :, 2:], sign=-1, max_disparity=3)
+    >>> bool((s.argmax(0)[:, 2:] == 2).all())
+    True
+    """
+    sign = int(sign)
+    if sign not in (1, -1):
+        raise ValueError(f"sign must be 1 or -1, got {sign}")
+    if feat_left.shape != feat_right.shape:
+        raise ValueError(
+            f"left and right features differ: {tuple(feat_left.shape)} vs "
+            f"{tuple(feat_right.shape)}"
+        )
+    _, h, w = feat_left.shape
+    out = torch.full((int(max_disparity) + 1, h, w), -torch.inf)
+    for d in range(int(max_disparity) + 1):
+        if d >= w:
+            break
+        if sign > 0:
+            out[d, :, : w - d] = (feat_left[:, :, : w - d] * feat_right[:, :, d:]).sum(0)
+        else:
+            out[d, :, d:] = (feat_left[:, :, d:] * feat_right[:, :, : w - d]).sum(0)
+    return out
+
+
+def wta_disparity(
+    net: MatchingNet, left, right, *, sign: int, max_disparity: int
+) -> np.ndarray:
+    """Winner-take-all disparity of a grey pair: dense features once per view, one dot product
+    per disparity, the best score per pixel; no aggregation, no SGM.
+
+    .. math::
+
+        \\hat d(x, y) = \\arg\\max_{0 \\le d \\le D} S(x, y, d)
+
+    Parameters
+    ----------
+    net : MatchingNet
+    left, right : numpy.ndarray, shape (H, W)
+        Network inputs of the two views.
+    sign : {1, -1}, keyword-only
+    max_disparity : int, keyword-only
+
+    Returns
+    -------
+    numpy.ndarray, float64, shape (H, W)
+        :math:`\\hat d`; NaN in the :func:`border` the features do not reach.
+    """
+    if np.shape(left) != np.shape(right) or np.ndim(left) != 2:
+        raise ValueError(
+            f"left and right must be grey images of one shape, got {np.shape(left)} and "
+            f"{np.shape(right)}"
+        )
+    b = border(net.layers, net.kernel)
+    fl, fr = dense_features(net, left), dense_features(net, right)
+    volume = score_volume(fl, fr, sign=sign, max_disparity=max_disparity)
+    out = np.full(np.shape(left), np.nan)
+    out[b:-b, b:-b] = volume.argmax(0).numpy().astype(np.float64)
+    return out

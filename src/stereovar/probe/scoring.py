@@ -1,0 +1,79 @@
+"""Scoring one predicted disparity map: per-tile sums of every metric, per region.
+
+A prediction :math:`\\hat d` is scored on the pixels of a region that have a ground-truth
+disparity :math:`d` and a prediction (the network's border has none):
+
+.. math::
+
+    \\mathrm{hit} = [\\,|\\hat d - d| < 1\\,], \\qquad
+    \\mathrm{EPE} = |\\hat d - d|, \\qquad
+    \\mathrm{pulled} = [\\,|\\hat d - (d + k)| < 1\\,],
+
+the last for the cue-conflict input, whose right residual lines up at :math:`d + k`. The
+sums are kept per bootstrap tile (:func:`stereovar.statistics.bootstrap.tile_labels`), so
+that intervals can resample tiles (:mod:`stereovar.probe.metrics`).
+
+Importing this module pulls in only numpy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["SUMS", "tile_sums"]
+
+SUMS = ("n", "hits", "abs_error", "pulled")
+"""The per-tile sums: scored pixels, hits, summed end-point error, pixels pulled to d + k."""
+
+
+def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
+    """Per-tile sums of the metrics of one prediction over one region.
+
+    Parameters
+    ----------
+    d_hat, d_gt : array_like, shape (H, W)
+        Predicted and ground-truth disparity magnitudes; NaN where there is none.
+    mask : array_like of bool, shape (H, W)
+        The region.
+    labels : array_like of int, shape (H, W)
+        Tile index of each pixel.
+    conflict_shift : int, keyword-only
+        :math:`k`.
+
+    Returns
+    -------
+    dict
+        ``tile`` (the tiles with a scored pixel) and one int or float array per :data:`SUMS`.
+
+    Examples
+    --------
+    >>> d = np.array([[2.0, 2.0, 5.0, np.nan]])
+    >>> s = tile_sums(np.array([[2.0, 5.0, 5.0, 1.0]]), d, np.ones((1, 4), bool),
+    ...               np.array([[0, 0, 1, 1]]), conflict_shift=3)
+    >>> s["tile"].tolist(), s["n"].tolist(), s["hits"].tolist(), s["pulled"].tolist()
+    ([0, 1], [2, 1], [1, 1], [1, 0])
+    >>> s["abs_error"].tolist()
+    [3.0, 0.0]
+    """
+    d_hat = np.asarray(d_hat, dtype=np.float64)
+    d_gt = np.asarray(d_gt, dtype=np.float64)
+    labels = np.asarray(labels)
+    mask = np.asarray(mask, dtype=bool)
+    if not d_hat.shape == d_gt.shape == mask.shape == labels.shape:
+        raise ValueError(
+            f"prediction, ground truth, mask and tile labels differ in shape: {d_hat.shape}, "
+            f"{d_gt.shape}, {mask.shape}, {labels.shape}"
+        )
+    scored = mask & np.isfinite(d_hat) & np.isfinite(d_gt)
+    tiles = labels[scored]
+    err = np.abs(d_hat[scored] - d_gt[scored])
+    pulled = np.abs(d_hat[scored] - d_gt[scored] - int(conflict_shift)) < 1
+    used, inverse = np.unique(tiles, return_inverse=True)
+    k = used.size
+    return {
+        "tile": used,
+        "n": np.bincount(inverse, minlength=k),
+        "hits": np.bincount(inverse, weights=err < 1, minlength=k).astype(np.int64),
+        "abs_error": np.bincount(inverse, weights=err, minlength=k),
+        "pulled": np.bincount(inverse, weights=pulled, minlength=k).astype(np.int64),
+    }

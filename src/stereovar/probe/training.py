@@ -1,0 +1,278 @@
+"""Training the learned matcher on single renders with their ground-truth disparity.
+
+Each step draws ``crops`` crops of ``crop_rows`` x ``crop_cols`` features from random
+training frames (one seed's render of each view; the right crop reaches as far as the largest
+disparity) and computes both views' features densely. Every left pixel of a crop with a ground-truth disparity :math:`d` gives one triplet
+(Žbontar & LeCun 2016, Sec. 3.2): a positive right pixel at
+:math:`x + s\\,\\mathrm{round}(d + o_+)`, :math:`o_+ \\sim U(-p, p)`, and a negative one at
+:math:`x + s\\,\\mathrm{round}(d \\pm o_-)`, :math:`o_- \\sim U(n_{lo}, n_{hi})` with a random
+sign, scored by the hinge loss
+
+.. math::
+
+    \\mathcal L = \\max\\bigl(0,\\ m + s(p_L, p_-) - s(p_L, p_+)\\bigr), \\qquad m = 0.2.
+
+The offsets are MC-CNN's Middlebury values (:math:`p = 0.5`, :math:`n_{lo} = 1.5`,
+:math:`n_{hi} = 6`), which fit disparities of 1-13 px: a positive is the nearest integer
+right pixel, a negative lies 1-6 px off. Dense crops give each step thousands of triplets
+for the price of one forward pass per view.
+
+Importing this module imports PyTorch (the ``probe`` extra).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import torch
+
+from .network import MatchingNet, border
+
+__all__ = [
+    "OPTIMISERS",
+    "TrainSettings",
+    "TrainingFrame",
+    "hinge_loss",
+    "load_matcher",
+    "save_matcher",
+    "train_matcher",
+]
+
+OPTIMISERS = ("adam", "sgd")
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """``probe.training``: steps, crops per step, feature rows and columns per crop, the offsets
+    :math:`p, n_{lo}, n_{hi}`, the margin :math:`m`, the optimiser, its learning rate and
+    momentum (SGD), and the Torch threads of the job."""
+
+    steps: int = 300
+    crops: int = 4
+    crop_rows: int = 16
+    crop_cols: int = 64
+    pos: float = 0.5
+    neg_low: float = 1.5
+    neg_high: float = 6.0
+    margin: float = 0.2
+    optimiser: str = "adam"
+    learning_rate: float = 1e-3
+    momentum: float = 0.9
+    threads: int = 1
+
+    def __post_init__(self):
+        if self.optimiser not in OPTIMISERS:
+            raise ValueError(
+                f"probe.training.optimiser {self.optimiser!r} is unknown; use one of "
+                + ", ".join(OPTIMISERS)
+            )
+        if not 0 <= self.pos < self.neg_low < self.neg_high:
+            raise ValueError(
+                "probe.training needs 0 <= pos < neg_low < neg_high, got "
+                f"{self.pos}, {self.neg_low}, {self.neg_high}"
+            )
+        for name in ("steps", "crops", "crop_rows", "crop_cols", "threads"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"probe.training.{name} must be >= 1")
+
+
+@dataclass(frozen=True)
+class TrainingFrame:
+    """One training pair: network inputs ``left`` and ``right`` (H, W) float32
+    (:func:`stereovar.probe.inputs.network_input`), the left view's ``disparity`` (H, W),
+    NaN outside the scored set, and the ground truth's ``sign``."""
+
+    left: np.ndarray
+    right: np.ndarray
+    disparity: np.ndarray
+    sign: int
+
+    def __post_init__(self):
+        shapes = {np.shape(self.left), np.shape(self.right), np.shape(self.disparity)}
+        if len(shapes) != 1 or np.ndim(self.left) != 2:
+            raise ValueError(f"a training frame needs three (H, W) arrays, got {sorted(shapes)}")
+        if int(self.sign) not in (1, -1):
+            raise ValueError(f"sign must be 1 or -1, got {self.sign}")
+
+
+def hinge_loss(s_pos: torch.Tensor, s_neg: torch.Tensor, margin: float) -> torch.Tensor:
+    """Mean of :math:`\\max(0, m + s_- - s_+)`.
+
+    Examples
+    --------
+    >>> float(hinge_loss(torch.tensor([1.0, 0.5]), torch.tensor([0.0, 0.5]), 0.2))
+    0.1
+    """
+    return torch.relu(margin + s_neg - s_pos).mean()
+
+
+def _reach(frames, settings: TrainSettings) -> int:
+    """Columns a right crop extends past its left crop: the largest disparity plus the
+    largest offset."""
+    d_max = max(float(np.nanmax(f.disparity, initial=0.0)) for f in frames)
+    return int(np.ceil(d_max + settings.neg_high)) + 1
+
+
+def _crop_batch(frames, settings: TrainSettings, b: int, reach: int, rng: np.random.Generator):
+    """Left crops (S, 1, rows + 2b, cols + 2b), right crops ``reach`` columns wider on the
+    side of the disparity sign, the left crops' disparities (S, rows, cols), the column of
+    each left feature in its right crop's feature map (S, 1, cols) and the signs (S,)."""
+    rows, cols = int(settings.crop_rows), int(settings.crop_cols)
+    lefts, rights, disps, starts, signs = [], [], [], [], []
+    for _ in range(int(settings.crops)):
+        frame = frames[int(rng.integers(len(frames)))]
+        height, width = frame.left.shape
+        sign = int(frame.sign)
+        lo = reach if sign < 0 else 0
+        hi = width - (cols + 2 * b) - (reach if sign > 0 else 0)
+        x0 = int(rng.integers(lo, hi + 1))
+        y0 = int(rng.integers(0, height - rows - 2 * b + 1))
+        xr0 = x0 - reach if sign < 0 else x0
+        ys = slice(y0, y0 + rows + 2 * b)
+        lefts.append(frame.left[ys, x0 : x0 + cols + 2 * b])
+        rights.append(frame.right[ys, xr0 : xr0 + cols + 2 * b + reach])
+        disps.append(frame.disparity[y0 + b : y0 + b + rows, x0 + b : x0 + b + cols])
+        starts.append(x0 - xr0 + np.arange(cols))
+        signs.append(sign)
+    as_t = lambda arrays: torch.from_numpy(np.stack(arrays)[:, None].astype(np.float32))  # noqa: E731
+    starts = np.stack(starts)[:, None, :]
+    return as_t(lefts), as_t(rights), np.stack(disps), starts, np.asarray(signs)
+
+
+def _columns(d, starts, signs, offset, width: int):
+    """Right feature columns of the right pixels :math:`x + s\\,\\mathrm{round}(d + o)`."""
+    col = starts + signs[:, None, None] * np.rint(d + offset)
+    ok = np.isfinite(col) & (col >= 0) & (col <= width - 1)
+    return np.where(ok, col, 0).astype(np.int64), ok
+
+
+def _gather(features: torch.Tensor, cols: np.ndarray) -> torch.Tensor:
+    idx = torch.from_numpy(cols)[:, None].expand(-1, features.shape[1], -1, -1)
+    return torch.gather(features, 3, idx)
+
+
+def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
+    """Train one :class:`~stereovar.probe.network.MatchingNet` on ``frames``.
+
+    Parameters
+    ----------
+    frames : sequence of TrainingFrame
+        Of one width; each at least ``crop_rows + 8`` rows high.
+    settings : TrainSettings, optional
+    seed : int, keyword-only
+        Seeds Torch's initialisation and the draws of crops and offsets; the same seed, data
+        and thread count give the same weights on one machine.
+
+    Returns
+    -------
+    net : MatchingNet
+    history : dict
+        ``loss`` per step, ``triplets`` per step, ``seconds`` of the loop and ``step_seconds``.
+    """
+    settings = settings or TrainSettings()
+    frames = list(frames)
+    if not frames:
+        raise ValueError("no training frame; the probe needs at least one scene to train on")
+    widths = {f.left.shape[1] for f in frames}
+    heights = {f.left.shape[0] for f in frames}
+    if len(widths) != 1:
+        raise ValueError(f"training frames differ in width: {sorted(widths)}")
+    net = _seeded_net(seed)
+    b = border(net.layers, net.kernel)
+    reach = _reach(frames, settings)
+    if (
+        min(heights) < settings.crop_rows + 2 * b
+        or min(widths) < settings.crop_cols + 2 * b + reach
+    ):
+        raise ValueError(
+            f"training frames of {min(heights)}x{min(widths)} px are too small for crops of "
+            f"{settings.crop_rows}x{settings.crop_cols} features and {reach} px of disparity "
+            "reach; lower probe.training.crop_rows or crop_cols"
+        )
+    torch.set_num_threads(int(settings.threads))
+    if settings.optimiser == "adam":
+        opt = torch.optim.Adam(net.parameters(), lr=settings.learning_rate)
+    else:
+        opt = torch.optim.SGD(
+            net.parameters(), lr=settings.learning_rate, momentum=settings.momentum
+        )
+    rng = np.random.default_rng([int(seed), 1])
+    losses, counts = [], []
+    start = time.perf_counter()
+    net.train()
+    for _ in range(int(settings.steps)):
+        left, right, d, starts, signs = _crop_batch(frames, settings, b, reach, rng)
+        width = int(right.shape[3]) - 2 * b
+        o_pos = rng.uniform(-settings.pos, settings.pos, d.shape)
+        o_neg = rng.uniform(settings.neg_low, settings.neg_high, d.shape)
+        o_neg *= rng.choice((-1.0, 1.0), d.shape)
+        c_pos, ok_pos = _columns(d, starts, signs, o_pos, width)
+        c_neg, ok_neg = _columns(d, starts, signs, o_neg, width)
+        keep = torch.from_numpy(ok_pos & ok_neg)
+        if not bool(keep.any()):
+            losses.append(float("nan"))
+            counts.append(0)
+            continue
+        fl, fr = net(left), net(right)
+        s_pos = (fl * _gather(fr, c_pos)).sum(1)[keep]
+        s_neg = (fl * _gather(fr, c_neg)).sum(1)[keep]
+        loss = hinge_loss(s_pos, s_neg, settings.margin)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(float(loss.detach()))
+        counts.append(int(keep.sum()))
+    seconds = time.perf_counter() - start
+    net.eval()
+    history = {
+        "loss": losses,
+        "triplets": counts,
+        "seconds": seconds,
+        "step_seconds": seconds / max(int(settings.steps), 1),
+    }
+    return net, history
+
+
+def _seeded_net(seed: int) -> MatchingNet:
+    torch.manual_seed(int(seed))
+    return MatchingNet()
+
+
+def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, meta: dict):
+    """Write a trained network with its training settings, seed and ``meta`` (condition,
+    training scenes, ...) to ``path`` atomically (a ``torch.save`` file)."""
+    from ..io.store import write_file
+
+    payload = {
+        "state_dict": net.state_dict(),
+        "architecture": {"features": net.features, "layers": net.layers, "kernel": net.kernel},
+        "settings": asdict(settings),
+        "seed": int(seed),
+        "meta": dict(meta),
+        "torch": torch.__version__,
+    }
+    return write_file(path, lambda tmp: torch.save(payload, tmp))
+
+
+def load_matcher(path) -> tuple[MatchingNet, dict]:
+    """A network written by :func:`save_matcher` and its record (settings, seed, meta).
+
+    Raises
+    ------
+    ValueError
+        ``path`` is not such a file (one line naming it).
+    """
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+        net = MatchingNet(**payload["architecture"])
+        net.load_state_dict(payload["state_dict"])
+    except (OSError, KeyError, RuntimeError, TypeError, ValueError) as err:
+        raise ValueError(
+            f"{path}: not a stereovar probe network ({type(err).__name__}: {err}); delete it "
+            "and rerun the probe to train it again"
+        ) from None
+    net.eval()
+    record = {k: v for k, v in payload.items() if k != "state_dict"}
+    return net, record
