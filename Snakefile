@@ -42,6 +42,7 @@ include: "workflow/rules/claims.smk"
 include: "workflow/rules/estimators.smk"
 include: "workflow/rules/audit.smk"
 include: "workflow/rules/mitigations.smk"
+include: "workflow/rules/probe.smk"
 
 
 onstart:

@@ -157,6 +157,7 @@ AUDIT_STAGES = {
         "mitigations_table",
         "mitigations",
     ),
+    "probe": ("probe_train", "probe_test", "probe_table", "probe"),
     "verdict": ("audit_verdict",),
 }
 _STAGE_OF = {rule: stage for stage, rules in AUDIT_STAGES.items() for rule in rules}

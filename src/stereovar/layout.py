@@ -23,7 +23,9 @@ source key:
     transform only);
 ``{estimator}/...``
     everything computed from those renders by one estimator: ``variance``, ``warped``,
-    ``correlation``, ``intervention``, ``mitigation``, ``tables``, ``figures``.
+    ``correlation``, ``intervention``, ``mitigation``, ``tables``, ``figures``;
+``probe/networks/fold{f}/seed{j}.pt`` and ``probe/tiles/fold{f}.csv``
+    the learned probe's networks trained on these renders and their scores on them.
 
 Ground truth belongs to the scene, not to a transform: ``results/ground_truth/{scene}.zarr``
 (traced for every renderer) or ``results/audit/{name}/ground_truth/{frame}.zarr`` (imported).
@@ -72,6 +74,11 @@ __all__ = [
     "mitigation_tables",
     "moment_store",
     "preview",
+    "probe_figure",
+    "probe_network",
+    "probe_tables",
+    "probe_tiles",
+    "probe_verdict",
     "render_store",
     "run_figure",
     "run_prefix",
@@ -327,6 +334,43 @@ def mitigation_tables(source: str | None = None) -> list[str]:
     if source is not None and is_audit(source):
         return table_paths("mitigations", f"{RESULTS}/{source}/tables")
     return table_paths("mitigations")
+
+
+def probe_network(source: str, fold, seed, transform: str = NONE) -> str:
+    """One trained probe network of a training condition, fold and training seed:
+    ``results/{source}[/{transform}]/probe/networks/fold{fold}/seed{seed}.pt``."""
+    return f"{RESULTS}/{source_key(source, transform)}/probe/networks/fold{fold}/seed{seed}.pt"
+
+
+def probe_tiles(source: str, fold, transform: str = NONE) -> str:
+    """The per-tile scores of every network on one fold's held-out scenes, tested on the
+    renders of ``source`` after ``transform``:
+    ``results/{source}[/{transform}]/probe/tiles/fold{fold}.csv``."""
+    return f"{RESULTS}/{source_key(source, transform)}/probe/tiles/fold{fold}.csv"
+
+
+def probe_tables(source: str | None = None) -> list[str]:
+    """The probe table: ``results/tables/probe.*``, or ``results/audit/{name}/tables/probe.*``
+    for an audit."""
+    if source is not None and is_audit(source):
+        return table_paths("probe", f"{RESULTS}/{source}/tables")
+    return table_paths("probe")
+
+
+def probe_figure(source: str | None = None) -> str:
+    """Accuracy per test input for each training condition: ``results/figures/probe.png``,
+    or ``results/audit/{name}/figures/probe.png`` for an audit."""
+    if source is not None and is_audit(source):
+        return f"{RESULTS}/{source}/figures/probe.png"
+    return f"{RESULTS}/figures/probe.png"
+
+
+def probe_verdict(source: str | None = None) -> str:
+    """The probe's verdict as numbers: ``results/tables/probe_verdict.json``, or
+    ``results/audit/{name}/tables/probe_verdict.json`` for an audit."""
+    if source is not None and is_audit(source):
+        return f"{RESULTS}/{source}/tables/probe_verdict.json"
+    return f"{RESULTS}/tables/probe_verdict.json"
 
 
 def scene_tables() -> list[str]:

@@ -116,6 +116,9 @@ rule audit_verdict:
         # audit.mitigations: the mitigation table and its figure
         mitigations=mitigation_targets()[:1],
         mitigation_figure=mitigation_targets()[-1:],
+        # audit.probe: the learned probe's verdict and figure
+        probe=probe_targets()[-1:],
+        probe_figure=probe_targets()[-2:-1],
     output:
         md=layout.audit_verdict("{name}", "md"),
         html=report(

@@ -56,6 +56,8 @@ rule claims:
         ],
         # the mitigation table, when mitigations.names asks for one
         mitigations=mitigation_targets()[:1],
+        # the probe's verdict, once `snakemake probe` has made it
+        probe=probe_if_run()[-1:],
     output:
         **table_outputs(
             layout.claims_tables(),

@@ -118,6 +118,8 @@ wildcard_constraints:
     estimator="|".join(ESTIMATORS),
     transform="|".join(TRANSFORMS),
     policy="|".join(SEED_POLICY_MITIGATIONS),
+    fold=r"\d+",
+    train_seed=r"\d+",
 
 
 WIDTH = config["resolution"]["width"]
@@ -412,13 +414,19 @@ def all_targets():
     """Everything `snakemake all` builds, for the configured renderer and estimator (for an
     audit: its verdict page and everything behind it, :func:`stereovar.audit.run.audit_targets`)."""
     if AUDIT:
-        return [*render_stores(), *audit_targets(config), *mitigation_targets()]
+        return [
+            *render_stores(),
+            *audit_targets(config),
+            *mitigation_targets(),
+            *probe_targets(),
+        ]
     shared = [
         *[layout.traced_ground_truth(s) for s in SCENES],
         *layout.scene_tables(),
         *layout.claims_tables(),
         layout.summary_json(),
         *mitigation_targets(),
+        *probe_if_run(),
     ]
     if len(RENDERER_RUNS) > 1:
         shared += [
@@ -774,3 +782,83 @@ def mitigation_targets():
     if not MITIGATION_RUNS:
         return []
     return [*MITIGATION_TABLES, MITIGATION_FIGURE]
+
+
+# The learned probe (stereovar.probe): one network per training condition, fold and training
+# seed; one test job per condition and fold scores that condition's networks and the control's
+# on the fold's held-out scenes rendered under the condition.
+from stereovar.probe.conditions import probe_runs
+from stereovar.probe.metrics import CONTROL as PROBE_CONTROL
+
+PROBE = config["probe"]
+PROBE_WANTED = not AUDIT or bool(AUDIT.get("probe"))
+with exit_with_one_line():
+    PROBE_RUNS = {run.name: run for run in probe_runs(config)} if PROBE_WANTED else {}
+PROBE_FOLDS = int(PROBE["folds"])
+PROBE_SEEDS = list(range(int(PROBE["train_seeds"])))
+PROBE_SOURCE = get_renderer()
+PROBE_TABLES = layout.probe_tables(PROBE_SOURCE)
+PROBE_FIGURE = layout.probe_figure(PROBE_SOURCE)
+PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
+PROBE_KEYS = {layout.source_key(run.source, run.transform): run for run in PROBE_RUNS.values()}
+
+
+def probe_folds():
+    """(training scenes, held-out scenes) of every fold; a config error when the scenes
+    cannot fill ``probe.folds`` folds."""
+    from stereovar.probe.experiment import fold_scenes
+    from stereovar.errors import ConfigError
+
+    try:
+        return fold_scenes(SCENES, PROBE_FOLDS)
+    except ValueError as err:
+        raise ConfigError(f"config key 'probe.folds': {err}") from None
+
+
+def probe_stores(key, scenes):
+    """Render stores of each view and the ground truth of ``scenes`` under source key ``key``,
+    named ``left_{scene}``, ``right_{scene}`` and ``gt_{scene}``."""
+    run = PROBE_KEYS[key]
+    stores = {}
+    for scene in scenes:
+        views = seed_stores(run_config(key), scene, run.spp)
+        stores.update({f"{view}_{scene}": views[view] for view in VIEWS})
+        stores[f"gt_{scene}"] = ground_truth_store(key, scene)
+    return stores
+
+
+def probe_train_inputs(wildcards):
+    """The training scenes of the wildcards' fold, rendered under its condition."""
+    return probe_stores(wildcards.renderer, probe_folds()[int(wildcards.fold)][0])
+
+
+def probe_test_inputs(wildcards):
+    """The held-out scenes of the wildcards' fold under its condition, and every network of
+    that condition and of the control for this fold."""
+    source, _ = layout.split_source_key(wildcards.renderer)
+    fold = int(wildcards.fold)
+    keys = dict.fromkeys([wildcards.renderer, layout.source_key(source, PROBE_CONTROL)])
+    return {
+        **probe_stores(wildcards.renderer, probe_folds()[fold][1]),
+        "networks": [layout.probe_network(k, fold, j) for k in keys for j in PROBE_SEEDS],
+    }
+
+
+def probe_tile_files():
+    """Every test job's tile table."""
+    return [layout.probe_tiles(key, f) for key in PROBE_KEYS for f in range(PROBE_FOLDS)]
+
+
+def probe_targets():
+    """`snakemake probe`: the probe table, figure and verdict (nothing for an audit without
+    ``audit.probe: true``)."""
+    if not PROBE_RUNS:
+        return []
+    return [*PROBE_TABLES, PROBE_FIGURE, PROBE_VERDICT]
+
+
+def probe_if_run():
+    """The probe's outputs when they exist (they are not part of `all`; a run that made them
+    has its report and summary include them)."""
+    targets = probe_targets()
+    return targets if targets and all(Path(p).exists() for p in targets) else []

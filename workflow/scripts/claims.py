@@ -13,6 +13,7 @@ run_job(
     sweep=snakemake.input.sweep,
     interventions=list(snakemake.input.interventions),
     mitigations=(list(snakemake.input.mitigations) or [None])[0],
+    probe=(list(snakemake.input.probe) or [None])[0],
     outputs={k: v for k, v in outputs.items() if k != "summary"},
     summary=outputs["summary"],
     # read here, not a param: a config change outside the analysis must not rerun the claims

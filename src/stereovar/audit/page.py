@@ -134,10 +134,12 @@ def page_sections(
     mitigations: list[str],
     thumbnails: list[str],
     figures: list[str],
+    probe: str = "",
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
-    ``thumbnails`` and ``figures`` are paths relative to the page.
+    ``thumbnails`` and ``figures`` are paths relative to the page; ``probe`` is the learned
+    probe's verdict paragraph (``audit.probe: true``).
     """
     banners = [f["text"] for f in flags if f["kind"] == "sign_check"]
     return {
@@ -153,6 +155,7 @@ def page_sections(
         "table": table,
         "caption": caption,
         "mitigations": mitigations,
+        "probe": probe,
         "figures": figures,
     }
 
@@ -189,6 +192,8 @@ def to_markdown_page(s: dict) -> str:
     ]
     if s["mitigations"]:
         lines += ["## Mitigations", "", *[f"- {f}" for f in s["mitigations"]], ""]
+    if s.get("probe"):
+        lines += ["## Learned probe", "", s["probe"], ""]
     lines += [f"![{Path(f).stem}]({f})" for f in s["figures"]] + [""]
     return "\n".join(lines)
 
@@ -242,6 +247,8 @@ def to_html_page(s: dict) -> str:
     if s["mitigations"]:
         items = "".join(f"<li>{e(f)}</li>" for f in s["mitigations"])
         body.append(f"<h2>Mitigations</h2>\n<ul>{items}</ul>")
+    if s.get("probe"):
+        body.append(f"<h2>Learned probe</h2>\n<p>{e(s['probe'])}</p>")
     body += [_figure(f) for f in s["figures"]]
     page = to_html([], ["quantity"], caption=s["title"])
     head = page[: page.index("<body>")].replace("</style>", _CSS + "</style>", 1)

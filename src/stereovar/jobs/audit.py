@@ -116,6 +116,8 @@ def verdict_job(
     imports=(),
     mitigations=None,
     mitigation_figure=None,
+    probe=None,
+    probe_figure=None,
 ) -> dict:
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``.
 
@@ -127,7 +129,8 @@ def verdict_job(
     intervals, the plain-language verdict, whether the views share their random streams
     (``seeding``: :func:`seeding_job`), the teasers and, with ``mitigations`` (the audit's
     mitigation table), which mitigation removes the Monte Carlo-specific part and at what
-    cost (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure."""
+    cost (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure; with
+    ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure."""
     from ..audit.page import import_flags, page_sections, to_html_page, to_markdown_page
     from ..audit.verdict import (
         RULES,
@@ -173,6 +176,11 @@ def verdict_job(
         return [Path(t).relative_to(base).as_posix() for t in paths]
 
     figures = relative(teasers) + (relative([mitigation_figure]) if mitigation_figure else [])
+    probe_result = json.loads(Path(probe).read_text()) if probe else None
+    if probe_figure:
+        figures += relative([probe_figure])
+    if probe_result:
+        lines.append(f"probe: {probe_result['paragraph']}")
     sections = page_sections(
         name=name,
         found=found,
@@ -186,6 +194,7 @@ def verdict_job(
         mitigations=findings,
         thumbnails=relative(thumbnails),
         figures=figures,
+        probe=probe_result["paragraph"] if probe_result else "",
     )
     summary = {
         "audit": name,
@@ -198,6 +207,7 @@ def verdict_job(
         "flags": flags,
         "summary": lines,
         "mitigations": findings,
+        "probe": probe_result,
         "rules": RULES,
         "rows": json.loads(json.dumps(table, default=str).replace("NaN", "null")),
         "csv": to_csv(table, VERDICT_COLUMNS),

@@ -56,11 +56,13 @@ def claims_job(
     config_digest="",
     claims_digest="",
     mitigations=None,
+    probe=None,
 ) -> list[dict]:
     """The claims table and ``results/summary.json``: every headline number with its
     interval and control, the config digest, the renderer, the estimator and the claims file
     with its SHA-256; with ``mitigations`` (``results/tables/mitigations.csv``), every
-    mitigation row too.
+    mitigation row too; with ``probe`` (``results/tables/probe_verdict.json``, when the probe
+    has run), the probe's verdict and a claims row "a trained matcher uses the cue".
 
     ``claims_digest`` is the claims file's SHA-256 when the workflow was read (the rule's
     rerun trigger); a file changed since is refused, so the table never mixes the two."""
@@ -88,6 +90,9 @@ def claims_job(
     claims = claims_table(
         rows, sweep=sweep_rows, curve=curve, intervention=intervention, claims=claims_file
     )
+    probe_verdict = json.loads(Path(probe).read_text()) if probe else None
+    if probe_verdict:
+        claims.append(probe_claim(probe_verdict))
     write_tables(
         claims,
         CLAIMS_COLUMNS,
@@ -135,8 +140,44 @@ def claims_job(
             "intervals": INTERVALS,
             "rows": [{k: clean(v) for k, v in r.items()} for r in read_rows(mitigations)],
         }
+    if probe_verdict:
+        document["probe"] = probe_verdict
     text = json.dumps(document, indent=2) + "\n"
     write_file(Path(summary), lambda tmp: Path(tmp).write_text(text))
     for c in claims:
         log.info("%-70s %s", c["claim"], c["verdict"])
     return claims
+
+
+def probe_claim(verdict: dict) -> dict:
+    """The claims-table row of the learned probe's verdict
+    (:func:`stereovar.probe.verdict.probe_verdict`): "a trained matcher uses the cue", the
+    difference in differences of the residual shuffle with its interval, against the control
+    network (the paper leaves the question open, Sec. 5)."""
+    import math
+
+    def num(key):
+        value = verdict.get(key)
+        return math.nan if value is None else float(value)
+
+    uses = verdict.get("uses_cue")
+    return {
+        "id": "probe",
+        "claim": "a trained matcher uses the cue",
+        "section": "5 (left open)",
+        "kind": "probe",
+        "paper": "open",
+        "null": 0.0,
+        "ours": num("did"),
+        "ours_low": num("did_low"),
+        "ours_high": num("did_high"),
+        "control": f"shuffle drop of the {verdict.get('control', 'sensor_only')} network",
+        "control_value": math.nan,
+        "control_low": math.nan,
+        "control_high": math.nan,
+        "verdict": "n/a" if uses is None else ("yes" if uses else "no"),
+        "note": (
+            f"difference in differences of the residual shuffle, {verdict.get('region')} "
+            "pixels; results/tables/probe.*"
+        ),
+    }

@@ -79,7 +79,7 @@ def network_input(render) -> np.ndarray:
     Examples
     --------
     >>> x = network_input(np.array([[0.0, 1.0], [2.0, np.nan]]))
-    >>> np.round(x, 3).tolist()
+    >>> np.round(x.astype(float), 3).tolist()
     [[-1.414, 0.707], [0.707, 0.0]]
     """
     g = grey(render)
@@ -134,7 +134,8 @@ def counterfactual_pair(
     sign : {1, -1}, keyword-only
         The ground truth's ``disparity_sign`` :math:`s`.
     block, shuffle_seed : int, keyword-only
-        Block side and seed of :math:`\\Pi` (:func:`stereovar.intervention.shuffle.block_permutation`).
+        Block side and seed of :math:`\\Pi`
+        (:func:`stereovar.intervention.shuffle.block_permutation`).
     conflict_shift : int, keyword-only
         :math:`k`, in pixels.
     camera : tuple of numpy.ndarray, optional, keyword-only

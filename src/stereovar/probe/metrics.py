@@ -169,7 +169,7 @@ def probe_rows(
             own, ctl = tested, control
             n_pixels = nets[own][1]["n"][0].sum(axis=1)
             for i, test_input in enumerate(inputs):
-                def stat(quantity, network=own, i=i):
+                def stat(quantity, network=own, i=i, point=point, reps_of=reps_of):
                     return point[network][quantity][i], reps_of[network][quantity][i]
 
                 acc, acc_r = stat("accuracy")

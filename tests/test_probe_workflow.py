@@ -1,0 +1,201 @@
+"""The `probe` target end to end on a tiny config: networks, tiles, table, verdict."""
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from stereovar import layout
+from stereovar.io.store import open_dataset
+from stereovar.io.tables import read_rows
+from stereovar.jobs.common import view_stack
+from stereovar.probe.experiment import scored_disparity
+from stereovar.probe.inputs import network_input
+from stereovar.probe.network import wta_disparity
+from stereovar.probe.training import load_matcher
+from stereovar.statistics.bootstrap import tile_labels
+
+from .test_workflow import copy_workflow, planned_jobs, snakemake
+
+pytestmark = pytest.mark.workflow
+
+TINY_PROBE = {
+    "scenes": ["scene_000", "scene_001"],
+    "resolution": {"width": 96, "height": 40},
+    "render": {
+        "spp": 2,
+        "n_seeds": 3,
+        "seeds_per_job": 3,
+        "spp_sweep": {"scene": "scene_000", "spp": [2]},
+    },
+    "analysis": {"bootstrap": {"tile": 8}},
+    "mitigations": {"names": []},
+    "probe": {
+        "folds": 2,
+        "train_seeds": 2,
+        "test_frames": 1,
+        "reps": 200,
+        "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24},
+    },
+}
+CONDITIONS = ("none", "sensor_only")
+INPUTS = ("normal", "shuffled", "camera", "clean", "conflict")
+
+
+@pytest.fixture(scope="module")
+def probe_run(tmp_path_factory):
+    """The tiny workflow after `snakemake -j2 probe`."""
+    root = copy_workflow(tmp_path_factory.mktemp("probe"), TINY_PROBE)
+    before = planned_jobs(root, "all")
+    snakemake(root, "-j2", "probe")
+    return root, before
+
+
+def test_probe_is_not_part_of_all_until_it_has_run(probe_run):
+    root, before = probe_run
+    assert not any(rule.startswith("probe") for rule in before)
+    after = planned_jobs(root, "all")
+    assert not any(rule.startswith("probe") for rule in after), after
+    assert planned_jobs(root, "probe") == {}
+
+
+def test_every_network_is_saved_with_its_config_and_reloads(probe_run):
+    root, _ = probe_run
+    for condition in CONDITIONS:
+        for fold in (0, 1):
+            for j in (0, 1):
+                path = root / layout.probe_network("mitsuba", fold, j, condition)
+                net, record = load_matcher(path)
+                assert record["seed"] == j  # probe.seed 0 + training seed j
+                assert record["meta"]["condition"] == condition
+                assert record["meta"]["fold"] == fold
+                held_out = TINY_PROBE["scenes"][fold]
+                assert held_out not in record["meta"]["scenes"]
+                assert record["settings"]["steps"] == 8
+                assert sum(p.numel() for p in net.parameters()) == 111424
+
+
+def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
+    """Rescore one held-out scene with its saved network and compare with the tile table."""
+    root, _ = probe_run
+    fold, scene = 0, "scene_000"
+    stores = layout.render_store("mitsuba", scene, "left", 2, "0-2")
+    left = view_stack([root / stores])[0]
+    right = view_stack([root / stores.replace("/left/", "/right/")])[0]
+    gt = open_dataset(root / layout.traced_ground_truth(scene)).sel(view="left").load()
+    sign = int(gt.attrs["disparity_sign"])
+    d_gt = scored_disparity(gt, sign=sign)
+    tiles = pd.read_csv(root / layout.probe_tiles("mitsuba", fold))
+    d_max = int(math.ceil(np.nanmax(np.where(gt["valid"], gt["disparity"], np.nan)))) + 4
+    net, _ = load_matcher(root / layout.probe_network("mitsuba", fold, 1))
+    d_hat = wta_disparity(
+        net, network_input(left[0]), network_input(right[0]), sign=sign, max_disparity=d_max
+    )
+    labels = tile_labels(d_gt.shape, 8)
+    rows = tiles[
+        (tiles.network == "none")
+        & (tiles.train_seed == 1)
+        & (tiles.test_input == "normal")
+        & (tiles.region == "all")
+    ]
+    assert set(rows.scene) == {scene}
+    scored = np.isfinite(d_gt) & np.isfinite(d_hat)
+    for _, row in rows.iterrows():
+        in_tile = scored & (labels == row.tile)
+        err = np.abs(d_hat[in_tile] - d_gt[in_tile])
+        assert row.n == in_tile.sum()
+        assert row.hits == (err < 1).sum()
+        assert row.abs_error == pytest.approx(err.sum(), rel=1e-9)
+    assert rows.n.sum() == scored.sum()
+
+
+def test_the_table_pools_the_tiles_of_every_fold(probe_run):
+    root, _ = probe_run
+    tiles = pd.concat(
+        pd.read_csv(root / layout.probe_tiles("mitsuba", f, c)) for c in CONDITIONS for f in (0, 1)
+    )
+    table = read_rows(root / layout.probe_tables()[0])
+    assert {(r["training"], r["test_input"]) for r in table} == {
+        (c, t) for c in CONDITIONS for t in INPUTS
+    }
+    for row in table:
+        own = tiles[
+            (tiles.tested == row["training"])
+            & (tiles.network == row["training"])
+            & (tiles.region == row["region"])
+        ]
+        per_seed = []
+        for seed in sorted(set(own.train_seed)):
+            part = own[(own.train_seed == seed) & (own.test_input == row["test_input"])]
+            per_seed.append(part.hits.sum() / part.n.sum())
+        assert row["accuracy"] == pytest.approx(np.mean(per_seed), abs=1e-12)
+        assert row["accuracy_low"] <= row["accuracy"] + 1e-12
+        assert row["accuracy_high"] >= row["accuracy"] - 1e-12
+        if row["training"] == "sensor_only":
+            assert math.isnan(row["did"])
+        # both scenes' held-out tiles pooled
+        assert set(own.scene) == set(TINY_PROBE["scenes"])
+
+
+def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
+    root, _ = probe_run
+    verdict = json.loads((root / layout.probe_verdict()).read_text())
+    table = read_rows(root / layout.probe_tables()[0])
+    shuffle = next(
+        r
+        for r in table
+        if (r["training"], r["test_input"], r["region"])
+        == ("none", "shuffled", verdict["region"])
+    )
+    assert verdict["did"] == pytest.approx(shuffle["did"])
+    assert verdict["uses_cue"] == (shuffle["did_low"] > 0)
+    assert verdict["claim"]["answer"] == ("yes" if verdict["uses_cue"] else "no")
+    assert f"{shuffle['did']:+.3f}" in verdict["paragraph"]
+    assert (root / layout.probe_figure()).stat().st_size > 0
+
+
+def test_claims_take_the_probe_once_it_has_run(probe_run):
+    root, _ = probe_run
+    out = snakemake(root, "-n", "--forceall", "-p", "claims").stdout
+    assert layout.probe_verdict() in out
+
+
+def test_an_audit_trains_the_probe_on_its_own_frames(tmp_path):
+    import subprocess
+    import sys
+
+    import yaml
+
+    from stereovar.audit.synthetic import write_synthetic_audit
+
+    from .test_workflow import TINY
+
+    root = copy_workflow(tmp_path / "wf", TINY)
+    settings, _ = write_synthetic_audit(root / "data", n_frames=2, width=96, height=48, n_seeds=3)
+    settings["renders"] = "data/renders/{frame}/{view}/seed_{seed}.exr"
+    settings["disparity"] = "data/disparity/{frame}.pfm"
+    settings["probe"] = True
+    probe = {k: TINY_PROBE["probe"][k] for k in ("train_seeds", "test_frames", "reps", "training")}
+    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe}))
+    proc = subprocess.run(
+        [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
+        cwd=root,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    base = root / "results/audit/synthetic"
+    table = read_rows(base / "tables/probe.csv")
+    assert {r["training"] for r in table} == set(CONDITIONS)
+    assert {r["region"] for r in table} == {"all"}  # no glass mask
+    for frame, fold in (("f00", 0), ("f01", 1)):
+        _, record = load_matcher(
+            root / layout.probe_network("audit/synthetic", fold, 0)
+        )
+        assert frame not in record["meta"]["scenes"]  # trained on the other frame only
+    summary = json.loads((base / "summary.json").read_text())
+    page = (base / "verdict.md").read_text()
+    assert "## Learned probe" in page and summary["probe"]["paragraph"] in page
+    assert "figures/probe.png" in page
