@@ -251,7 +251,8 @@ def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, 
         "settings": asdict(settings),
         "seed": int(seed),
         "meta": dict(meta),
-        "torch": torch.__version__,
+        # a plain str: torch.__version__ is a TorchVersion, which weights_only loading refuses
+        "torch": str(torch.__version__),
     }
     return write_file(path, lambda tmp: torch.save(payload, tmp))
 
@@ -268,9 +269,10 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         net = MatchingNet(**payload["architecture"])
         net.load_state_dict(payload["state_dict"])
-    except (OSError, KeyError, RuntimeError, TypeError, ValueError) as err:
+    except Exception as err:  # torch.load raises many types (EOFError, UnpicklingError, ...)
+        detail = " ".join(str(err).split())[:160]  # torch's messages span several lines
         raise ValueError(
-            f"{path}: not a stereovar probe network ({type(err).__name__}: {err}); delete it "
+            f"{path}: not a stereovar probe network ({type(err).__name__}: {detail}); delete it "
             "and rerun the probe to train it again"
         ) from None
     net.eval()
