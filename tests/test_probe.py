@@ -17,10 +17,16 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 import pytest
+import torch  # the probe extra, which the set-up installs
 from scipy.ndimage import gaussian_filter
+from torch.nn import functional as F
 
 from stereovar.intervention.shuffle import block_permutation
 from stereovar.io.images import linear_to_srgb
+
+# imported as a module: pytest would collect test_scene and TestSettings by their names
+from stereovar.probe import experiment
+from stereovar.probe.experiment import fold_scenes
 from stereovar.probe.inputs import (
     TEST_INPUTS,
     counterfactual_pair,
@@ -28,33 +34,19 @@ from stereovar.probe.inputs import (
     shift_columns,
 )
 from stereovar.probe.metrics import CONTROL, TILE_COLUMNS, probe_rows
+from stereovar.probe.network import MatchingNet, border, score_volume, wta_disparity
 from stereovar.probe.scoring import SUMS, tile_sums
+from stereovar.probe.training import (
+    TrainingFrame,
+    TrainSettings,
+    load_matcher,
+    save_matcher,
+    train_matcher,
+)
 from stereovar.statistics.correlation import pearson_over_mask
 from stereovar.statistics.warp import warp_right_to_left
 
 from .reference.shuffle import decorrelate_right
-
-try:
-    import torch
-except ImportError:  # the probe extra is not installed: the numpy-only tests still run
-    torch = None
-
-if torch is not None:
-    from torch.nn import functional as F
-
-    # imported as a module: pytest would collect test_scene and TestSettings by their names
-    from stereovar.probe import experiment
-    from stereovar.probe.experiment import fold_scenes
-    from stereovar.probe.network import MatchingNet, border, score_volume, wta_disparity
-    from stereovar.probe.training import (
-        TrainingFrame,
-        TrainSettings,
-        load_matcher,
-        save_matcher,
-        train_matcher,
-    )
-
-needs_torch = pytest.mark.skipif(torch is None, reason="PyTorch (the probe extra) is missing")
 
 H, W = 48, 96  # the synthetic pairs of the training tests
 B = 4  # the network's border: four unpadded 3x3 convolutions
@@ -162,7 +154,6 @@ def trained():
 # --------------------------------------------------------------------------------------------
 
 
-@needs_torch
 @pytest.mark.parametrize("sign", [1, -1])
 def test_trained_matcher_finds_a_known_shift_and_beats_sad(trained, sign):
     net, history, _ = trained
@@ -196,7 +187,6 @@ def test_trained_matcher_finds_a_known_shift_and_beats_sad(trained, sign):
     assert np.mean(d_net[ok] == d) >= 0.98
 
 
-@needs_torch
 def test_training_rejects_bad_settings_and_frames():
     with pytest.raises(ValueError, match="optimiser"):
         TrainSettings(optimiser="rmsprop")
@@ -220,7 +210,6 @@ def test_training_rejects_bad_settings_and_frames():
 # --------------------------------------------------------------------------------------------
 
 
-@needs_torch
 @pytest.mark.parametrize("sign", [1, -1])
 @pytest.mark.parametrize("max_disparity", [4, 13])
 def test_score_volume_matches_brute_force(sign, max_disparity):
@@ -244,7 +233,6 @@ def test_score_volume_matches_brute_force(sign, max_disparity):
     np.testing.assert_allclose(own[0].numpy(), 1.0, atol=1e-6)
 
 
-@needs_torch
 def test_score_volume_rejects_bad_arguments():
     f = torch.zeros(4, 3, 6)
     with pytest.raises(ValueError, match="sign"):
@@ -253,7 +241,6 @@ def test_score_volume_rejects_bad_arguments():
         score_volume(f, torch.zeros(4, 3, 5), sign=1, max_disparity=2)
 
 
-@needs_torch
 @pytest.mark.parametrize("sign", [1, -1])
 def test_wta_disparity_matches_patchwise_brute_force(sign):
     """The features of every pixel from its own 9x9 patch (one forward pass each), then the
@@ -751,7 +738,6 @@ def test_network_input_is_standardised_display_grey():
 # --------------------------------------------------------------------------------------------
 
 
-@needs_torch
 def test_training_is_deterministic_per_seed():
     rng = np.random.default_rng(50)
     pairs = [(*shifted_pair(rng, d, -1, noise=0.05, height=24, width=64), -1) for d in (2, 4)]
@@ -778,7 +764,6 @@ def test_training_is_deterministic_per_seed():
     assert not all(torch.equal(init[n], params_a[n]) for n in init)
 
 
-@needs_torch
 def test_save_and_load_round_trip(trained, tmp_path):
     net, _, settings = trained
     meta = {"condition": "none", "scenes": ["a", "b"], "fold": 1}
@@ -803,7 +788,6 @@ def test_save_and_load_round_trip(trained, tmp_path):
     )
 
 
-@needs_torch
 @pytest.mark.parametrize("content", [b"not a network at all", b"", "dict", "list"])
 def test_load_matcher_rejects_other_files(tmp_path, content):
     path = tmp_path / "bad.pt"
@@ -825,7 +809,6 @@ def test_load_matcher_rejects_other_files(tmp_path, content):
 # --------------------------------------------------------------------------------------------
 
 
-@needs_torch
 @pytest.mark.parametrize("n_folds", [2, 3, 7])
 def test_fold_scenes_hold_every_scene_out_once(n_folds):
     scenes = [f"scene{i}" for i in range(7)]
@@ -841,7 +824,6 @@ def test_fold_scenes_hold_every_scene_out_once(n_folds):
     assert all(c == 1 for c in held_count.values())
 
 
-@needs_torch
 @pytest.mark.parametrize("n_folds", [0, 1, 4])
 def test_fold_scenes_rejects_bad_folds(n_folds):
     with pytest.raises(ValueError, match="probe.folds"):
@@ -853,7 +835,6 @@ def test_fold_scenes_rejects_bad_folds(n_folds):
 # --------------------------------------------------------------------------------------------
 
 
-@needs_torch
 @pytest.mark.parametrize("sign", [1, -1])
 def test_test_scene_scores_every_valid_pixel_of_each_frame(sign):
     rng = np.random.default_rng(60)

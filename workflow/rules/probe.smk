@@ -50,6 +50,7 @@ rule probe_test:
         },
         max_disparity_fixed=config["intervention"]["max_disparity"],
         disparity_margin=config["intervention"]["disparity_margin"],
+        threads=1,
     log:
         "logs/{renderer}/probe/test/fold{fold}.log",
     benchmark:

@@ -94,15 +94,20 @@ def test_job(
     test: dict,
     max_disparity_fixed=None,
     disparity_margin: int = 4,
+    threads: int = 1,
 ) -> int:
     """Score every network in ``networks`` (the tested condition's and the control's, of one
     fold) on every test input of the fold's held-out ``scenes``, rendered under ``tested``;
-    the per-tile sums go to ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`)."""
+    the per-tile sums go to ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`). Torch
+    runs ``threads`` threads (one per job: more spin on a machine whose cores are busy)."""
+    import torch
+
     from ..io.tables import write_tables
     from ..probe.experiment import TestSettings, test_scene
     from ..probe.metrics import TILE_COLUMNS
     from ..probe.training import load_matcher
 
+    torch.set_num_threads(int(threads))
     nets = {}
     for path in networks:
         net, record = load_matcher(path)
