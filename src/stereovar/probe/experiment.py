@@ -22,8 +22,8 @@ from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import region_masks, valid_set
 from ..transforms.sensor import DEFAULT_GAIN, DEFAULT_READ_NOISE, camera_noise
-from .inputs import TEST_INPUTS, counterfactual_pair, network_input
-from .network import wta_disparity
+from .inputs import LEFT_KEPT, TEST_INPUTS, counterfactual_pair, network_input
+from .network import border, dense_features, wta_from_features
 from .scoring import SUMS, tile_sums
 from .training import TrainingFrame
 
@@ -162,6 +162,7 @@ def test_scene(
             _camera_residual(mean_l, scene, "left", frame, settings),
             _camera_residual(mean_r, scene, "right", frame, settings),
         )
+        pairs = {}
         for test_input in settings.inputs:
             a, b = counterfactual_pair(
                 test_input,
@@ -175,10 +176,21 @@ def test_scene(
                 conflict_shift=settings.conflict_shift,
                 camera=camera,
             )
-            xa, xb = network_input(a), network_input(b)
-            for (network, train_seed), net in networks.items():
-                d_hat = wta_disparity(
-                    net, xa, xb, sign=sign, max_disparity=settings.max_disparity
+            pairs[test_input] = (network_input(a), network_input(b))
+        for (network, train_seed), net in networks.items():
+            kept = None  # the left features shared by the inputs that keep the left render
+            for test_input, (xa, xb) in pairs.items():
+                if test_input in LEFT_KEPT:
+                    kept = dense_features(net, xa) if kept is None else kept
+                    fl = kept
+                else:
+                    fl = dense_features(net, xa)
+                d_hat = wta_from_features(
+                    fl,
+                    dense_features(net, xb),
+                    sign=sign,
+                    max_disparity=settings.max_disparity,
+                    border_px=border(net.layers, net.kernel),
                 )
                 for region, mask in masks.items():
                     sums = tile_sums(

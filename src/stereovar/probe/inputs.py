@@ -35,6 +35,7 @@ from ..intervention.shuffle import apply_block_permutation, block_permutation
 from ..io.images import linear_to_srgb
 
 __all__ = [
+    "LEFT_KEPT",
     "TEST_INPUTS",
     "counterfactual_pair",
     "grey",
@@ -44,6 +45,9 @@ __all__ = [
 
 TEST_INPUTS = ("normal", "shuffled", "camera", "clean", "conflict")
 """The test inputs, in table order."""
+
+LEFT_KEPT = ("normal", "shuffled", "conflict")
+"""The test inputs whose left view is the render itself (only the right residual changes)."""
 
 
 def grey(render) -> np.ndarray:

@@ -25,6 +25,7 @@ __all__ = [
     "dense_features",
     "score_volume",
     "wta_disparity",
+    "wta_from_features",
 ]
 
 FEATURES = 64
@@ -184,9 +185,35 @@ def wta_disparity(
             f"left and right must be grey images of one shape, got {np.shape(left)} and "
             f"{np.shape(right)}"
         )
-    b = border(net.layers, net.kernel)
     fl, fr = dense_features(net, left), dense_features(net, right)
-    volume = score_volume(fl, fr, sign=sign, max_disparity=max_disparity)
-    out = np.full(np.shape(left), np.nan)
-    out[b:-b, b:-b] = volume.argmax(0).numpy().astype(np.float64)
+    return wta_from_features(
+        fl, fr, sign=sign, max_disparity=max_disparity, border_px=border(net.layers, net.kernel)
+    )
+
+
+def wta_from_features(
+    feat_left, feat_right, *, sign: int, max_disparity: int, border_px: int = border()
+) -> np.ndarray:
+    """:func:`wta_disparity` from features already computed (a view shared by several test
+    inputs is computed once).
+
+    Parameters
+    ----------
+    feat_left, feat_right : torch.Tensor, shape (F, H - 2b, W - 2b)
+        :func:`dense_features` of the two views.
+    sign : {1, -1}, keyword-only
+    max_disparity : int, keyword-only
+    border_px : int, keyword-only
+        :math:`b`, the network's :func:`border`.
+
+    Returns
+    -------
+    numpy.ndarray, float64, shape (H, W)
+        :math:`\\hat d`, NaN in the border.
+    """
+    _, h, w = feat_left.shape
+    b = int(border_px)
+    volume = score_volume(feat_left, feat_right, sign=sign, max_disparity=max_disparity)
+    out = np.full((h + 2 * b, w + 2 * b), np.nan)
+    out[b : b + h, b : b + w] = volume.argmax(0).numpy().astype(np.float64)
     return out
