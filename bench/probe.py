@@ -44,13 +44,11 @@ import torch
 
 from stereovar.intervention.scan import scan_cost_volume
 from stereovar.probe.inputs import network_input
-from stereovar.probe.network import FEATURES, MatchingNet, border, wta_disparity
+from stereovar.probe.network import FEATURES, MatchingNet, wta_disparity
 from stereovar.probe.training import (
     TrainingFrame,
     TrainSettings,
-    _columns,
-    _crop_batch,
-    _reach,
+    draw_batch,
     train_matcher,
 )
 
@@ -96,17 +94,10 @@ def train_step_seconds(frames, settings: TrainSettings, seed: int) -> float:
 
 def bare_batch(frames, settings: TrainSettings, seed: int):
     """One batch of crops and triplet columns drawn as train_matcher draws them, once."""
-    b = border()
     rng = np.random.default_rng([int(seed), 1])
-    left, right, d, starts, signs = _crop_batch(frames, settings, b, _reach(frames, settings), rng)
-    width = int(right.shape[3]) - 2 * b
-    o_pos = rng.uniform(-settings.pos, settings.pos, d.shape)
-    o_neg = rng.uniform(settings.neg_low, settings.neg_high, d.shape)
-    o_neg *= rng.choice((-1.0, 1.0), d.shape)
-    c_pos, ok_pos = _columns(d, starts, signs, o_pos, width)
-    c_neg, ok_neg = _columns(d, starts, signs, o_neg, width)
+    left, right, c_pos, c_neg, keep = draw_batch(frames, settings, rng)
     idx = lambda c: torch.from_numpy(c)[:, None].expand(-1, FEATURES, -1, -1)  # noqa: E731
-    return left, right, idx(c_pos), idx(c_neg), torch.from_numpy(ok_pos & ok_neg)
+    return left, right, idx(c_pos), idx(c_neg), keep
 
 
 def bare_step_seconds(batch, settings: TrainSettings, seed: int) -> float:

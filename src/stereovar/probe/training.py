@@ -34,6 +34,7 @@ __all__ = [
     "OPTIMISERS",
     "TrainSettings",
     "TrainingFrame",
+    "draw_batch",
     "hinge_loss",
     "load_matcher",
     "save_matcher",
@@ -153,6 +154,40 @@ def _gather(features: torch.Tensor, cols: np.ndarray) -> torch.Tensor:
     return torch.gather(features, 3, idx)
 
 
+def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, reach=None):
+    """One training batch: crops of both views and the right feature columns of each left
+    pixel's positive and negative.
+
+    Parameters
+    ----------
+    frames : sequence of TrainingFrame
+    settings : TrainSettings
+    rng : numpy.random.Generator
+        The draws of crops and offsets.
+    reach : int, optional
+        Columns a right crop extends past its left crop (default: from the frames).
+
+    Returns
+    -------
+    left, right : torch.Tensor, (S, 1, rows + 2b, cols + 2b) and (S, 1, rows + 2b,
+        cols + 2b + reach)
+    c_pos, c_neg : numpy.ndarray of int64, (S, rows, cols)
+        Right feature columns of the positive and the negative.
+    keep : torch.Tensor of bool, (S, rows, cols)
+        The left pixels with a ground truth and both right pixels inside the crop.
+    """
+    b = border()
+    reach = _reach(frames, settings) if reach is None else int(reach)
+    left, right, d, starts, signs = _crop_batch(frames, settings, b, reach, rng)
+    width = int(right.shape[3]) - 2 * b
+    o_pos = rng.uniform(-settings.pos, settings.pos, d.shape)
+    o_neg = rng.uniform(settings.neg_low, settings.neg_high, d.shape)
+    o_neg *= rng.choice((-1.0, 1.0), d.shape)
+    c_pos, ok_pos = _columns(d, starts, signs, o_pos, width)
+    c_neg, ok_neg = _columns(d, starts, signs, o_neg, width)
+    return left, right, c_pos, c_neg, torch.from_numpy(ok_pos & ok_neg)
+
+
 def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     """Train one :class:`~stereovar.probe.network.MatchingNet` on ``frames``.
 
@@ -203,14 +238,7 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     start = time.perf_counter()
     net.train()
     for _ in range(int(settings.steps)):
-        left, right, d, starts, signs = _crop_batch(frames, settings, b, reach, rng)
-        width = int(right.shape[3]) - 2 * b
-        o_pos = rng.uniform(-settings.pos, settings.pos, d.shape)
-        o_neg = rng.uniform(settings.neg_low, settings.neg_high, d.shape)
-        o_neg *= rng.choice((-1.0, 1.0), d.shape)
-        c_pos, ok_pos = _columns(d, starts, signs, o_pos, width)
-        c_neg, ok_neg = _columns(d, starts, signs, o_neg, width)
-        keep = torch.from_numpy(ok_pos & ok_neg)
+        left, right, c_pos, c_neg, keep = draw_batch(frames, settings, rng, reach=reach)
         if not bool(keep.any()):
             losses.append(float("nan"))
             counts.append(0)
