@@ -13,6 +13,7 @@ from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.io.images import write_field
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
+from stereovar.probe.training import load_matcher
 
 from .test_workflow import SCENES, TINY, copy_workflow, snakemake
 
@@ -89,7 +90,10 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     settings["renders"] = "data/renders/{frame}/{view}/seed_{seed}.exr"
     settings["disparity"] = "data/disparity/{frame}.pfm"
     settings["mitigations"] = ["denoise"]  # from colour alone: an audit has no albedo/normal
-    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings}))
+    settings["probe"] = True  # the learned probe on the audit's frames, briefly trained
+    probe = {"train_seeds": 1, "test_frames": 1, "reps": 200,
+             "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24}}
+    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe}))
     proc = subprocess.run(
         [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
         cwd=root, capture_output=True, text=True,
@@ -123,6 +127,17 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     assert "## Mitigations" in page and "denoise: intensity-controlled rho" in page
     assert "figures/mitigations.png" in page and (base / "figures/mitigations.png").is_file()
     assert summary["mitigations"][-1] in page
+    # audit.probe: networks trained on one frame and tested on the other, for the baseline,
+    # the control and the audit's mitigation; the page's section states the verdict
+    probe_rows = read_rows(base / "tables/probe.csv")
+    assert {r["training"] for r in probe_rows} == {"none", "sensor_only", "denoise"}
+    assert {r["region"] for r in probe_rows} == {"all"}  # no glass mask
+    for fold, other in ((0, "f01"), (1, "f00")):
+        for key in ("", "sensor_only", "denoise"):  # the source key's transform segment
+            _, record = load_matcher(base / key / f"probe/spp0/networks/fold{fold}/seed0.pt")
+            assert record["meta"]["scenes"] == [other]
+    assert "## Learned probe" in page and summary["probe"]["paragraph"] in page
+    assert "figures/probe.png" in page and (base / "figures/probe.png").is_file()
     # the glass rows are NaN with the reason, all is computed
     table = read_rows(root / "results/audit/synthetic/seeds/correlation/f00/spp0.csv")
     glass = [r for r in table if r["region"] == "glass"]

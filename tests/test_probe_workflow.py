@@ -1,4 +1,5 @@
-"""The `probe` target end to end on a tiny config: networks, tiles, table, verdict."""
+"""The `probe` target end to end on a tiny config: networks, tiles, table, verdict (the audit's
+probe runs in the synthetic audit of tests/test_audit_workflow.py)."""
 
 import json
 import math
@@ -66,7 +67,7 @@ def test_every_network_is_saved_with_its_config_and_reloads(probe_run):
     for condition in CONDITIONS:
         for fold in (0, 1):
             for j in (0, 1):
-                path = root / layout.probe_network("mitsuba", fold, j, condition)
+                path = root / layout.probe_network("mitsuba", 2, fold, j, condition)
                 net, record = load_matcher(path)
                 assert record["seed"] == j  # probe.seed 0 + training seed j
                 assert record["meta"]["condition"] == condition
@@ -87,9 +88,9 @@ def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
     gt = open_dataset(root / layout.traced_ground_truth(scene)).sel(view="left").load()
     sign = int(gt.attrs["disparity_sign"])
     d_gt = scored_disparity(gt, sign=sign)
-    tiles = pd.read_csv(root / layout.probe_tiles("mitsuba", fold))
+    tiles = pd.read_csv(root / layout.probe_tiles("mitsuba", 2, fold))
     d_max = int(math.ceil(np.nanmax(np.where(gt["valid"], gt["disparity"], np.nan)))) + 4
-    net, _ = load_matcher(root / layout.probe_network("mitsuba", fold, 1))
+    net, _ = load_matcher(root / layout.probe_network("mitsuba", 2, fold, 1))
     d_hat = wta_disparity(
         net, network_input(left[0]), network_input(right[0]), sign=sign, max_disparity=d_max
     )
@@ -114,7 +115,9 @@ def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
 def test_the_table_pools_the_tiles_of_every_fold(probe_run):
     root, _ = probe_run
     tiles = pd.concat(
-        pd.read_csv(root / layout.probe_tiles("mitsuba", f, c)) for c in CONDITIONS for f in (0, 1)
+        pd.read_csv(root / layout.probe_tiles("mitsuba", 2, f, c))
+        for c in CONDITIONS
+        for f in (0, 1)
     )
     table = read_rows(root / layout.probe_tables()[0])
     assert {(r["training"], r["test_input"]) for r in table} == {
@@ -161,41 +164,3 @@ def test_claims_take_the_probe_once_it_has_run(probe_run):
     out = snakemake(root, "-n", "--forceall", "-p", "claims").stdout
     assert layout.probe_verdict() in out
 
-
-def test_an_audit_trains_the_probe_on_its_own_frames(tmp_path):
-    import subprocess
-    import sys
-
-    import yaml
-
-    from stereovar.audit.synthetic import write_synthetic_audit
-
-    from .test_workflow import TINY
-
-    root = copy_workflow(tmp_path / "wf", TINY)
-    settings, _ = write_synthetic_audit(root / "data", n_frames=2, width=96, height=48, n_seeds=3)
-    settings["renders"] = "data/renders/{frame}/{view}/seed_{seed}.exr"
-    settings["disparity"] = "data/disparity/{frame}.pfm"
-    settings["probe"] = True
-    probe = {k: TINY_PROBE["probe"][k] for k in ("train_seeds", "test_frames", "reps", "training")}
-    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe}))
-    proc = subprocess.run(
-        [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
-        cwd=root,
-        capture_output=True,
-        text=True,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    base = root / "results/audit/synthetic"
-    table = read_rows(base / "tables/probe.csv")
-    assert {r["training"] for r in table} == set(CONDITIONS)
-    assert {r["region"] for r in table} == {"all"}  # no glass mask
-    for frame, fold in (("f00", 0), ("f01", 1)):
-        _, record = load_matcher(
-            root / layout.probe_network("audit/synthetic", fold, 0)
-        )
-        assert frame not in record["meta"]["scenes"]  # trained on the other frame only
-    summary = json.loads((base / "summary.json").read_text())
-    page = (base / "verdict.md").read_text()
-    assert "## Learned probe" in page and summary["probe"]["paragraph"] in page
-    assert "figures/probe.png" in page

@@ -24,7 +24,7 @@ source key:
 ``{estimator}/...``
     everything computed from those renders by one estimator: ``variance``, ``warped``,
     ``correlation``, ``intervention``, ``mitigation``, ``tables``, ``figures``;
-``probe/networks/fold{f}/seed{j}.pt`` and ``probe/tiles/fold{f}.csv``
+``probe/spp{spp}/networks/fold{f}/seed{j}.pt`` and ``probe/spp{spp}/tiles/fold{f}.csv``
     the learned probe's networks trained on these renders and their scores on them.
 
 Ground truth belongs to the scene, not to a transform: ``results/ground_truth/{scene}.zarr``
@@ -336,17 +336,19 @@ def mitigation_tables(source: str | None = None) -> list[str]:
     return table_paths("mitigations")
 
 
-def probe_network(source: str, fold, seed, transform: str = NONE) -> str:
-    """One trained probe network of a training condition, fold and training seed:
-    ``results/{source}[/{transform}]/probe/networks/fold{fold}/seed{seed}.pt``."""
-    return f"{RESULTS}/{source_key(source, transform)}/probe/networks/fold{fold}/seed{seed}.pt"
+def probe_network(source: str, spp, fold, seed, transform: str = NONE) -> str:
+    """One trained probe network of a training condition (its renders at ``spp``), fold and
+    training seed:
+    ``results/{source}[/{transform}]/probe/spp{spp}/networks/fold{fold}/seed{seed}.pt``."""
+    key = source_key(source, transform)
+    return f"{RESULTS}/{key}/probe/spp{spp}/networks/fold{fold}/seed{seed}.pt"
 
 
-def probe_tiles(source: str, fold, transform: str = NONE) -> str:
+def probe_tiles(source: str, spp, fold, transform: str = NONE) -> str:
     """The per-tile scores of every network on one fold's held-out scenes, tested on the
-    renders of ``source`` after ``transform``:
-    ``results/{source}[/{transform}]/probe/tiles/fold{fold}.csv``."""
-    return f"{RESULTS}/{source_key(source, transform)}/probe/tiles/fold{fold}.csv"
+    renders of ``source`` after ``transform`` at ``spp``:
+    ``results/{source}[/{transform}]/probe/spp{spp}/tiles/fold{fold}.csv``."""
+    return f"{RESULTS}/{source_key(source, transform)}/probe/spp{spp}/tiles/fold{fold}.csv"
 
 
 def probe_tables(source: str | None = None) -> list[str]:

@@ -800,7 +800,12 @@ PROBE_SOURCE = get_renderer()
 PROBE_TABLES = layout.probe_tables(PROBE_SOURCE)
 PROBE_FIGURE = layout.probe_figure(PROBE_SOURCE)
 PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
-PROBE_KEYS = {layout.source_key(run.source, run.transform): run for run in PROBE_RUNS.values()}
+# (source key, SPP) of each condition: spp_xK shares the source's key at K x SPP
+PROBE_KEYS = {
+    (layout.source_key(run.source, run.transform), str(run.spp)): run
+    for run in PROBE_RUNS.values()
+}
+PROBE_CONTROL_RUN = PROBE_RUNS.get(PROBE_CONTROL)
 
 
 def probe_folds():
@@ -815,13 +820,12 @@ def probe_folds():
         raise ConfigError(f"config key 'probe.folds': {err}") from None
 
 
-def probe_stores(key, scenes):
-    """Render stores of each view and the ground truth of ``scenes`` under source key ``key``,
-    named ``left_{scene}``, ``right_{scene}`` and ``gt_{scene}``."""
-    run = PROBE_KEYS[key]
+def probe_stores(key, spp, scenes):
+    """Render stores of each view and the ground truth of ``scenes`` under source key ``key``
+    at ``spp``, named ``left_{scene}``, ``right_{scene}`` and ``gt_{scene}``."""
     stores = {}
     for scene in scenes:
-        views = seed_stores(run_config(key), scene, run.spp)
+        views = seed_stores(run_config(key), scene, spp)
         stores.update({f"{view}_{scene}": views[view] for view in VIEWS})
         stores[f"gt_{scene}"] = ground_truth_store(key, scene)
     return stores
@@ -829,7 +833,9 @@ def probe_stores(key, scenes):
 
 def probe_train_inputs(wildcards):
     """The training scenes of the wildcards' fold, rendered under its condition."""
-    return probe_stores(wildcards.renderer, probe_folds()[int(wildcards.fold)][0])
+    return probe_stores(
+        wildcards.renderer, wildcards.spp, probe_folds()[int(wildcards.fold)][0]
+    )
 
 
 def probe_test_inputs(wildcards):
@@ -837,16 +843,21 @@ def probe_test_inputs(wildcards):
     that condition and of the control for this fold."""
     source, _ = layout.split_source_key(wildcards.renderer)
     fold = int(wildcards.fold)
-    keys = dict.fromkeys([wildcards.renderer, layout.source_key(source, PROBE_CONTROL)])
+    control = (layout.source_key(source, PROBE_CONTROL), PROBE_CONTROL_RUN.spp)
+    keys = dict.fromkeys([(wildcards.renderer, wildcards.spp), control])
     return {
-        **probe_stores(wildcards.renderer, probe_folds()[fold][1]),
-        "networks": [layout.probe_network(k, fold, j) for k in keys for j in PROBE_SEEDS],
+        **probe_stores(wildcards.renderer, wildcards.spp, probe_folds()[fold][1]),
+        "networks": [
+            layout.probe_network(k, spp, fold, j) for k, spp in keys for j in PROBE_SEEDS
+        ],
     }
 
 
 def probe_tile_files():
     """Every test job's tile table."""
-    return [layout.probe_tiles(key, f) for key in PROBE_KEYS for f in range(PROBE_FOLDS)]
+    return [
+        layout.probe_tiles(key, spp, f) for key, spp in PROBE_KEYS for f in range(PROBE_FOLDS)
+    ]
 
 
 def probe_targets():

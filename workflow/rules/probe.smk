@@ -8,17 +8,17 @@ rule probe_train:
     input:
         unpack(probe_train_inputs),
     output:
-        layout.probe_network("{renderer}", "{fold}", "{train_seed}"),
+        layout.probe_network("{renderer}", "{spp}", "{fold}", "{train_seed}"),
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
-        condition=lambda wc: PROBE_KEYS[wc.renderer].name,
+        condition=lambda wc: PROBE_KEYS[(wc.renderer, wc.spp)].name,
         fold=lambda wc: int(wc.fold),
         seed=lambda wc: int(PROBE["seed"]) + int(wc.train_seed),
         training=PROBE["training"],
     log:
-        "logs/{renderer}/probe/train/fold{fold}/seed{train_seed}.log",
+        "logs/{renderer}/probe/spp{spp}/train/fold{fold}/seed{train_seed}.log",
     benchmark:
-        "benchmarks/{renderer}/probe/train/fold{fold}/seed{train_seed}.tsv"
+        "benchmarks/{renderer}/probe/spp{spp}/train/fold{fold}/seed{train_seed}.tsv"
     threads: PROBE["training"]["threads"]
     resources:
         **analysis_resources(images=2 * N_SEEDS * len(SCENES) + 8, n_reads=2 * N_SEEDS),
@@ -34,10 +34,10 @@ rule probe_test:
     input:
         unpack(probe_test_inputs),
     output:
-        layout.probe_tiles("{renderer}", "{fold}"),
+        layout.probe_tiles("{renderer}", "{spp}", "{fold}"),
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][1],
-        tested=lambda wc: PROBE_KEYS[wc.renderer].name,
+        tested=lambda wc: PROBE_KEYS[(wc.renderer, wc.spp)].name,
         test={
             "test_frames": PROBE["test_frames"],
             "block": config["intervention"]["block"],
@@ -52,9 +52,9 @@ rule probe_test:
         disparity_margin=config["intervention"]["disparity_margin"],
         threads=1,
     log:
-        "logs/{renderer}/probe/test/fold{fold}.log",
+        "logs/{renderer}/probe/spp{spp}/test/fold{fold}.log",
     benchmark:
-        "benchmarks/{renderer}/probe/test/fold{fold}.tsv"
+        "benchmarks/{renderer}/probe/spp{spp}/test/fold{fold}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=4 * N_SEEDS * len(SCENES) + 16, n_reads=2 * N_SEEDS),
