@@ -35,3 +35,27 @@ def tree_snapshot():
         return out
 
     return snapshot
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory):
+    """A copy of the workflow with the tiny config of ``tests/test_workflow.py``, run once to
+    completion (``snakemake -j2 all``) and shared by every module that reads such a run;
+    a test that changes it works on a copy (:func:`tiny_run_copy`)."""
+    from .test_workflow import TINY, copy_workflow, snakemake
+
+    root = copy_workflow(tmp_path_factory.mktemp("tiny") / "wf", TINY)
+    snakemake(root, "-j2", "all")
+    return root
+
+
+@pytest.fixture(scope="session")
+def tiny_run_copy(tiny_run):
+    """A function of a folder: a copy of :func:`tiny_run` there, file times kept (so
+    Snakemake finds every result up to date), to change freely."""
+    import shutil
+
+    def copy(root):
+        return shutil.copytree(tiny_run, root, symlinks=True)
+
+    return copy

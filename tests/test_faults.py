@@ -69,11 +69,9 @@ def rerender_all(root: Path, **kwargs):
 
 
 @pytest.fixture(scope="module")
-def done(tmp_path_factory):
-    """A finished tiny run."""
-    root = copy_workflow(tmp_path_factory.mktemp("faults"), FAULT)
-    snakemake(root, "-j2", "all")
-    return root
+def done(tiny_run_copy, tmp_path_factory):
+    """A finished tiny run (a copy of the shared one: these tests damage it)."""
+    return tiny_run_copy(tmp_path_factory.mktemp("faults") / "wf")
 
 
 def test_unavailable_variant_stops_before_any_job_and_keeps_every_result(done):

@@ -104,11 +104,9 @@ def outputs(workdir) -> dict:
 
 
 @pytest.fixture(scope="module")
-def local_reference(tmp_path_factory):
+def local_reference(tiny_run):
     """The tiny config run locally with -j2."""
-    workdir = copy_workflow(tmp_path_factory.mktemp("local") / "wf", TINY)
-    run(workdir, os.environ, "-j2", "all")
-    return workdir
+    return tiny_run
 
 
 @pytest.fixture(scope="module")

@@ -101,11 +101,10 @@ def copy_workflow(root: Path, config: dict) -> Path:
 
 
 @pytest.fixture(scope="module")
-def workdir(tmp_path_factory):
-    """A copy of the workflow with two scenes, run once to completion."""
-    root = copy_workflow(tmp_path_factory.mktemp("wf"), TINY)
-    snakemake(root, "-j2", "all")
-    return root
+def workdir(tiny_run):
+    """A copy of the workflow with two scenes, run once to completion (shared with other
+    modules: a test that changes it puts it back)."""
+    return tiny_run
 
 
 def test_run_produces_ground_truth_previews_and_tables(workdir):
