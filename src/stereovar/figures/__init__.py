@@ -1,0 +1,23 @@
+"""Figures: pure functions from arrays or table rows to a matplotlib figure (Agg backend).
+
+The caller saves the figure; nothing here reads or writes results.
+
+``paper``
+    The paper's figures: the teaser (Fig. 1), :math:`\\rho` versus SPP (Fig. 2), the
+    material scatter (Fig. 3) and the intervention's margin distribution.
+``uncertainty``
+    :math:`\\rho` against the number of seeds, and every statistic and control per scene
+    with its bootstrap interval.
+``estimators``
+    The estimator validation: the moments estimator against N seeds.
+``cross_renderer``
+    One scene's variance fields from every renderer, side by side.
+``mitigations``
+    The cue each mitigation leaves against its image-quality cost.
+``probe``
+    The learned probe's accuracy on each test input, per training condition.
+``preview``
+    Both renders of a scene, its disparity and material map; the audit's thumbnails.
+
+Importing this package imports none of its modules (nor matplotlib).
+"""

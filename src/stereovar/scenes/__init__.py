@@ -1,0 +1,15 @@
+"""Renderer-neutral scene specs: generate, validate, digest and texture them.
+
+``spec``
+    Load, validate (``schemas/scene.schema.yaml``), digest and write scene specs.
+``generate``
+    The deterministic generator of indoor stereo scenes (scene ``i`` of seed ``s`` depends
+    on ``(s, i)`` only).
+``textures``
+    Procedural diffuse textures baked to bitmaps.
+``references``
+    The files a Mitsuba XML scene reads (meshes, textures, spectra, includes), tracked and
+    hashed as the scene's content.
+
+Importing this package imports none of its modules (nor numpy or jsonschema).
+"""
