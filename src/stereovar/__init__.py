@@ -2,21 +2,25 @@
 
 Importing the package is cheap and pulls in no third-party module (numpy, Dr.Jit, Mitsuba),
 so that set-up scripts can use :mod:`stereovar.renderers.mitsuba.backend` with the system
-Python before the dependencies are installed. Import submodules explicitly, e.g.
-``stereovar.estimators.seeds``.
+Python before the dependencies are installed.
+
+The names of :data:`__all__` (Eq. 1 :func:`variance_field`, Eq. 2 :func:`warp_right_to_left`,
+Eq. 3 :func:`pearson_over_mask`, the stores, the registries, the tables and the figures) are
+attributes of the package, each imported from its module on first access; ``dir(stereovar)``
+lists them, and ``__init__.pyi`` declares them for type checkers and editors. Everything else
+is imported from its module, e.g. ``stereovar.statistics.bootstrap``.
+
+The Mitsuba-only names ``load_mitsuba``, ``select_variant``, ``load_scene``,
+``render_view`` and ``MitsubaScene`` live in :mod:`stereovar.renderers.mitsuba`; their old
+top-level names still resolve, with a :class:`DeprecationWarning`, until the next release.
 """
 
 __version__ = "0.1.0"
 
 # Public API for notebooks, imported on first use so that `import stereovar` stays cheap.
 _API = {
-    "load_mitsuba": "renderers.mitsuba.backend",
-    "select_variant": "renderers.mitsuba.backend",
     "get_renderer": "renderers",
     "RENDERERS": "renderers",
-    "MitsubaScene": "renderers.mitsuba",
-    "load_scene": "renderers.mitsuba.scene",
-    "render_view": "renderers.mitsuba.render",
     "load_scene_spec": "scenes.spec",
     "generate_scene": "scenes.generate",
     "make_rig": "rig",
@@ -60,12 +64,35 @@ _API = {
     "RenderStore": "io.renders",
 }
 
+_DEPRECATED = {
+    name: "renderers.mitsuba"
+    for name in ("MitsubaScene", "load_mitsuba", "load_scene", "render_view", "select_variant")
+}
+"""Old top-level names kept for one release: each resolves to the same object in its new
+module, with a :class:`DeprecationWarning` that names it."""
+
 __all__ = ["__version__", *sorted(_API)]
 
 
-def __getattr__(name):
+def __getattr__(name: str):
     if name in _API:
         from importlib import import_module
 
         return getattr(import_module(f"stereovar.{_API[name]}"), name)
+    if name in _DEPRECATED:
+        import warnings
+        from importlib import import_module
+
+        new = f"stereovar.{_DEPRECATED[name]}"
+        warnings.warn(
+            f"stereovar.{name} is deprecated and will be removed in the next release; "
+            f"use {new}.{name}",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return getattr(import_module(new), name)
     raise AttributeError(f"module 'stereovar' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

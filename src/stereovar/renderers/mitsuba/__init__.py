@@ -6,6 +6,13 @@ this subpackage imports ``mitsuba`` or ``drjit`` (through :func:`.backend.load_m
 
 Importing this package pulls in no third-party module; the back end loads in
 :meth:`MitsubaRenderer.prepare`.
+
+The Mitsuba-only functions are importable from here, each loaded from its module on first
+use: :func:`~.backend.load_mitsuba` and :func:`~.backend.select_variant` (the variant),
+:func:`~.scene.load_scene` (a spec compiled into a Mitsuba scene and its camera) and
+:func:`~.render.render_view` (one view of the rig rendered). The modules :mod:`.jit_target`
+(Dr.Jit's LLVM target) and :mod:`.moments` (per-pixel sample moments of one render) serve the
+back end and the ``moments`` estimator.
 """
 
 from __future__ import annotations
@@ -18,7 +25,28 @@ from ..base import FirstHits, PreparedScene, Renderer, RenderSettings
 
 log = logging.getLogger("stereovar")
 
-__all__ = ["MitsubaRenderer", "MitsubaScene"]
+_LAZY = {
+    "load_mitsuba": "backend",
+    "select_variant": "backend",
+    "load_scene": "scene",
+    "render_view": "render",
+}
+"""Functions of the submodules, imported on first access (:func:`__getattr__`) so that this
+package stays free of numpy."""
+
+__all__ = ["MitsubaRenderer", "MitsubaScene", *sorted(_LAZY)]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        from importlib import import_module
+
+        return getattr(import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
 
 
 @dataclass
