@@ -3,6 +3,9 @@
 ``layout`` finds an audit's files from path templates; ``importer`` writes them into the
 render and ground-truth store contracts (with provenance and SHA-256s, re-importing only what
 changed); ``ground_truth`` builds the imported ground truth; ``sign`` settles the disparity
-convention photometrically; ``verdict`` writes the one-page verdict; ``export`` writes this
-project's renders, variance fields and disparity in the same file formats.
+convention photometrically; ``verdict`` decides whether the data carry the cue and ``page``
+lays the verdict out as one page; ``run`` makes an audit a workflow run (its discovery, config
+and targets, which ``stereovar audit`` drives); ``export`` writes this project's renders,
+variance fields and disparity in the same file formats; ``synthetic`` writes stereo renders
+with a known cross-view variance correlation as files (the test data and the examples).
 """

@@ -5,6 +5,16 @@
 class, imported on first use; :func:`get_estimator` builds one. A new estimator is one module
 plus one :meth:`~stereovar.registry.Registry.register` call below and the name in the config
 schema's ``render.estimator`` enum.
+
+``base``
+    The interface: render stores in, the variance contract out.
+``seeds``
+    Eq. 1 over N independent seeds (``seeds``), in memory or streamed from the stores.
+``moments``
+    Eq. 1's target from one render's per-pixel sample moments (``moments``).
+``subsets``
+    Eq. 1 on split halves and disjoint subsets of the seeds (the reliability and the
+    seed-subset curve).
 """
 
 from __future__ import annotations

@@ -1,7 +1,9 @@
 """One function per workflow job, one module per ``workflow/rules/*.smk`` file.
 
 ``common`` (logging, scene preparation), ``scenes``, ``ground_truth``, ``preview``,
-``render``, ``variance``, ``correlation`` (Eq. 2 and Eq. 3), ``tables``, ``figures`` and
-``intervention``. Import the module you need, e.g. ``from stereovar.jobs.render import
-render_job``.
+``render``, ``variance``, ``correlation`` (Eq. 2 and Eq. 3), ``tables``, ``figures``,
+``intervention``, ``estimators`` (the moments estimator against N seeds), ``claims`` (the
+claims table), ``mitigations``, ``probe`` (the learned probe) and ``audit`` (an audit's
+import, verdict page and export). Import the module you need, e.g.
+``from stereovar.jobs.render import render_job``.
 """

@@ -1,7 +1,8 @@
 """The learned probe: does a stereo matcher trained on these renders use the Monte Carlo cue?
 
 A small matcher (MC-CNN "fast", :mod:`~stereovar.probe.network`) is trained on single renders
-of each training condition (:mod:`~stereovar.probe.training`), cross-validated over scenes
+of each training condition (:mod:`~stereovar.probe.conditions`,
+:mod:`~stereovar.probe.training`), cross-validated over scenes
 (:mod:`~stereovar.probe.experiment`), and tested on counterfactual inputs that change only the
 right view's Monte Carlo residual (:mod:`~stereovar.probe.inputs`): the block shuffle
 :math:`\\Pi`, camera noise, no noise, and a cue conflict that moves the residual's variance

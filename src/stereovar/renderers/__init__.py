@@ -6,6 +6,15 @@ its ``RENDERER`` attribute the :class:`~stereovar.renderers.base.Renderer` class
 first use. :data:`RENDERERS` lists them; :func:`get_renderer` builds one. A new renderer is
 one new subpackage plus its name in the config schema's ``render.renderer`` enum; a test or
 notebook can also :meth:`~stereovar.registry.Registry.register` one of its own.
+
+``base``
+    The protocol: :class:`~stereovar.renderers.base.Renderer`, a prepared scene, first hits.
+``mitsuba``
+    Mitsuba 3 (CUDA, LLVM or scalar variants); the Mitsuba-only functions live here.
+``cycles``
+    Blender Cycles on the CPU, through ``bpy``.
+``quiet``
+    Silencing a C-level file descriptor while native code prints (standard library only).
 """
 
 from __future__ import annotations

@@ -3,7 +3,9 @@
 :data:`TRANSFORMS` names each :class:`~stereovar.transforms.base.Transform`; its entries are
 ``"module:attribute"`` strings, so importing this package pulls in neither pyoidn nor the
 camera model. The render-time policies (``shared_seed``, ``spp_xK``) act while rendering and
-are not store transforms.
+are not store transforms. :mod:`~stereovar.transforms.base` defines the seam (what a
+transform reads), :mod:`~stereovar.transforms.registered` the registered objects,
+:mod:`~stereovar.transforms.denoise` and :mod:`~stereovar.transforms.sensor` their work.
 
 ========================  =============================================================
 ``denoise``               OIDN on each render, albedo and normal when given (BlenderProc)

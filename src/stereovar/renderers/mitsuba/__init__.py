@@ -19,9 +19,14 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..base import FirstHits, PreparedScene, Renderer, RenderSettings
+
+if TYPE_CHECKING:  # for type checkers and editors; at run time, __getattr__ imports them
+    from .backend import load_mitsuba, select_variant
+    from .render import render_view
+    from .scene import load_scene
 
 log = logging.getLogger("stereovar")
 
@@ -34,7 +39,14 @@ _LAZY = {
 """Functions of the submodules, imported on first access (:func:`__getattr__`) so that this
 package stays free of numpy."""
 
-__all__ = ["MitsubaRenderer", "MitsubaScene", *sorted(_LAZY)]
+__all__ = [
+    "MitsubaRenderer",
+    "MitsubaScene",
+    "load_mitsuba",
+    "load_scene",
+    "render_view",
+    "select_variant",
+]
 
 
 def __getattr__(name: str):
