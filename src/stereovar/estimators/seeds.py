@@ -52,6 +52,31 @@ def variance_field(images, *, dim: str = "seed"):
         Seed mean per channel.
     variance : numpy.ndarray (H, W) or xarray.DataArray (y, x), float64
         Eq. 1 averaged over channels.
+
+    Examples
+    --------
+    Two seeds of a 1 x 2 image. Pixel (0, 0) reads 0 in every channel at the first seed and
+    (2, 4, 0) at the second, so its per-channel means are (1, 2, 0) and its per-channel
+    population variances :math:`\\frac12 \\sum_n (I^{(n)} - \\bar I)^2` are (1, 4, 0), whose
+    RGB average is 5/3. Pixel (0, 1) reads 5 at both seeds: variance 0.
+
+    >>> import numpy as np
+    >>> renders = np.zeros((2, 1, 2, 3))  # (N seeds, H, W, RGB)
+    >>> renders[1, 0, 0] = [2.0, 4.0, 0.0]
+    >>> renders[:, 0, 1] = 5.0
+    >>> mean, variance = variance_field(renders)
+    >>> mean[0, 0].tolist(), mean[0, 1].tolist()
+    ([1.0, 2.0, 0.0], [5.0, 5.0, 5.0])
+    >>> np.round(variance, 4).tolist()
+    [[1.6667, 0.0]]
+
+    A DataArray keeps its coordinates; the seed dim is named by ``dim``:
+
+    >>> import xarray as xr
+    >>> stack = xr.DataArray(renders, dims=("seed", "y", "x", "channel"))
+    >>> _, var = variance_field(stack)
+    >>> var.dims, bool(np.allclose(var, variance))
+    (('y', 'x'), True)
     """
     if isinstance(images, xr.DataArray):
         missing = [d for d in (dim, *IMAGE_DIMS) if d not in images.dims]
@@ -125,6 +150,25 @@ class StreamingVariance:
     shape : tuple of int (H, W, C), optional
         Image shape; taken from the first full render when omitted, and required to add row
         blocks before any full render.
+
+    Examples
+    --------
+    The same estimate as :func:`variance_field`, one render at a time: the values 0, 2 and 4
+    at one pixel have mean 2 and population variance :math:`(4 + 0 + 4) / 3 = 8/3`, in every
+    channel, even on a large offset.
+
+    >>> import numpy as np
+    >>> acc = StreamingVariance()
+    >>> for value in (0.0, 2.0, 4.0):
+    ...     _ = acc.update(np.full((1, 1, 3), 1e4 + value))
+    >>> acc.n, round(float(acc.mean[0, 0, 0]), 6), round(float(acc.variance[0, 0]), 6)
+    (3, 10002.0, 2.666667)
+
+    A NaN in a render is counted and that pixel is reported as not finite (0):
+
+    >>> _ = acc.update(np.full((1, 1, 3), np.nan))
+    >>> acc.n_nonfinite.tolist(), acc.finite.tolist(), acc.variance.tolist()
+    ([[1]], [[False]], [[0.0]])
     """
 
     def __init__(self, shape: tuple[int, int, int] | None = None):

@@ -19,7 +19,7 @@ def warp_right_to_left(right, disparity, *, sign: int = 1, valid=None):
 
         \\hat f_{R\\to L}(x, y) = f_R\\bigl(x + s\\,d(x, y),\\, y\\bigr)
 
-    (Eq. 2, with :math:`s = +1` for the paper's :math:`x_R = x_L + d` convention and
+    (paper Sec. 2.2, Eq. 2, with :math:`s = +1` for the paper's :math:`x_R = x_L + d` convention and
     :math:`s = -1` for the conventional rig). Pixel ``x`` is masked out of the valid set
     :math:`\\Omega` when :math:`x + s\\,d` falls outside ``[0, W - 1]``, when :math:`d` is
     non-positive or non-finite, or when ``valid`` is False there.
@@ -42,6 +42,31 @@ def warp_right_to_left(right, disparity, *, sign: int = 1, valid=None):
         The field in left coordinates; 0 outside :math:`\\Omega`.
     omega : same type as ``disparity`` (bool)
         The valid set :math:`\\Omega`.
+
+    Examples
+    --------
+    A right field that grows by 10 per pixel, :math:`f_R(x) = 10x` on one row of width 5,
+    and a constant disparity of 1.5 px. With the paper's convention (:math:`s = +1`) left pixel
+    :math:`x` reads :math:`f_R(x + 1.5) = 10x + 15` (bilinear between two right pixels) while
+    :math:`x + 1.5 \\le 4`; pixels 3 and 4 match outside the right image and leave
+    :math:`\\Omega`:
+
+    >>> import numpy as np
+    >>> right = 10.0 * np.arange(5.0)[None, :]
+    >>> disparity = np.full((1, 5), 1.5)
+    >>> warped, omega = warp_right_to_left(right, disparity, sign=1)
+    >>> warped.tolist(), omega.tolist()
+    ([[15.0, 25.0, 35.0, 0.0, 0.0]], [[True, True, True, False, False]])
+
+    The conventional rig (:math:`x_R = x_L - d`, :math:`s = -1`) reads :math:`10x - 15`,
+    defined from :math:`x = 2` on; a non-positive or non-finite disparity is never valid:
+
+    >>> warped, omega = warp_right_to_left(right, disparity, sign=-1)
+    >>> warped.tolist(), omega.tolist()
+    ([[0.0, 0.0, 5.0, 15.0, 25.0]], [[False, False, True, True, True]])
+    >>> disparity[0, 2:] = [0.0, np.nan, -1.0]
+    >>> warp_right_to_left(right, disparity, sign=1)[1].tolist()
+    [[True, True, False, False, False]]
     """
     if sign not in (1, -1):
         raise ValueError(f"sign must be +1 or -1, got {sign}")
@@ -236,7 +261,11 @@ def align_variance(
 ) -> dict:
     """Warp the right variance field into the left view and build the valid set (Eq. 2).
 
-    .. math:: \\hat\\sigma_{R\\to L}^2(x, y) = \\sigma_R^2\\bigl(x + s\\,d(x, y),\\, y\\bigr)
+    .. math::
+
+        \\hat\\sigma_{R\\to L}^2(x, y) = \\sigma_R^2\\bigl(x + s\\,d(x, y),\\, y\\bigr)
+
+    (paper Sec. 2.2, Eq. 2), on the valid set :math:`\\Omega` of Eq. 3 (Sec. 2.3).
 
     Parameters
     ----------
@@ -253,6 +282,28 @@ def align_variance(
         valid set from the ground truth alone), ``usable`` (left value finite and warped right
         value built only from finite right pixels) and ``omega`` (both: the :math:`\\Omega` of
         Eq. 3).
+
+    Examples
+    --------
+    A right variance field that is the left one seen 2 px further right (paper convention,
+    :math:`\\sigma_R^2(x + 2) = \\sigma_L^2(x)`): the warp by :math:`d = 2` recovers the left
+    field on :math:`\\Omega`, the pixels whose match lies inside the right image. A NaN in the
+    right field removes the left pixels that read it from ``omega`` (not from
+    ``omega_geometry``):
+
+    >>> import numpy as np
+    >>> left = np.array([[1.0, 4.0, 2.0, 8.0, 5.0, 7.0]])
+    >>> right = np.array([[0.0, 0.0, 1.0, 4.0, 2.0, 8.0]])
+    >>> gt = {"disparity": np.full((1, 6), 2.0), "valid": np.ones((1, 6), bool)}
+    >>> out = align_variance(left, right, gt, sign=1)
+    >>> out["omega"].tolist()
+    [[True, True, True, True, False, False]]
+    >>> bool(np.array_equal(out["warped"][out["omega"]], left[out["omega"]]))
+    True
+    >>> right[0, 3] = np.nan
+    >>> out = align_variance(left, right, gt, sign=1)
+    >>> out["omega_geometry"].tolist(), out["omega"].tolist()
+    ([[True, True, True, True, False, False]], [[True, False, True, True, False, False]])
     """
     left = as_field(sigma_left).astype(np.float64)
     right = as_field(sigma_right).astype(np.float64)
