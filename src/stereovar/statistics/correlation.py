@@ -94,6 +94,15 @@ def fisher_interval(rho: float, n: int) -> dict:
     -------
     dict
         ``fisher_low``, ``fisher_high``, ``p_value``, ``log10_p_value``.
+
+    Examples
+    --------
+    :math:`\\rho = 0` over :math:`n = 103` pixels: :math:`z = 0`, :math:`s = 0.1`, so the
+    interval is :math:`\\pm\\tanh(0.1960)` and :math:`p = 1`:
+
+    >>> out = fisher_interval(0.0, 103)
+    >>> round(out["fisher_low"], 4), round(out["fisher_high"], 4), round(out["p_value"], 12)
+    (-0.1935, 0.1935, 1.0)
     """
     with np.errstate(divide="ignore"):
         z = float(np.arctanh(rho))
@@ -143,6 +152,38 @@ def pearson_over_mask(a, b, mask, *, min_pixels: int = 30) -> dict:
         ``log10_p_value``, ``n_nonfinite`` (pixels of ``mask`` dropped because ``a`` or ``b``
         is NaN or Inf) and ``reason``: ``""``, or why the correlation is undefined (fewer than
         ``min_pixels`` pixels, or a constant field), in which case the numbers are NaN.
+
+    Examples
+    --------
+    Over the four pixels of :math:`\\Omega` (the fifth is outside and ignored), the
+    deviations from the means are :math:`(-1.5, -0.5, 0.5, 1.5)` for ``a`` and
+    :math:`(-1.5, 0.5, -0.5, 1.5)` for ``b``, each with sum of squares 5, so
+    :math:`\\rho = (2.25 - 0.25 - 0.25 + 2.25) / 5 = 0.8`:
+
+    >>> import numpy as np
+    >>> a = np.array([[1.0, 2.0, 3.0, 4.0, 9.0]])
+    >>> b = np.array([[1.0, 3.0, 2.0, 4.0, -9.0]])
+    >>> omega = np.array([[True, True, True, True, False]])
+    >>> r = pearson_over_mask(a, b, omega, min_pixels=4)
+    >>> round(r["rho"], 12), r["n_pixels"], r["reason"]
+    (0.8, 4, '')
+
+    With :math:`n = 4` pixels the Fisher-z interval is
+    :math:`\\tanh(\\operatorname{artanh} 0.8 \\pm 1.959964)`, wide:
+
+    >>> z = np.arctanh(0.8)
+    >>> bool(np.allclose([r["fisher_low"], r["fisher_high"]], np.tanh([z - Z_95, z + Z_95])))
+    True
+
+    Pixels where a field is NaN are dropped and counted; a constant field, or too few
+    pixels, gives NaN and the reason:
+
+    >>> a[0, 0] = np.nan
+    >>> r = pearson_over_mask(a, b, omega, min_pixels=4)
+    >>> r["n_pixels"], r["n_nonfinite"], r["reason"]
+    (3, 1, 'fewer than 4 valid pixels (n=3)')
+    >>> pearson_over_mask(np.ones((1, 5)), b, omega, min_pixels=4)["reason"]
+    'constant field in region'
     """
     if min_pixels < 4:
         raise ValueError(
