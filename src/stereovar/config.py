@@ -540,8 +540,8 @@ def load_config(path, schema_path) -> dict:
 
 
 def check_config_files_or_exit(paths) -> None:
-    """Read each workflow config file as stereovar reads YAML (:func:`~stereovar.schema.
-    load_yaml`), and stop with one line naming the file, the line and the problem.
+    """Read each workflow config file as stereovar reads YAML (:func:`~stereovar.schema.load_yaml`),
+    and stop with one line naming the file, the line and the problem.
 
     Snakemake reads config files with a loader that builds the Python objects some tags
     name (``!!python/name:...``) and reports a tag it refuses as "Config file is not valid

@@ -11,7 +11,7 @@ from .paper import _pyplot
 
 
 def probe_figure(rows: list[dict]):
-    """Accuracy (|d - d_GT| < 1 px) of each training condition's networks on each test input,
+    """Accuracy (``|d - d_GT| < 1`` px) of each training condition's networks on each test input,
     with 95% intervals over test tiles and training seeds
     (:mod:`stereovar.probe.metrics`); one panel per region. A network that uses the Monte
     Carlo cue loses more on ``shuffled`` and ``conflict`` than the ``sensor_only`` control.

@@ -183,7 +183,7 @@ def sensor_rows(renders_l, renders_r, ground_truth_left, sensor: dict, *, label,
 
 def intervention_table_job(inputs, outputs: dict) -> list[dict]:
     """Table 3: mean ± std across scenes of each metric, normal and decorrelated, with the
-    relative change (normal - decorrelated) / |decorrelated|."""
+    relative change ``(normal - decorrelated) / |decorrelated|``."""
     from ..io.tables import read_rows, write_tables
     from ..statistics.summary import intervention_table
 

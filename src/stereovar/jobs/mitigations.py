@@ -255,7 +255,7 @@ def _reference(spec, loaded: dict):
 
 
 def leave_one_out_quality(images, seeds, raw, raw_seeds, *, mask=None) -> dict:
-    """Image quality of renders against the mean of the source's other seeds.
+    r"""Image quality of renders against the mean of the source's other seeds.
 
     Image :math:`k` of seed index :math:`s_k` is graded against the mean of the untransformed
     renders of every other seed, whose noise is independent of it when the image depends on
@@ -263,16 +263,16 @@ def leave_one_out_quality(images, seeds, raw, raw_seeds, *, mask=None) -> dict:
 
     .. math::
 
-        R_{-k} = \frac1{N-1} \\sum_{n \ne s_k} I_n, \\qquad
-        V_{-k} = \frac{\\hat\\sigma^2_{-k}}{N-1},
+        R_{-k} = \frac1{N-1} \sum_{n \ne s_k} I_n, \qquad
+        V_{-k} = \frac{\hat\sigma^2_{-k}}{N-1},
 
-    with :math:`\\hat\\sigma^2_{-k}` the unbiased variance of those :math:`N - 1` renders
+    with :math:`\hat\sigma^2_{-k}` the unbiased variance of those :math:`N - 1` renders
     (:func:`seed_moments`); a seed index not among the renders is graded against all
     :math:`N`. MSE, relative MSE, bias and the reference noise are the images' means, the
     relative bias the mean bias over the mean reference and PSNR follows from the mean MSE
     (:func:`stereovar.statistics.utility.image_quality` per image). A transform that reads the
     seed mean (``equalise``, ``sensor_only``) shares noise with this reference, so its error
-    is underestimated by up to :math:`\\sigma^2/N`.
+    is underestimated by up to :math:`\sigma^2/N`.
     """
     from ..statistics.utility import image_quality
 

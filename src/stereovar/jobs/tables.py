@@ -64,8 +64,8 @@ def spp_sweep_job(correlations, variances, warped, outputs: dict, fit_outputs: d
 def cross_renderer_job(correlations: dict, outputs: dict, *, spp) -> list[dict]:
     """The cross-renderer table: per scene and their mean, each renderer's rho with its
     bootstrap interval, the robust statistics, the intensity-controlled rho, the no-warp
-    control and the sensor baseline (:func:`stereovar.statistics.cross_renderer.
-    cross_renderer_table`)."""
+    control and the sensor baseline
+    (:func:`stereovar.statistics.cross_renderer.cross_renderer_table`)."""
     from ..io.tables import read_rows, write_tables
     from ..statistics.cross_renderer import cross_renderer_columns, cross_renderer_table
 

@@ -1242,14 +1242,14 @@ def _albedo(spec: dict, material: str) -> float | None:
 def predicted_mean_radiance(
     spec: dict, *, width: int = EXPOSURE_SIZE[0], height: int = EXPOSURE_SIZE[1]
 ) -> float:
-    """Mean left-view pixel value predicted by a simple one-bounce-plus-ambient model.
+    r"""Mean left-view pixel value predicted by a simple one-bounce-plus-ambient model.
 
     .. math::
 
-        \\hat I(p) = \frac{\rho(p)}{\\pi}\\Bigl(
-            \\sum_{\\ell} L_\\ell \\int_{A_\\ell}
-                \frac{\\cos\theta_\\ell \\cos\theta_p}{r^2}\\,dA
-            + \frac{\bar\rho}{1-\bar\rho}\\,\frac{\\pi \\sum_\\ell L_\\ell A_\\ell}{S}\\Bigr)
+        \hat I(p) = \frac{\rho(p)}{\pi}\Bigl(
+            \sum_{\ell} L_\ell \int_{A_\ell}
+                \frac{\cos\theta_\ell \cos\theta_p}{r^2}\,dA
+            + \frac{\bar\rho}{1-\bar\rho}\,\frac{\pi \sum_\ell L_\ell A_\ell}{S}\Bigr)
 
     for the first hit ``p`` of each pixel's ray: direct light from a 4x4 grid of points on each
     panel (shadows ignored) plus a uniform inter-reflected irradiance from the emitted power
