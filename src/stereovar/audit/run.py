@@ -37,10 +37,54 @@ def discover_audit(settings: dict) -> Discovery:
     written. The import is a job per frame (rule ``audit_import``,
     :func:`stereovar.audit.importer.import_frame`).
 
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` section of the config: ``name``, the ``renders`` template (fields
+        ``{frame}``, ``{view}``, ``{seed}``), ``views``, the ground truth's templates
+        (``disparity`` or ``depth``) and the ``convention``.
+
+    Returns
+    -------
+    Discovery
+        The frames in name order, each with its render and ground-truth files.
+
     Raises
     ------
     AuditError, ImageError
         One line naming the setting or file and the fix.
+
+    Examples
+    --------
+    ``stereovar audit CONFIG`` starts here. Two synthetic frames
+    (:func:`~stereovar.audit.synthetic.write_synthetic_audit`: 32 x 16 EXR renders, 2 views
+    x 4 seeds, and a PFM disparity per frame) written to a temporary folder, with the
+    ``audit:`` settings that read them. The audit finds the files without reading a pixel,
+    and the run takes its scenes, resolution and N from them (:func:`audit_run_config`):
+
+    >>> import tempfile
+    >>> from stereovar.audit.synthetic import write_synthetic_audit
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> settings, _ = write_synthetic_audit(folder.name, width=32, height=16, n_seeds=4)
+    >>> sorted(settings)
+    ['convention', 'disparity', 'name', 'renders', 'views']
+    >>> discovery = discover_audit(settings)
+    >>> discovery.summary()
+    '2 frames × 2 views × 4 seeds'
+    >>> config = {"audit": settings, "rig": {}, "render": {}, "intervention": {}}
+    >>> run = audit_run_config(config, discovery)
+    >>> run["scenes"], run["resolution"], run["render"]["n_seeds"]
+    (['f00', 'f01'], {'width': 32, 'height': 16}, 4)
+    >>> audit_paths(settings["name"])["verdict_html"]
+    'results/audit/synthetic/verdict.html'
+
+    A setting that cannot work stops the audit before any file is read, in one line:
+
+    >>> discover_audit({**settings, "convention": "sideways"})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.AuditError: audit.convention 'sideways' is unknown; use paper ...
+    >>> folder.cleanup()
     """
     check_settings(settings)
     import_settings(settings)
