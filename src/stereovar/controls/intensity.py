@@ -24,12 +24,13 @@ def intensity_residuals(log_variance, log_intensity, *, degree: int = DEGREE) ->
         \\ln \\sigma^2_i = \\sum_{k=0}^{K} \\beta_k (\\ln \\mu_i)^k + e_i, \\qquad
         \\hat\\beta = \\arg\\min_\\beta \\sum_i e_i^2,
 
-    returning :math:`\\hat e`. A cubic is smooth and follows the curvature a
-    Poisson-Gaussian law :math:`\\sigma^2 = a\\mu + b` has in log-log coordinates (slope 0 in
-    the read-noise floor, 1 in the shot-noise regime) and the different slopes of diffuse and
-    specular pixels, without the step artefacts of a monotone (isotonic) fit, which also
-    could not follow a non-monotone relation. The fit solves the normal equations of the
-    powers of :math:`\\ln\\mu` mapped onto :math:`[-1, 1]` (the mapping of
+    returning :math:`\\hat e` (the intensity control, not in the paper; :func:`partial_pair`
+    correlates the two views' residuals by Eq. 3, paper Sec. 2.3). A cubic is smooth and follows
+    the curvature a Poisson-Gaussian law :math:`\\sigma^2 = a\\mu + b` has in log-log
+    coordinates (slope 0 in the read-noise floor, 1 in the shot-noise regime) and the different
+    slopes of diffuse and specular pixels, without the step artefacts of a monotone (isotonic)
+    fit, which also could not follow a non-monotone relation. The fit solves the normal
+    equations of the powers of :math:`\\ln\\mu` mapped onto :math:`[-1, 1]` (the mapping of
     ``numpy.polynomial.Polynomial.fit``, which keeps the 4x4 system well conditioned).
 
     Parameters
