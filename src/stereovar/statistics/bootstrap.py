@@ -212,7 +212,15 @@ def pearson_from_sums(sums) -> np.ndarray:
 
 
 def bootstrap_replicates(sums, counts) -> np.ndarray:
-    """Replicates of :math:`\\rho`: :math:`\\rho(\\sum_t c_{rt} s_t)` for each row of counts.
+    """Replicates of :math:`\\rho`, one per row :math:`r` of the draw counts.
+
+    .. math::
+
+        \\rho_r = \\rho\\Bigl(\\sum_t c_{rt}\\, s_t\\Bigr)
+
+    with :math:`s_t` the sums of tile :math:`t` (:func:`tile_sums`) and :math:`\\rho(\\cdot)`
+    :func:`pearson_from_sums`: Eq. 3 (paper Sec. 2.3) over the pixels of the drawn tiles,
+    each counted as often as its tile is drawn.
 
     Examples
     --------

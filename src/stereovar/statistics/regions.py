@@ -46,6 +46,22 @@ def valid_set(disparity, *, sign: int, valid=None) -> np.ndarray:
     Returns
     -------
     numpy.ndarray of bool, shape (H, W)
+
+    Examples
+    --------
+    One row of width 5 and the paper's convention (:math:`s = +1`): pixel 0 matches
+    :math:`x_R = 1`; pixel 1's disparity is 0, pixel 2's NaN; pixel 3 matches
+    :math:`x_R = 5`, outside the image; pixel 4 matches :math:`x_R = 4.5`, also outside.
+
+    >>> import numpy as np
+    >>> valid_set(np.array([[1.0, 0.0, np.nan, 2.0, 0.5]]), sign=1).tolist()
+    [[True, False, False, False, False]]
+
+    On the conventional rig (:math:`s = -1`) pixels 3 and 4 match :math:`x_R = 1` and 3.5,
+    and pixel 0 matches :math:`x_R = -1`, outside:
+
+    >>> valid_set(np.array([[1.0, 0.0, np.nan, 2.0, 0.5]]), sign=-1).tolist()
+    [[False, False, False, True, True]]
     """
     d = np.asarray(disparity, dtype=np.float64)
     xs = np.arange(d.shape[1])[None, :] + sign * d
