@@ -119,9 +119,19 @@ def test_package_is_marked_typed():
     assert (PACKAGE / "py.typed").is_file()
 
 
+def _source_files():
+    """The package's Python files, outside ``__pycache__`` and private data folders (a name
+    starting with one underscore, e.g. the workflow an installed wheel carries)."""
+    return [
+        p
+        for p in PACKAGE.rglob("*.py")
+        if not any(d.startswith("_") for d in p.relative_to(PACKAGE).parts[:-1])
+    ]
+
+
 def _python_folders():
     """Every folder under the package that holds a Python module at any depth."""
-    folders = {p.parent for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts}
+    folders = {p.parent for p in _source_files()}
     for folder in list(folders):
         folders.update(a for a in folder.parents if PACKAGE in (a, *a.parents))
     return sorted(folders)

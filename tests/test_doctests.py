@@ -39,12 +39,20 @@ WITH_EQUATION = [
 """Those that state an equation (the others compute sums, replicates or find files)."""
 
 
+def _source_files() -> list:
+    """The package's Python files, outside ``__pycache__`` and private data folders (a name
+    starting with one underscore, e.g. the workflow an installed wheel carries)."""
+    return sorted(
+        p
+        for p in PACKAGE.rglob("*.py")
+        if not any(d.startswith("_") for d in p.relative_to(PACKAGE).parts[:-1])
+    )
+
+
 def _module_names_from_files() -> set:
     """Every module of the package by its file, independently of pkgutil."""
     names = set()
-    for path in PACKAGE.rglob("*.py"):
-        if "__pycache__" in path.parts:
-            continue
+    for path in _source_files():
         parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
         if parts[-1] == "__init__":
             parts = parts[:-1]
@@ -103,7 +111,7 @@ def _docstrings(tree):
 
 @pytest.mark.parametrize(
     "path",
-    sorted(p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts),
+    _source_files(),
     ids=lambda p: p.relative_to(PACKAGE).as_posix(),
 )
 def test_docstrings_hold_no_control_characters(path):
