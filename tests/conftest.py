@@ -59,3 +59,132 @@ def tiny_run_copy(tiny_run):
         return shutil.copytree(tiny_run, root, symlinks=True)
 
     return copy
+
+
+@pytest.fixture(scope="session")
+def headless_chromium():
+    """A function ``load(path, *, width=1280, height=900, expression=None)``: open a local
+    HTML file in headless Chromium (Debian's ``chromium``) through the DevTools protocol on a
+    pipe, and return its ``errors`` (console errors, uncaught exceptions and failed loads,
+    one line each), a viewport ``screenshot`` (PNG bytes) and the ``value`` of the
+    JavaScript ``expression`` evaluated after the page has loaded. Skips where Chromium is
+    not installed (``scripts/setup.sh`` installs it where it can)."""
+    import base64
+    import fcntl
+    import json
+    import os
+    import select
+    import shutil
+    import subprocess
+    import tempfile
+    import time
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    binary = next(
+        (b for b in ("chromium", "chromium-browser") if shutil.which(b)), None
+    )
+    if binary is None:
+        pytest.skip(
+            "Chromium is not installed (Debian/Ubuntu: apt-get install chromium; "
+            "scripts/setup.sh installs it where it can)"
+        )
+
+    def load(path, *, width=1280, height=900, expression=None, timeout=60.0):
+        deadline = time.monotonic() + timeout
+        to_browser, from_browser = os.pipe(), os.pipe()
+        # the browser reads commands on fd 3 and writes replies on fd 4; both ends are
+        # moved above 4 first, so that dup2 onto 3 and 4 clobbers neither
+        ends = [fcntl.fcntl(to_browser[0], fcntl.F_DUPFD, 10),
+                fcntl.fcntl(from_browser[1], fcntl.F_DUPFD, 10)]
+
+        def child_fds():
+            os.dup2(ends[0], 3)
+            os.dup2(ends[1], 4)
+
+        profile = tempfile.mkdtemp(prefix="chromium-profile-")
+        proc = subprocess.Popen(
+            [binary, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+             "--remote-debugging-pipe", f"--user-data-dir={profile}", "--no-first-run",
+             f"--window-size={width},{height}", "about:blank"],
+            preexec_fn=child_fds, close_fds=False,
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        )
+        for fd in (*to_browser[:1], from_browser[1], *ends):
+            os.close(fd)
+        write_fd, read_fd = to_browser[1], from_browser[0]
+        buffer, events, counter = b"", [], [0]
+
+        def receive():
+            nonlocal buffer
+            while b"\0" not in buffer:
+                left = deadline - time.monotonic()
+                if left <= 0 or not select.select([read_fd], [], [], left)[0]:
+                    raise TimeoutError(f"Chromium did not answer within {timeout:.0f} s")
+                chunk = os.read(read_fd, 1 << 20)
+                if not chunk:
+                    raise RuntimeError("Chromium closed the DevTools pipe")
+                buffer += chunk
+            message, buffer = buffer.split(b"\0", 1)
+            return json.loads(message)
+
+        def call(method, params=None, session=None):
+            counter[0] += 1
+            message = {"id": counter[0], "method": method, "params": params or {}}
+            if session:
+                message["sessionId"] = session
+            os.write(write_fd, json.dumps(message).encode() + b"\0")
+            while True:
+                reply = receive()
+                if reply.get("id") == counter[0]:
+                    if "error" in reply:
+                        raise RuntimeError(f"{method}: {reply['error']}")
+                    return reply["result"]
+                events.append(reply)
+
+        try:
+            targets = call("Target.getTargets")["targetInfos"]
+            page = next(t for t in targets if t["type"] == "page")
+            session = call(
+                "Target.attachToTarget", {"targetId": page["targetId"], "flatten": True}
+            )["sessionId"]
+            for domain in ("Page", "Runtime", "Log"):
+                call(f"{domain}.enable", session=session)
+            call("Emulation.setDeviceMetricsOverride",
+                 {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False},
+                 session=session)
+            call("Page.navigate", {"url": Path(path).resolve().as_uri()}, session=session)
+            while not any(e.get("method") == "Page.loadEventFired" for e in events):
+                events.append(receive())
+            value = None
+            if expression is not None:
+                value = call("Runtime.evaluate",
+                             {"expression": expression, "returnByValue": True},
+                             session=session)["result"].get("value")
+            shot = call("Page.captureScreenshot", {"format": "png"}, session=session)
+            call("Browser.close")
+        finally:
+            os.close(write_fd)
+            os.close(read_fd)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+            shutil.rmtree(profile, ignore_errors=True)
+        errors = []
+        for e in events:
+            method, params = e.get("method"), e.get("params", {})
+            if method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
+                errors.append("console: " + " ".join(
+                    str(a.get("value", a.get("description", ""))) for a in params["args"]))
+            elif method == "Runtime.exceptionThrown":
+                errors.append("exception: " + params["exceptionDetails"].get("text", ""))
+            elif method == "Log.entryAdded" and params["entry"]["level"] == "error":
+                entry = params["entry"]
+                errors.append(f"{entry['source']}: {entry['text']} {entry.get('url', '')}")
+        return SimpleNamespace(
+            errors=errors, screenshot=base64.b64decode(shot["data"]), value=value
+        )
+
+    return load

@@ -38,6 +38,7 @@ SUMMARIES = {
     "rho_vs_seeds_figure": 1,
     "statistics_dot_figure": 1,
     "claims": 1,
+    "results_page": 1,
 }
 """Jobs downstream of every scene's correlation rows."""
 RUN = "results/mitsuba/seeds"

@@ -30,7 +30,8 @@ source key:
 Ground truth belongs to the scene, not to a transform: ``results/ground_truth/{scene}.zarr``
 (traced for every renderer) or ``results/audit/{name}/ground_truth/{frame}.zarr`` (imported).
 Tables across runs sit under ``results/tables/`` and figures across runs under
-``results/figures/``.
+``results/figures/``; the page a person opens, the claims, the headline with its controls
+and every figure, is ``results/index.html`` (:func:`results_page`).
 
 The workflow's rules match the source key with one ``{renderer}`` wildcard
 (:func:`source_key_pattern`), so every rule from the variance estimator to the tables runs
@@ -80,12 +81,14 @@ __all__ = [
     "probe_tiles",
     "probe_verdict",
     "render_store",
+    "results_page",
     "run_figure",
     "run_prefix",
     "run_tables",
     "scene_tables",
     "source_key",
     "source_key_pattern",
+    "snakemake_report",
     "split_source_key",
     "summary_json",
     "table_paths",
@@ -388,6 +391,17 @@ def claims_tables() -> list[str]:
 def summary_json() -> str:
     """The run's headline numbers: ``results/summary.json``."""
     return f"{RESULTS}/summary.json"
+
+
+def results_page() -> str:
+    """The run's results page, the one page a person opens: ``results/index.html``."""
+    return f"{RESULTS}/index.html"
+
+
+def snakemake_report() -> str:
+    """Snakemake's report of the run (``snakemake --report``), which the results page links
+    when it exists: ``results/report.html``."""
+    return f"{RESULTS}/report.html"
 
 
 def cross_renderer_tables() -> list[str]:

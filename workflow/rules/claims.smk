@@ -1,5 +1,6 @@
-# Every statistic and control across scenes, rho against the number of seeds, and the claims
-# table with results/summary.json (the run's headline numbers with their intervals).
+# Every statistic and control across scenes, rho against the number of seeds, the claims
+# table with results/summary.json (the run's headline numbers with their intervals), and the
+# results page results/index.html that shows them with every figure.
 from stereovar.statistics.claims import claims_digest
 
 
@@ -131,3 +132,31 @@ rule statistics_dot_figure:
         ENV
     script:
         "../scripts/statistics_dot_figure.py"
+
+
+rule results_page:
+    input:
+        claims=layout.claims_tables()[0],
+        summary=layout.summary_json(),
+        figures=page_results()[0],
+        tables=page_results()[1],
+        # the mitigation table and its figure, when mitigations.names asks for them
+        mitigations=mitigation_targets()[:1],
+        mitigation_figure=mitigation_targets()[-1:],
+        # the probe's verdict and figure, once `snakemake probe` has made them
+        probe=probe_if_run()[-1:],
+        probe_figure=probe_if_run()[-2:-1],
+    output:
+        layout.results_page(),
+    params:
+        captions=page_captions(),
+        report=layout.snakemake_report(),
+    log:
+        "logs/results_page.log",
+    benchmark:
+        "benchmarks/results_page.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/results_page.py"

@@ -13,7 +13,8 @@
    mitigations and the teasers.
 
 :func:`to_markdown_page` and :func:`to_html_page` write the same sections; the HTML page is
-self-contained (its own stylesheet, images by relative path).
+self-contained (its own stylesheet, images by relative path), built from the blocks of
+:mod:`stereovar.pages.html`.
 """
 
 from __future__ import annotations
@@ -22,7 +23,9 @@ import html
 import math
 from pathlib import Path
 
-from ..io.tables import to_html, to_markdown
+from ..io.tables import to_markdown
+from ..pages.html import document, figure
+from ..pages.html import table as _table_html
 from .importer import WARNING_KINDS
 from .verdict import FLAG_LABELS, LIGHTS, VERDICT_COLUMNS
 
@@ -198,18 +201,8 @@ def to_markdown_page(s: dict) -> str:
     return "\n".join(lines)
 
 
-def _table_html(rows: list[dict], columns: list[str], caption: str = "") -> str:
-    """The ``<table>`` of :func:`~stereovar.io.tables.to_html`'s page."""
-    page = to_html(rows, columns, caption=caption)
-    return page[page.index("<body>") + len("<body>") : page.index("</body>")].strip()
-
-
 def _figure(path: str) -> str:
-    p = html.escape(path)
-    return (
-        f'<figure><img src="{p}" alt="{html.escape(Path(path).stem)}" style="max-width:100%">'
-        f"<figcaption>{html.escape(Path(path).stem)}</figcaption></figure>"
-    )
+    return figure(path, html.escape(Path(path).stem), alt=Path(path).stem)
 
 
 def to_html_page(s: dict) -> str:
@@ -250,6 +243,4 @@ def to_html_page(s: dict) -> str:
     if s.get("probe"):
         body.append(f"<h2>Learned probe</h2>\n<p>{e(s['probe'])}</p>")
     body += [_figure(f) for f in s["figures"]]
-    page = to_html([], ["quantity"], caption=s["title"])
-    head = page[: page.index("<body>")].replace("</style>", _CSS + "</style>", 1)
-    return head + "<body>\n" + "\n".join(body) + "\n</body>\n</html>\n"
+    return document(s["title"], body, _CSS)

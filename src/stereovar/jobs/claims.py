@@ -1,5 +1,5 @@
 """Jobs of ``workflow/rules/claims.smk``: every statistic across scenes, the seed curve, the
-claims table and ``results/summary.json``."""
+claims table and ``results/summary.json``, and the results page ``results/index.html``."""
 
 from __future__ import annotations
 
@@ -181,3 +181,134 @@ def probe_claim(verdict: dict) -> dict:
             "pixels; results/tables/probe.*"
         ),
     }
+
+
+def _page_group(path) -> str:
+    """The run a result file belongs to, from its folder: ``across the run`` for
+    ``results/{tables,figures}/``, else ``{source key}, {estimator} estimator``."""
+    from pathlib import PurePosixPath
+
+    parts = PurePosixPath(str(path)).parts[1:-2]  # results/<key...>/<estimator>/<kind>/<file>
+    if not parts:
+        return "across the run"
+    return f"{'/'.join(parts[:-1])}, {parts[-1]} estimator" if len(parts) > 1 else parts[0]
+
+
+def _page_tables(paths, page) -> list[dict]:
+    """The tables among ``paths`` (every format of each), one entry per table with its
+    links from ``page`` in :data:`stereovar.layout.TABLE_FORMATS` order, the tables across
+    the run first."""
+    from pathlib import PurePosixPath
+
+    from ..layout import TABLE_FORMATS
+    from ..pages.html import relative_link
+
+    tables: dict = {}
+    for path in paths:
+        p = PurePosixPath(str(path))
+        if p.suffix[1:] not in TABLE_FORMATS:
+            continue
+        entry = tables.setdefault(
+            (str(p.parent), p.stem), {"name": p.stem, "group": _page_group(p), "links": {}}
+        )
+        entry["links"][p.suffix[1:]] = relative_link(p, page)
+    for entry in tables.values():
+        entry["links"] = {f: entry["links"][f] for f in TABLE_FORMATS if f in entry["links"]}
+    # the run's own tables (claims, scenes) first, then each run's in the order given
+    return sorted(tables.values(), key=lambda t: t["group"] != "across the run")
+
+
+def _page_figure(path, captions: dict) -> dict:
+    """One figure of the page: embedded as a data URI, with its caption."""
+    from pathlib import Path
+
+    from ..pages.html import data_uri
+
+    name = Path(path).stem
+    return {
+        "name": name,
+        "src": data_uri(path),
+        "caption": captions.get(name, ""),
+        "group": _page_group(path),
+    }
+
+
+def results_page_job(
+    claims,
+    summary,
+    out,
+    *,
+    figures=(),
+    tables=(),
+    captions=None,
+    report=None,
+    mitigations=None,
+    mitigation_figure=None,
+    probe=None,
+    probe_figure=None,
+) -> dict:
+    """Write ``results/index.html`` (:mod:`stereovar.pages.results`): the headline
+    :math:`\\rho` with its interval and controls from ``summary`` (``results/summary.json``),
+    the claims table (``claims``, its CSV), every figure of ``figures`` embedded with its
+    caption (``captions``: figure name, ``claims`` and ``workflow`` to the report's caption,
+    its Jinja already filled), with ``mitigations`` (the mitigation table's CSV) and
+    ``probe`` (the probe's verdict JSON) their sections and figures, links to every table of
+    ``tables`` relative to the page, and to ``report`` (Snakemake's report) when it exists.
+
+    Returns the page's sections."""
+    import json
+    from pathlib import Path
+
+    from ..io.store import write_file
+    from ..io.tables import read_rows
+    from ..layout import snakemake_report
+    from ..pages.html import relative_link
+    from ..pages.results import page_sections, to_html_page
+    from ..statistics.claims import KINDS, load_claims
+
+    captions = dict(captions or {})
+    claim_rows = read_rows(claims, required=["claim", "verdict"])
+    document = json.loads(Path(summary).read_text())
+    claims_file = load_claims()
+    all_tables = _page_tables(tables, out)
+
+    def section_tables(name):
+        return [t for t in all_tables if t["name"] == name]
+
+    mitigation_section = None
+    if mitigations:
+        from ..statistics.mitigations import mitigation_findings
+
+        mitigation_section = {
+            "lines": mitigation_findings(read_rows(mitigations)),
+            "figure": _page_figure(mitigation_figure, captions) if mitigation_figure else None,
+            "tables": section_tables("mitigations"),
+        }
+    probe_section = None
+    if probe:
+        probe_section = {
+            "paragraph": json.loads(Path(probe).read_text())["paragraph"],
+            "figure": _page_figure(probe_figure, captions) if probe_figure else None,
+            "tables": section_tables("probe"),
+        }
+    report = report or snakemake_report()
+    sections = page_sections(
+        summary=document,
+        claims=claim_rows,
+        claims_text=captions.get("claims", ""),
+        rules=[*(claims_file.rules[k] for k in KINDS), claims_file.intervals],
+        figures=[_page_figure(f, captions) for f in figures],
+        tables=all_tables,
+        intro=captions.get("workflow", ""),
+        mitigations=mitigation_section,
+        probe=probe_section,
+        report=relative_link(report, out) if Path(report).is_file() else None,
+        report_command=f"snakemake --report {report}",
+    )
+    page = to_html_page(sections)
+    write_file(Path(out), lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
+    log.info("headline rho %s; %d claims, %d figures, %d tables%s%s",
+             sections["headline"]["text"], len(claim_rows), len(figures), len(all_tables),
+             "; mitigations" if mitigation_section else "", "; probe" if probe_section else "")
+    log.info("wrote %s (%.0f KiB): open it in a browser", out, len(page.encode()) / 1024)
+    return sections

@@ -1,0 +1,388 @@
+"""The main run's results page, results/index.html (stereovar.pages.results): built from
+synthetic results, then on the tiny run, and in headless Chromium."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stereovar import layout
+from stereovar.io.tables import read_rows, write_tables
+from stereovar.jobs.claims import results_page_job
+from stereovar.pages.results import CONTROL_GROUPS, REGIONS
+from stereovar.statistics.claims import CLAIMS_COLUMNS, load_claims
+
+VERDICTS = ("holds", "does not hold", "explained by a control", "not testable at this scale")
+METHODS = ("warp", *(m for _, _, methods in CONTROL_GROUPS for m, _ in methods))
+RUN_FIGURES = ("fig1_teaser", "rho_vs_seeds")
+CAPTIONS = {
+    "fig1_teaser": "**Fig. 1.** The teaser of ``scene_000``: σ²_L against σ²_R.",
+    "rho_vs_seeds": "rho against the number of seeds N'.",
+    "mitigations": "**Mitigation trade-off.** The cue each mitigation leaves.",
+    "probe": "**Learned probe.** Accuracy per test input.",
+    "claims": "The paper's claims on this run. Read this first.",
+    "workflow": "**stereovar** on a synthetic run.",
+}
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+class Page(HTMLParser):
+    """The parts of a page the tests read: every element's attributes and text by id, the
+    claims rows by claim id, images, links and the headline table's rows."""
+
+    def __init__(self, text: str):
+        super().__init__(convert_charrefs=True)
+        self.stack: list[tuple[str, dict]] = []
+        self.text_by_id: dict[str, str] = {}
+        self.claims: dict[str, list[str]] = {}
+        self.controls: list[list[str]] = []
+        self.images: list[dict] = []
+        self.links: list[str] = []
+        self.scripts = 0
+        self._open_ids: list[str] = []
+        self._claim: str | None = None
+        self._cells: list[str] | None = None
+        self._cell: list[str] | None = None
+        self._in_controls = False
+        self.feed(text)
+
+    BLOCKS = {"p", "div", "td", "th", "tr", "li", "h1", "h2", "h3", "caption", "figcaption"}
+
+    def _space(self, tag):
+        """Block elements' texts are apart, as a browser shows them."""
+        if tag in self.BLOCKS:
+            for ident in self._open_ids:
+                self.text_by_id[ident] += " "
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        self._space(tag)
+        if tag in ("img", "meta", "br", "hr", "link", "input"):
+            if tag == "img":
+                self.images.append(a)
+            return
+        self.stack.append((tag, a))
+        if "id" in a:
+            self._open_ids.append(a["id"])
+            self.text_by_id.setdefault(a["id"], "")
+        if tag == "a" and "href" in a:
+            self.links.append(a["href"])
+        if tag == "script":
+            self.scripts += 1
+        if tag == "table" and "controls" in a.get("class", ""):
+            self._in_controls = True
+        if tag == "tr":
+            self._claim = a.get("data-claim")
+            self._cells = []
+        if tag == "td" and self._cells is not None:
+            self._cell = []
+
+    def handle_endtag(self, tag):
+        self._space(tag)
+        while self.stack:
+            t, a = self.stack.pop()
+            if "id" in a:
+                self._open_ids.remove(a["id"])
+            if t == tag:
+                break
+        if tag == "td" and self._cell is not None:
+            self._cells.append(" ".join("".join(self._cell).split()))
+            self._cell = None
+        elif tag == "tr" and self._cells is not None:
+            if self._claim:
+                self.claims[self._claim] = self._cells
+            elif self._in_controls:
+                self.controls.append(self._cells)
+            self._cells, self._claim = None, None
+        elif tag == "table":
+            self._in_controls = False
+
+    def handle_data(self, data):
+        for ident in self._open_ids:
+            self.text_by_id[ident] += data
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?")
+
+
+def numbers(text: str) -> list[float]:
+    """Every number in ``text``, in order."""
+    return [float(x) for x in NUMBER.findall(text)]
+
+
+def close(shown: float, value: float, digits: int = 3) -> bool:
+    """Whether ``shown`` is ``value`` to ``digits`` significant digits or decimals."""
+    return math.isclose(shown, value, rel_tol=10 ** (1 - digits), abs_tol=10**-digits)
+
+
+def formats(paths: list[str]) -> dict:
+    """A table's paths by format (:func:`stereovar.io.tables.write_tables`)."""
+    return dict(zip(layout.TABLE_FORMATS, paths, strict=True))
+
+
+def synthetic_results(
+    root: Path, *, mitigations: bool = False, probe: bool = False, seed: int = 0
+) -> dict:
+    """Write a run's results under ``root/results`` as the workflow would (claims table,
+    summary.json, figures and tables of every format) and return the job's arguments,
+    paths relative to ``root``."""
+    from PIL import Image
+
+    rng = np.random.default_rng(seed)
+    run = "results/mitsuba/seeds"
+    claims = []
+    for i, claim in enumerate(load_claims().claims):
+        ours = float(rng.uniform(-1, 1))
+        claims.append({
+            "id": claim["id"], "claim": claim["text"], "section": claim["section"],
+            "kind": claim["kind"], "paper": claim["paper"], "null": 0.0,
+            "ours": ours, "ours_low": ours - 0.1, "ours_high": ours + 0.07,
+            "control": "sensor_sim rho" if i % 3 else "",
+            "control_value": float(rng.uniform(-0.2, 0.2)) if i % 3 else math.nan,
+            "control_low": -0.3 if i % 3 else math.nan,
+            "control_high": 0.3 if i % 3 else math.nan,
+            "verdict": VERDICTS[i % len(VERDICTS)], "note": f"note {i}",
+        })
+    (root / "results/tables").mkdir(parents=True)
+    tables = layout.claims_tables()
+    write_tables(claims, CLAIMS_COLUMNS, formats(tables), caption="c")
+    stats = layout.run_tables("mitsuba", "seeds", "statistics")
+    (root / run / "tables").mkdir(parents=True)
+    write_tables([{"a": 1}], ["a"], formats(stats))
+    tables = [*tables, *stats]
+    statistics = []
+    for region in REGIONS:
+        for method in METHODS:
+            rho = float(rng.uniform(-0.5, 0.95))
+            statistics.append({
+                "region": region, "method": method, "mean_rho": rho,
+                "boot_low": rho - float(rng.uniform(0.01, 0.1)),
+                "boot_high": rho + float(rng.uniform(0.01, 0.1)),
+                "std_rho": 0.1, "n_scenes": 3, "mean_rho_corrected": rho,
+            })
+    summary = {
+        "config_digest": "ab" * 32, "renderer": "mitsuba", "estimator": "seeds", "spp": 2,
+        "n_seeds": 4, "scenes": ["scene_000", "scene_001", "scene_002"],
+        "interval": "95% spatial block bootstrap (scenes combined)",
+        "statistics": statistics,
+    }
+    layout_summary = root / layout.summary_json()
+    layout_summary.write_text(json.dumps(summary))
+    (root / run / "figures").mkdir(parents=True)
+    figures = []
+    for i, name in enumerate(RUN_FIGURES):
+        path = layout.run_figure("mitsuba", "seeds", name)
+        Image.new("RGB", (320, 160), (40 * i, 90, 160)).save(root / path)
+        figures.append(path)
+    kwargs = {
+        "claims": tables[0],
+        "summary": layout.summary_json(),
+        "figures": figures,
+        "tables": tables,
+        "captions": CAPTIONS,
+        "out": layout.results_page(),
+    }
+    (root / "results/figures").mkdir()
+    if mitigations:
+        rows = [
+            {"mitigation": m, "region": "all", "partial": p, "partial_low": p - 0.1,
+             "partial_high": p + 0.1, "mc_cue": cue, "residual_rho_zero": 0.0,
+             "residual_rho_zero_low": -0.1, "residual_rho_zero_high": 0.1,
+             "psnr": q, "psnr_low": q - 1, "psnr_high": q + 1}
+            for m, p, cue, q in (("none", 0.5, "remains", 30.0), ("denoise", 0.02, "removed", 33.0))
+        ]
+        paths = layout.mitigation_tables()
+        write_tables(rows, list(rows[0]), formats(paths))
+        Image.new("RGB", (200, 100), (10, 120, 40)).save(root / layout.mitigation_figure())
+        kwargs |= {"mitigations": paths[0], "mitigation_figure": layout.mitigation_figure()}
+        kwargs["tables"] = [*kwargs["tables"], *paths]
+    if probe:
+        paths = layout.probe_tables()
+        write_tables([{"training": "none"}], ["training"], formats(paths))
+        verdict = {"uses_cue": True, "paragraph": "The trained matcher uses the cue (synthetic)."}
+        (root / layout.probe_verdict()).write_text(json.dumps(verdict))
+        Image.new("RGB", (200, 100), (160, 40, 40)).save(root / layout.probe_figure())
+        kwargs |= {"probe": layout.probe_verdict(), "probe_figure": layout.probe_figure()}
+        kwargs["tables"] = [*kwargs["tables"], *paths]
+    return kwargs
+
+
+def build_page(root: Path, kwargs: dict) -> tuple[str, Page]:
+    """Build the page of the results under ``root`` (the working directory)."""
+    results_page_job(**kwargs)
+    text = (root / layout.results_page()).read_text(encoding="utf-8")
+    return text, Page(text)
+
+
+@pytest.fixture
+def synthetic(tmp_path, monkeypatch):
+    """A function: write synthetic results in a new folder of ``tmp_path`` (made the working
+    directory) and build their page; returns (folder, job arguments, page text, page)."""
+
+    def build(name: str = "run", **options):
+        root = tmp_path / name
+        root.mkdir()
+        monkeypatch.chdir(root)
+        kwargs = synthetic_results(root, **options)
+        return root, kwargs, *build_page(root, kwargs)
+
+    return build
+
+
+def check_claims(page: Page, claims: list[dict]) -> None:
+    """Every claims-table row is on the page: its claim, paper value, our value with its
+    interval, its control and its verdict."""
+    assert list(page.claims) == [str(c["id"]) for c in claims]
+    for c in claims:
+        claim, paper, ours, control, verdict = page.claims[str(c["id"])]
+        assert claim.startswith(html.unescape(str(c["claim"])))
+        assert verdict == c["verdict"]
+        expected = [c["ours"], c["ours_low"], c["ours_high"]]
+        shown = numbers(ours)
+        if not math.isfinite(float(c["ours"])):
+            assert ours == "n/a"
+        else:
+            finite = [x for x in expected if math.isfinite(float(x))]
+            assert len(shown) == len(finite)
+            assert all(close(s, float(v)) for s, v in zip(shown, finite, strict=True)), ours
+        if isinstance(c["paper"], (int, float)) and math.isfinite(c["paper"]):
+            assert close(numbers(paper)[0], c["paper"])
+        if c["control"] and math.isfinite(float(c["control_value"] or math.nan)):
+            assert control.startswith(str(c["control"]))
+            tail = numbers(control[len(str(c["control"])):])
+            assert close(tail[0], float(c["control_value"]))
+
+
+def check_headline(page: Page, summary: dict) -> None:
+    """The headline rho with its interval, and each control of the summary beside it with
+    its interval, per region."""
+    stats = {(r["region"], r["method"]): r for r in summary["statistics"]}
+    main = stats[("all", "warp")]
+    text = " ".join(page.text_by_id["headline"].split())
+    rho = re.search(r"ρ = (\S+)", text)
+    assert rho and close(float(rho.group(1)), main["mean_rho"])
+    interval = re.search(r"95% interval \[(\S+), (\S+)\]", text)
+    assert interval and close(float(interval.group(1)), main["boot_low"])
+    assert close(float(interval.group(2)), main["boot_high"])
+    # one row per statistic (and a heading row per group): label, then a cell per region
+    labels = {label: m for _, _, methods in CONTROL_GROUPS for m, label in methods}
+    shown = {}
+    for cells in page.controls:
+        if len(cells) == 1 + len(REGIONS):
+            shown[labels.get(cells[0], "warp")] = cells[1:]
+    methods = {m for _, m in stats}
+    expected_controls = {m for m in labels.values() if m in methods}
+    assert set(shown) == {"warp", *expected_controls}
+    assert expected_controls & {"sensor_sim", "partial", "null_shift"}  # baseline, intensity, null
+    for method, cells in shown.items():
+        for region, cell in zip(REGIONS, cells, strict=True):
+            row = stats.get((region, method))
+            if row is None or row["mean_rho"] is None:
+                assert cell == "n/a"
+                continue
+            values = [row["mean_rho"], row["boot_low"], row["boot_high"]]
+            got = numbers(cell)
+            finite = [v for v in values if v is not None and math.isfinite(v)]
+            assert len(got) == len(finite), (method, region, cell)
+            assert all(close(g, v) for g, v in zip(got, finite, strict=True)), (method, cell)
+
+
+def check_links(page: Page, results: Path) -> None:
+    """Every link is relative and resolves to a file under ``results``; nothing is loaded
+    from elsewhere and the page runs no script."""
+    assert page.scripts == 0
+    for href in page.links:
+        if href.startswith("#"):
+            assert href[1:] in page.text_by_id, href
+            continue
+        assert "://" not in href and not href.startswith("/"), href
+        target = (results / href).resolve()
+        assert target.is_file(), href
+        assert target.is_relative_to(results.resolve()), href
+    for image in page.images:
+        assert image["src"].startswith("data:image/png;base64,"), image["src"][:40]
+
+
+# ----------------------------------------------------------------------------- unit tests
+
+
+def test_page_shows_every_claim_with_its_interval_control_and_verdict(synthetic):
+    _, kwargs, _, page = synthetic()
+    claims = read_rows(kwargs["claims"])
+    check_claims(page, claims)
+    assert {c["verdict"] for c in claims} == set(VERDICTS)
+
+
+def test_headline_rho_comes_with_its_interval_and_controls(synthetic):
+    _, kwargs, text, page = synthetic()
+    summary = json.loads(Path(kwargs["summary"]).read_text())
+    check_headline(page, summary)
+    assert summary["interval"] in " ".join(page.text_by_id["headline"].split())
+    # the headline and the claims come before the figures
+    assert text.index('id="headline"') < text.index('id="claims"') < text.index('id="figures"')
+
+
+def test_a_headline_without_its_interval_says_so(synthetic):
+    root, kwargs, _, _ = synthetic()
+    summary = json.loads(Path(kwargs["summary"]).read_text())
+    for row in summary["statistics"]:
+        if (row["region"], row["method"]) == ("all", "warp"):
+            row["boot_low"] = row["boot_high"] = None
+    Path(kwargs["summary"]).write_text(json.dumps(summary))
+    _, page = build_page(root, kwargs)
+    text = " ".join(page.text_by_id["headline"].split())
+    assert "no interval" in text and "95% interval [" not in text
+
+
+def test_figures_are_embedded_with_their_captions(synthetic):
+    _, kwargs, _, page = synthetic()
+    assert len(page.images) == len(kwargs["figures"])
+    for image, path in zip(page.images, kwargs["figures"], strict=True):
+        assert base64.b64decode(image["src"].split(",", 1)[1]) == Path(path).read_bytes()
+        name = Path(path).stem
+        caption = " ".join(page.text_by_id[f"figure-{name}"].split())
+        assert caption == re.sub(r"\*\*|``", "", CAPTIONS[name])
+
+
+def test_links_resolve_relative_to_results_and_cover_every_table(synthetic):
+    root, kwargs, _, page = synthetic(mitigations=True, probe=True)
+    results = root / "results"
+    check_links(page, results)
+    linked = {(results / h).resolve() for h in page.links if not h.startswith("#")}
+    assert {(root / t).resolve() for t in kwargs["tables"]} <= linked
+
+
+def test_snakemake_report_is_linked_once_it_exists(synthetic):
+    root, kwargs, text, page = synthetic()
+    assert "snakemake --report results/report.html" in html.unescape(text)
+    assert "report.html" not in page.links
+    (root / layout.snakemake_report()).write_text("<html></html>")
+    _, page = build_page(root, kwargs)
+    assert "report.html" in page.links
+    check_links(page, root / "results")
+
+
+def test_mitigations_and_probe_sections_appear_when_they_have_run(synthetic):
+    _, _, text, _ = synthetic()
+    assert 'id="mitigations"' not in text and 'id="probe"' not in text
+    _, kwargs, text, page = synthetic("with", mitigations=True, probe=True)
+    mitigations = " ".join(page.text_by_id["mitigations"].split())
+    assert "denoise" in mitigations and "Removes the Monte Carlo-specific part" in mitigations
+    assert "The trained matcher uses the cue (synthetic)." in page.text_by_id["probe"]
+    embedded = [base64.b64decode(i["src"].split(",", 1)[1]) for i in page.images]
+    for key in ("mitigation_figure", "probe_figure"):
+        assert Path(kwargs[key]).read_bytes() in embedded
+    assert "tables/mitigations.csv" in page.links and "tables/probe.csv" in page.links
+    assert text.index('id="figures"') < text.index('id="mitigations"') < text.index('id="probe"')
