@@ -68,9 +68,12 @@ def test_mitsuba_names_live_in_the_mitsuba_package(name):
 
 @pytest.mark.parametrize("name", sorted(MITSUBA_ONLY))
 def test_deprecated_alias_warns_and_is_the_same_object(name):
-    with pytest.warns(DeprecationWarning, match=rf"stereovar\.renderers\.mitsuba\.{name}\b"):
+    with pytest.warns(
+        DeprecationWarning, match=rf"stereovar\.renderers\.mitsuba\.{name}\b"
+    ) as record:
         obj = getattr(stereovar, name)
     assert obj is getattr(importlib.import_module(MITSUBA_ONLY[name]), name)
+    assert record[0].filename == __file__, "the warning points at the caller's line"
 
 
 def test_deprecated_alias_warns_on_from_import_too():
