@@ -8,12 +8,20 @@ min_version("8.20")
 # Config files read as stereovar reads YAML before Snakemake uses them: a tag such as
 # !!python/object in config.yaml (which Snakemake reports naming neither the file nor the
 # tag) or aliases that expand past what a config holds are one line naming file and line.
+import os
+
 from stereovar.config import check_config_files_or_exit
+from stereovar.workflow_home import default_configfile, export_install_requirement
 
-check_config_files_or_exit(["config.yaml", *workflow.overwrite_configfiles])
+# config.yaml of the working directory, else the workflow's own (an installed stereovar run
+# from a directory without one: `stereovar run`).
+CONFIGFILE = default_configfile(workflow.basedir)
+check_config_files_or_exit([CONFIGFILE, *workflow.overwrite_configfiles])
+# What envs/stereovar.post-deploy.sh installs into a job's conda environment (--sdm conda).
+export_install_requirement(os.environ)
 
 
-configfile: "config.yaml"
+configfile: CONFIGFILE
 
 
 report: "workflow/report/workflow.rst"

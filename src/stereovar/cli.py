@@ -102,25 +102,29 @@ def _register_scenes(subparsers) -> None:
 
 
 def _project_root():
-    """The checkout whose workflow the command runs: the current directory, which must hold
-    the Snakefile (relative paths in configs are relative to it, as for ``snakemake``)."""
+    """The directory a command works in: the current one. Configs' relative paths, results,
+    logs and Snakemake's state are all relative to it, as for ``snakemake``; the workflow
+    itself is the installed package's or the checkout's (:func:`_workflow`)."""
     from pathlib import Path
 
-    root = Path.cwd()
-    if not (root / "Snakefile").is_file() or not (root / "workflow").is_dir():
-        raise StereovarError(
-            f"{root} has no stereovar Snakefile; run this command from the stereovar checkout "
-            "(the directory with the Snakefile)"
-        )
-    return root
+    return Path.cwd()
+
+
+def _workflow():
+    """The folder of the workflow's Snakefile (:func:`stereovar.workflow_home.workflow_root`)."""
+    from .workflow_home import workflow_root
+
+    return workflow_root()
 
 
 def _snakemake(args: list, root) -> int:
-    """Run ``snakemake ARGS`` in ``root``; its output goes to the terminal, or, while a
-    command has set :data:`_MONITOR` (``stereovar audit``), through that monitor."""
+    """Run ``snakemake --snakefile <workflow>/Snakefile ARGS`` in ``root``; its output goes to
+    the terminal, or, while a command has set :data:`_MONITOR` (``stereovar audit``), through
+    that monitor."""
     import subprocess
 
-    cmd = [sys.executable, "-m", "snakemake", *args]
+    snakefile = _workflow() / "Snakefile"
+    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(snakefile), *args]
     monitor = _MONITOR.get()
     if monitor is not None:
         return monitor.run(cmd, root)
@@ -477,14 +481,15 @@ def _import_warnings(root, name: str, frames) -> list:
 
 
 def _workflow_config(root, files) -> dict:
-    """The config the workflow would run with: ``config.yaml`` of ``root``, then ``files``
+    """The config the workflow would run with: ``config.yaml`` of ``root`` (else the
+    workflow's own, as the Snakefile reads it), then ``files``
     (as ``--configfile``), validated against the workflow's schema with its defaults filled
     in (:func:`stereovar.config.load_config`); one line for anything it refuses."""
     from .config import load_config
 
-    return load_config(
-        [root / "config.yaml", *files], root / "workflow" / "schemas" / "config.schema.yaml"
-    )
+    workflow = _workflow()
+    first = root / "config.yaml" if (root / "config.yaml").is_file() else workflow / "config.yaml"
+    return load_config([first, *files], workflow / "workflow" / "schemas" / "config.schema.yaml")
 
 
 def _cmd_audit(args: argparse.Namespace) -> int:
@@ -624,6 +629,162 @@ def _register_audit(subparsers) -> None:
 
 
 # --------------------------------------------------------------------------------------------
+# stereovar init / run / report
+# --------------------------------------------------------------------------------------------
+
+#: The starter audit config ``stereovar init`` writes; ``{name}``, ``{renders}``, ``{views}``,
+#: ``{disparity}`` and ``{convention}`` are filled in (placeholders, or the example's files).
+AUDIT_STARTER = """\
+# stereovar audit audit.yaml: audit renders made elsewhere for the cross-view variance cue.
+# Keys, types and defaults: the documentation's configuration reference (audit: section).
+audit:
+  # results/audit/<name>/verdict.html
+  name: {name}
+  renders: {renders}
+  # the {{view}} values in the paths
+  views: {views}
+  # the left view's disparity (add {{view}} to give both views')
+  disparity: {disparity}
+  # conventional: x_R = x_L - d (Middlebury, KITTI, SceneFlow); paper: x_R = x_L + d
+  convention: {convention}
+  # glass_mask: masks/{{frame}}.png      # or segmentation: seg/{{frame}}.png, glass_ids: [3]
+  # depth: depth/{{frame}}.exr           # instead of disparity, with focal_px and baseline_m
+  # transfer: srgb                     # PNG renders: srgb (default, with a warning) or linear
+  # spp: 128                           # for the tables; null = not given (0)
+  # mitigations: [denoise]             # test mitigations on these renders
+  # probe: true                        # train and test the learned matcher on these frames
+"""
+
+
+def _write_new(path, text: str) -> bool:
+    """Write ``text`` to ``path`` atomically unless it exists; True if written."""
+    from .io.store import atomic_path
+
+    if path.exists():
+        print(f"kept {path} (it exists)")
+        return False
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    print(f"wrote {path}")
+    return True
+
+
+def _cmd_init(args: argparse.Namespace) -> int:
+    import os
+
+    root = _project_root()
+    fields = {
+        "name": "my_renders",
+        "renders": "renders/{frame}/{view}/seed_{seed}.exr",
+        "views": "{left: L, right: R}",
+        "disparity": "disparity/{frame}.pfm",
+        "convention": "conventional",
+    }
+    if args.example:
+        from .audit.synthetic import write_synthetic_audit
+
+        folder = root / "data" / "synthetic"
+        for path in (folder, root / "audit.yaml"):
+            if path.exists():
+                raise StereovarError(
+                    f"{path} exists; remove it or run stereovar init --example in another "
+                    "directory"
+                )
+        settings, _ = write_synthetic_audit(os.path.relpath(folder, root))
+        fields = {**settings, "views": "{left: L, right: R}"}
+        print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
+    _write_new(root / "config.yaml", (_workflow() / "config.yaml").read_text())
+    _write_new(root / "audit.yaml", AUDIT_STARTER.format(**fields))
+    print("next: stereovar run -j2 (the default experiment) or stereovar audit audit.yaml")
+    return 0
+
+
+def _configfiles(args) -> list:
+    """``--preset`` configs (the workflow's) then ``--configfile`` configs, as given."""
+    from .workflow_home import preset_path
+
+    files = [str(preset_path(name)) for name in args.preset or []]
+    for f in args.configfile or []:
+        from pathlib import Path
+
+        if not Path(f).is_file():
+            raise StereovarError(f"{f}: no such config file; give an existing --configfile")
+        files.append(f)
+    return files
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    if args.cores < 1:
+        raise StereovarError(f"-j must be >= 1, got {args.cores}")
+    files = _configfiles(args)
+    options = ["-j", str(args.cores), *(args.targets or ["all"])]
+    if files:
+        options += ["--configfile", *files]
+    return _snakemake([*options, *args.snakemake_args], _project_root())
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    files = _configfiles(args)
+    options = ["--report", args.output]
+    if files:
+        options += ["--configfile", *files]
+    rc = _snakemake([*options, *args.snakemake_args], _project_root())
+    if rc == 0:
+        print(f"report: {args.output}")
+    return rc
+
+
+def _add_configs(parser) -> None:
+    parser.add_argument(
+        "--configfile", action="append", metavar="FILE", help="config merged on top (repeatable)"
+    )
+    parser.add_argument(
+        "--preset",
+        action="append",
+        metavar="NAME",
+        help="the workflow's preset NAME (workflow/presets/NAME.yaml: paper, paper-moments, "
+        "probe), merged before --configfile",
+    )
+
+
+def _register_workflow(subparsers) -> None:
+    init = subparsers.add_parser(
+        "init",
+        help="write a starter config.yaml and audit.yaml here",
+        description="Write config.yaml (the workflow's defaults, commented) and audit.yaml (an "
+        "audit config to fill in) in the current directory; an existing file is kept.",
+    )
+    init.add_argument(
+        "--example",
+        action="store_true",
+        help="also write two synthetic frames under data/synthetic and point audit.yaml at them",
+    )
+    init.set_defaults(func=_cmd_init)
+    run = subparsers.add_parser(
+        "run",
+        help="run the workflow here (results under ./results)",
+        description="Run the stereovar workflow with the current directory as its working "
+        "directory: config.yaml here if there is one (else the defaults), then --preset and "
+        "--configfile configs. Options after -- go to snakemake unchanged.",
+    )
+    run.add_argument("targets", nargs="*", metavar="TARGET", help="targets (default: all)")
+    run.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    _add_configs(run)
+    run.set_defaults(func=_cmd_run, passthrough=True)
+    report = subparsers.add_parser(
+        "report",
+        help="write Snakemake's report of the run here",
+        description="Write Snakemake's self-contained report of the results here (the "
+        "workflow's captions, figures and tables). Options after -- go to snakemake.",
+    )
+    report.add_argument(
+        "-o", "--output", default="results/report.html", help="default results/report.html"
+    )
+    _add_configs(report)
+    report.set_defaults(func=_cmd_report, passthrough=True)
+
+
+# --------------------------------------------------------------------------------------------
 # entry point
 # --------------------------------------------------------------------------------------------
 
@@ -633,11 +794,24 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="Cross-view Monte Carlo variance correlation in path-traced stereo.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,  # --version's line unwrapped
     )
+    parser.add_argument("--version", action="version", version=_version())
     subparsers = parser.add_subparsers(dest="command", metavar="GROUP", required=True)
+    _register_workflow(subparsers)
     _register_scenes(subparsers)
     _register_audit(subparsers)
     return parser
+
+
+def _version() -> str:
+    """``stereovar <version> (workflow: <folder>)``."""
+    from . import __version__
+
+    try:
+        return f"{PROG} {__version__} (workflow: {_workflow()})"
+    except StereovarError as err:
+        return f"{PROG} {__version__} ({err})"
 
 
 def main(argv=None) -> int:
@@ -653,8 +827,16 @@ def main(argv=None) -> int:
     int
         0 on success, 2 on a usage error or a :class:`~stereovar.errors.StereovarError`.
     """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    passthrough = []
+    if "--" in argv:  # snakemake's own options, for the commands that run it
+        cut = argv.index("--")
+        argv, passthrough = argv[:cut], argv[cut + 1 :]
     parser = build_parser()
     args = parser.parse_args(argv)
+    if passthrough and not getattr(args, "passthrough", False):
+        parser.error(f"options after -- are for run and report only, not {args.command}")
+    args.snakemake_args = passthrough
     try:
         return int(args.func(args) or 0)
     except StereovarError as err:
