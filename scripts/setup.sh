@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10, and
+# Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10,
 # `pip install -e ".[test,cycles,mitigations,probe]"` (skipped while pyproject.toml is unchanged;
 # the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn;
-# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB).
+# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB),
+# and, where apt-get can install it, Debian's chromium for the results page's browser test.
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
 # Environment:
@@ -66,20 +67,25 @@ apt_install_llvm() {  # $@: command prefix (nothing, or sudo -n)
     return 1
 }
 
-install_llvm() {  # sets INSTALL_NOTE when it cannot or did not install
-    local prefix=()
+apt_root() {  # sets PREFIX for apt-get (nothing as root, else sudo -n); INSTALL_NOTE if neither
+    PREFIX=()
     if ! command -v apt-get >/dev/null 2>&1; then
         INSTALL_NOTE="no apt-get here to install it automatically"
         return 1
     fi
     if [ "$(id -u)" -ne 0 ]; then
         if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
-            prefix=(sudo -n)
+            PREFIX=(sudo -n)
         else
             INSTALL_NOTE="not installed automatically (not root, no password-less sudo)"
             return 1
         fi
     fi
+}
+
+install_llvm() {  # sets INSTALL_NOTE when it cannot or did not install
+    apt_root || return 1
+    local prefix=(${PREFIX[@]+"${PREFIX[@]}"})
     local updated=0
     if [ -z "$(apt_candidate libllvm19)" ]; then
         say "apt-get update (libllvm19 not in the package lists)"
@@ -129,6 +135,40 @@ else
     "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations,probe]" \
         || die "pip install -e \".[test,cycles,mitigations,probe]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
+fi
+
+# --- Chromium for the results page's browser test (optional) ------------------
+# tests/test_results_page.py opens results/index.html in headless Chromium (Debian's
+# `chromium`); without it that one test is skipped. Set-up never fails here: a failed install
+# is one line, and is not tried again while its note is in .venv.
+CHROMIUM_STAMP="$VENV/.stereovar-chromium"
+
+install_chromium() {  # sets INSTALL_NOTE when it cannot or did not install
+    apt_root || return 1
+    if [ -z "$(apt_candidate chromium)" ]; then
+        say "apt-get update (chromium not in the package lists)"
+        ${PREFIX[@]+"${PREFIX[@]}"} apt-get update -q >/dev/null 2>&1 || true
+    fi
+    if [ -z "$(apt_candidate chromium)" ]; then
+        INSTALL_NOTE="no chromium package in the apt sources"
+        return 1
+    fi
+    say "installing chromium with apt-get (for the results page's browser test)"
+    ${PREFIX[@]+"${PREFIX[@]}"} env DEBIAN_FRONTEND=noninteractive \
+        apt-get install -y -q --no-install-recommends chromium >/dev/null 2>&1 && return 0
+    INSTALL_NOTE="apt-get install chromium failed"
+    return 1
+}
+
+if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1; then
+    :
+elif [ -f "$CHROMIUM_STAMP" ]; then
+    say "no chromium: $(cat "$CHROMIUM_STAMP") (delete $CHROMIUM_STAMP to try again); the results page's browser test will be skipped"
+elif install_chromium; then
+    say "chromium: $(command -v chromium)"
+else
+    echo "$INSTALL_NOTE" >"$CHROMIUM_STAMP"
+    say "no chromium: $INSTALL_NOTE; the results page's browser test will be skipped"
 fi
 
 variant="$("$VENV/bin/python" -c 'import stereovar.renderers.mitsuba.backend as b; print(b.select_variant())')" \
