@@ -5,7 +5,7 @@ VENV := .venv
 PYTHON := $(VENV)/bin/python
 SNAKEMAKE := $(VENV)/bin/snakemake
 
-.PHONY: setup run test test-other-cpu lint clean
+.PHONY: setup run test test-other-cpu lint docs clean
 
 setup:
 	bash scripts/setup.sh
@@ -26,6 +26,10 @@ test-other-cpu: setup
 lint: setup
 	$(PYTHON) -m ruff check .
 	$(SNAKEMAKE) --lint
+
+# The documentation site, warnings as errors; open docs/_build/html/index.html.
+docs: setup
+	$(PYTHON) -m sphinx -W --keep-going -b html docs docs/_build/html
 
 # Removes workflow outputs and Snakemake's state; never scenes/ or .venv.
 clean:

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10,
-# `pip install -e ".[test,cycles,mitigations,probe]"` (skipped while pyproject.toml is unchanged;
+# `pip install -e ".[test,cycles,mitigations,probe,docs]"` (skipped while pyproject.toml is unchanged;
 # the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn;
-# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB),
+# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB;
+# docs is Sphinx and its extensions, for `make docs` and the documentation test),
 # and, where apt-get can install it, Debian's chromium for the results page's browser test.
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
@@ -131,9 +132,9 @@ want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("py
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else
-    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations,probe]\")"
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations,probe]" \
-        || die "pip install -e \".[test,cycles,mitigations,probe]\" failed (see the pip output above)"
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations,probe,docs]\")"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations,probe,docs]" \
+        || die "pip install -e \".[test,cycles,mitigations,probe,docs]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
 fi
 

@@ -1456,7 +1456,7 @@ def generate_scene(index: int, seed: int) -> dict:
 
 
 def generate_scenes(count: int, seed: int) -> list[dict]:
-    """Scenes ``0 .. count-1`` of the run with ``seed`` (see :func:`generate_scene`)."""
+    """Scenes ``0`` to ``count - 1`` of the run with ``seed`` (see :func:`generate_scene`)."""
     return [generate_scene(i, seed) for i in range(int(count))]
 
 

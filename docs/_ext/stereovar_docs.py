@@ -1,0 +1,544 @@
+"""Pages of the stereovar documentation that are generated from the code at build time.
+
+Sections that would go stale if written by hand are written here, before Sphinx reads the
+sources, into ``docs/_generated/`` (included by the hand-written pages, never read on their
+own):
+
+``config_keys.rst``
+    every key of the workflow's JSON Schema (``workflow/schemas/config.schema.yaml``): its
+    type, default, the values allowed and the schema's description, with the value
+    ``config.yaml`` sets where it differs from the schema's default;
+``source_tree.rst``
+    every package and module under ``src/stereovar`` with the first sentence of its
+    docstring, and the data files shipped with them;
+``result_paths.rst``, ``layout_doc.rst``
+    every path of :mod:`stereovar.layout`, obtained by calling its functions with the
+    wildcards as arguments, and the module's own description;
+``top_level_names.rst``
+    the names ``import stereovar`` exposes and the object each one is;
+``cli.rst``
+    the ``--help`` of the ``stereovar`` command and of each of its commands.
+
+A file is rewritten only when its content changes, so an unchanged build stays incremental.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import inspect
+import re
+import warnings
+from pathlib import Path
+
+import yaml
+
+GENERATED = "_generated"
+
+
+# --- helpers -----------------------------------------------------------------------------
+
+
+def write_if_changed(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` unless it already holds exactly that."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_file() and path.read_text(encoding="utf-8") == text:
+        return
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
+
+
+def literal(value) -> str:
+    """``value`` as an inline reStructuredText literal (YAML flow style for data)."""
+    if isinstance(value, str):
+        text = value
+    else:
+        text = yaml.safe_dump(value, default_flow_style=True, width=10_000).strip()
+        if text.endswith("\n...") or text.endswith(" ..."):
+            text = text[: -len("...")].rstrip()
+    text = " ".join(text.split())
+    return f"``{text}``" if text else "``''``"
+
+
+_INLINE_SPECIAL = re.compile(r"([\\*_|<>\[\]])")
+
+
+def rst_text(text: str) -> str:
+    """Plain text (the schema's descriptions) as reStructuredText: Markdown-style
+    ```code``` spans become literals, everything else is escaped."""
+    out = []
+    for i, part in enumerate(re.split(r"`([^`]+)`", " ".join(str(text).split()))):
+        if i % 2:
+            out.append(f"``{part}``")
+        else:
+            out.append(_INLINE_SPECIAL.sub(r"\\\1", part))
+    return "".join(out)
+
+
+def list_table(header: list[str], rows: list[list[str]], widths: list[int]) -> list[str]:
+    lines = [
+        ".. list-table::",
+        "   :header-rows: 1",
+        f"   :widths: {' '.join(str(w) for w in widths)}",
+        "   :class: config-table",
+        "",
+    ]
+    for row in [header, *rows]:
+        for j, cell in enumerate(row):
+            bullet = f"   {'*' if j == 0 else ' '} -"
+            cell_lines = str(cell).split("\n")
+            lines.append(f"{bullet} {cell_lines[0]}".rstrip())
+            lines.extend(f"       {line}".rstrip() for line in cell_lines[1:])
+    lines.append("")
+    return lines
+
+
+# --- the configuration reference ------------------------------------------------------------
+
+
+def schema_path(repo: Path) -> Path:
+    """The workflow's config schema: the checkout's, else the packaged workflow's."""
+    for candidate in (
+        repo / "workflow" / "schemas" / "config.schema.yaml",
+        repo / "src" / "stereovar" / "_workflow" / "workflow" / "schemas" / "config.schema.yaml",
+    ):
+        if candidate.is_file():
+            return candidate
+    raise FileNotFoundError(f"no workflow/schemas/config.schema.yaml under {repo}")
+
+
+def schema_keys(schema: dict, prefix: str = ""):
+    """``(dotted key, subschema, required)`` of every property, depth first in schema order."""
+    required = set(schema.get("required", ()))
+    for name, sub in (schema.get("properties") or {}).items():
+        key = f"{prefix}{name}"
+        yield key, sub, name in required
+        if sub.get("type") == "object" or "properties" in sub:
+            yield from schema_keys(sub, f"{key}.")
+
+
+def type_text(sub: dict) -> str:
+    kinds = sub.get("type")
+    if kinds is None:
+        if "enum" in sub:
+            kinds = sorted({type(v).__name__ for v in sub["enum"]} - {"NoneType"})
+            kinds = [{"str": "string", "int": "integer", "float": "number"}.get(k, k)
+                     for k in kinds]
+            if None in sub["enum"]:
+                kinds.append("null")
+        elif "const" in sub:
+            kinds = [type(sub["const"]).__name__]
+        else:
+            return "any"
+    if isinstance(kinds, str):
+        kinds = [kinds]
+    text = " or ".join(kinds)
+    items = sub.get("items")
+    if "array" in kinds and isinstance(items, dict) and items.get("type"):
+        item_type = items["type"]
+        item_type = " or ".join(item_type) if isinstance(item_type, list) else item_type
+        text = text.replace("array", f"array of {item_type}")
+    return text
+
+
+def bounds(sub: dict) -> list[str]:
+    parts = []
+    for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
+                      ("exclusiveMaximum", "<")):
+        if key in sub:
+            parts.append(f"{sign} {sub[key]}")
+    return parts
+
+
+def allowed_text(sub: dict, required: bool) -> str:
+    """The values a key allows, in words."""
+    parts = []
+    if required:
+        parts.append("required")
+    if "enum" in sub:
+        parts.append("one of " + ", ".join(literal(v) for v in sub["enum"]))
+    if "const" in sub:
+        parts.append(literal(sub["const"]))
+    parts.extend(bounds(sub))
+    if "anyOf" in sub:
+        options = []
+        for option in sub["anyOf"]:
+            if "const" in option:
+                options.append(literal(option["const"]))
+            else:
+                options.extend(bounds(option))
+        parts.append(", or ".join(options))
+    if "pattern" in sub:
+        parts.append(f"matches {literal(sub['pattern'])}")
+    if "minLength" in sub:
+        parts.append(f"at least {sub['minLength']} characters")
+    if "minItems" in sub:
+        parts.append(f"at least {sub['minItems']} item{'s' if sub['minItems'] > 1 else ''}")
+    if sub.get("uniqueItems"):
+        parts.append("no repeats")
+    items = sub.get("items")
+    if isinstance(items, dict):
+        inner = allowed_text(items, False)
+        if inner:
+            parts.append(f"each item {inner}")
+    if sub.get("required"):
+        parts.append("needs " + ", ".join(literal(k) for k in sub["required"]))
+    return "; ".join(p for p in parts if p)
+
+
+def lookup(config: dict, key: str):
+    node = config
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            raise KeyError(key)
+        node = node[part]
+    return node
+
+
+def config_reference(schema: dict, config: dict) -> str:
+    """The configuration reference: one section per top-level key, one row per key."""
+    lines = [
+        ".. This file is generated from the workflow's config schema by",
+        "   docs/_ext/stereovar_docs.py; edit the schema, not this file.",
+        "",
+    ]
+    keys = list(schema_keys(schema))
+    sections = [k for k, _, _ in keys if "." not in k]
+    for top in sections:
+        sub = schema["properties"][top]
+        lines += [f".. _config-{top}:", "", f"``{top}``", "~" * (len(top) + 4), ""]
+        if sub.get("description"):
+            lines += [rst_text(sub["description"]), ""]
+        rows = []
+        for key, ksub, required in keys:
+            if key != top and not key.startswith(f"{top}."):
+                continue
+            if "default" in ksub:
+                default = literal(ksub["default"])
+            else:
+                default = "none (optional)" if not required else "none"
+            try:
+                set_here = lookup(config, key)
+            except KeyError:
+                pass
+            else:
+                if "default" not in ksub or set_here != ksub["default"]:
+                    if not isinstance(set_here, dict):
+                        default += f"; ``config.yaml``: {literal(set_here)}"
+            rows.append([
+                f"``{key}``",
+                rst_text(type_text(ksub)),
+                default,
+                allowed_text(ksub, required),
+                rst_text(ksub.get("description", "")),
+            ])
+        lines += list_table(["key", "type", "default", "allowed", "meaning"], rows,
+                            [18, 10, 16, 16, 40])
+    return "\n".join(lines) + "\n"
+
+
+# --- the source tree ----------------------------------------------------------------------------
+
+
+def first_sentence(doc: str | None) -> str:
+    """The first sentence of a docstring's first paragraph."""
+    if not doc:
+        return ""
+    paragraph = " ".join(inspect.cleandoc(doc).split("\n\n")[0].split())
+    return re.split(r"(?<=[.!?])\s+(?=[A-Z])", paragraph)[0]
+
+
+def module_doc(path: Path) -> str | None:
+    return ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")))
+
+
+def data_file_doc(path: Path) -> str:
+    """What a data file shipped with the package is: a YAML file's ``title`` or
+    ``description``, or its first comment line."""
+    text = path.read_text(encoding="utf-8", errors="replace")
+    if path.suffix in (".yaml", ".yml"):
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError:
+            data = None
+        if isinstance(data, dict):
+            for key in ("title", "description"):
+                if isinstance(data.get(key), str):
+                    return data[key]
+    for line in text.splitlines():
+        if line.startswith("#"):
+            return line.lstrip("#").strip()
+    return ""
+
+
+def package_tree(root: Path, package: str, depth: int = 0) -> list[str]:
+    """Bullet lines of one package: its modules, data files and subpackages."""
+    indent = "  " * depth
+    lines = []
+    init = root / "__init__.py"
+    doc = first_sentence(module_doc(init)) if init.is_file() else ""
+    head = f"{indent}- :mod:`{package}`"
+    lines.append(f"{head} -- {doc}" if doc else head)
+    lines.append("")
+    inner = "  " * (depth + 1)
+    for path in sorted(root.iterdir()):
+        if path.name.startswith(("_", ".")) or path.name == "__pycache__":
+            continue
+        if path.is_dir():
+            if any(path.glob("*.py")):
+                lines += package_tree(path, f"{package}.{path.name}", depth + 1)
+            continue
+        if path.suffix == ".py":
+            name = f"{package}.{path.stem}"
+            doc = first_sentence(module_doc(path))
+            lines.append(f"{inner}- :mod:`{name}`" + (f" -- {doc}" if doc else ""))
+        elif path.suffix in (".yaml", ".yml", ".json"):
+            doc = data_file_doc(path)
+            rel = path.relative_to(root.parents[depth]) if depth else path.name
+            lines.append(f"{inner}- ``{rel}``" + (f" -- {rst_text(doc)}" if doc else ""))
+        else:
+            continue
+        lines.append("")
+    return lines
+
+
+def source_tree(src: Path) -> str:
+    lines = [
+        ".. This file is generated from the modules' docstrings by",
+        "   docs/_ext/stereovar_docs.py.",
+        "",
+    ]
+    lines += package_tree(src / "stereovar", "stereovar")
+    return "\n".join(lines) + "\n"
+
+
+# --- the result paths -----------------------------------------------------------------------
+
+
+def _placeholder(name: str) -> str:
+    return "{format}" if name == "fmt" else "{" + name + "}"
+
+
+def path_patterns(func) -> list[str]:
+    """The path patterns a :mod:`stereovar.layout` function returns, wildcards in braces:
+    one call with every argument a wildcard (transform left out), one with the transform
+    given, and, for a function whose ``source`` may be None, one for the run and one for an
+    audit. Lists of table paths are folded into ``{csv,md,...}``."""
+    sig = inspect.signature(func)
+    required = {}
+    optional = {}
+    for name, param in sig.parameters.items():
+        if param.kind not in (param.POSITIONAL_OR_KEYWORD, param.KEYWORD_ONLY):
+            return []
+        if param.default is param.empty:
+            required[name] = _placeholder(name)
+        else:
+            optional[name] = param.default
+    calls = [dict(required)]
+    if "transform" in optional:
+        calls.append({**required, "transform": "{transform}"})
+    if "source" in optional:
+        calls = [dict(required), {**required, "source": "audit/{name}"}]
+    elif "source" in required and "transform" not in optional:
+        calls.append({**required, "source": "audit/{name}"})
+    if set(optional) - {"transform", "source"}:
+        return []
+    out = []
+    for kwargs in calls:
+        value = func(**kwargs)
+        values = value if isinstance(value, list) else [value]
+        if not values or not all(isinstance(v, str) for v in values):
+            return []
+        if len(values) > 1:
+            stems = {v.rsplit(".", 1)[0] for v in values}
+            if len(stems) == 1:
+                exts = ",".join(v.rsplit(".", 1)[1] for v in values)
+                values = [f"{stems.pop()}.{{{exts}}}"]
+        if kwargs.get("source") == "audit/{name}" and "source" in required:
+            # an audit's path that is the run's with the source filled in adds nothing
+            plain = out[0].replace("{source}", "audit/{name}")
+            values = [v for v in values if v != plain]
+        out.extend(v for v in values if v not in out)
+    if len(out) == 2 and "transform" in optional:
+        plain, with_transform = out
+        if with_transform == plain.replace("{source}", "{source}/{transform}", 1):
+            out = [plain.replace("{source}", "{source}[/{transform}]", 1)]
+    return out
+
+
+def result_paths(layout) -> str:
+    lines = [
+        ".. This file is generated from stereovar.layout by docs/_ext/stereovar_docs.py.",
+        "",
+    ]
+    rows = []
+    for name, func in inspect.getmembers(layout, inspect.isfunction):
+        if name.startswith("_") or func.__module__ != layout.__name__:
+            continue
+        try:
+            patterns = path_patterns(func)
+        except (TypeError, ValueError):
+            continue
+        patterns = [p for p in patterns if p.startswith(layout.RESULTS + "/")]
+        if not patterns:
+            continue
+        doc = first_sentence(inspect.getdoc(func))
+        what = re.split(r":\s*``|:$", doc)[0].rstrip(" :,")
+        rows.append([
+            "\n\n".join(f"``{p}``" for p in patterns),
+            rst_text_keep_roles(what),
+            f":func:`~stereovar.layout.{name}`",
+        ])
+    rows.sort()
+    lines += list_table(["path", "what", "function"], rows, [50, 35, 15])
+    return "\n".join(lines) + "\n"
+
+
+def layout_doc(layout) -> str:
+    """The docstring of :mod:`stereovar.layout`, its cross-references made absolute."""
+    doc = inspect.getdoc(layout) or ""
+    doc = re.sub(r":(data|func):`(?![~.]|stereovar)([^`]+)`", r":\1:`~stereovar.layout.\2`", doc)
+    return ".. Generated from the docstring of stereovar.layout.\n\n" + doc + "\n"
+
+
+def rst_text_keep_roles(text: str) -> str:
+    """A docstring fragment is reStructuredText already; only a dangling literal is closed."""
+    if text.count("``") % 2:
+        text += "``"
+    return text
+
+
+# --- the names of ``import stereovar`` ------------------------------------------------------------
+
+
+def top_level_names() -> str:
+    """A table of ``stereovar.__all__``: each name with the object it is and where it is
+    documented."""
+    import stereovar
+
+    lines = [
+        ".. This file is generated from stereovar.__all__ by docs/_ext/stereovar_docs.py.",
+        "",
+    ]
+    rows = []
+    for name in stereovar.__all__:
+        if name.startswith("__"):
+            continue
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            obj = getattr(stereovar, name)
+        deprecated = any(issubclass(w.category, DeprecationWarning) for w in caught)
+        module = getattr(obj, "__module__", None)
+        qualname = getattr(obj, "__qualname__", None)
+        owner = None
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            target = f"{module}.{qualname}"
+            kind = "class" if inspect.isclass(obj) else "func"
+            ref = f":{kind}:`{target}`"
+        else:
+            owner = _defining_module(stereovar, name)
+            target = f"{owner}.{name}" if owner else name
+            ref = f":data:`{target}`" if owner else f"``{name}``"
+        if callable(obj):
+            summary = first_sentence(inspect.getdoc(obj))
+        else:
+            summary = first_sentence(_attribute_doc(owner, name)) if owner else ""
+        note = " (deprecated alias)" if deprecated else ""
+        rows.append([f"``stereovar.{name}``{note}", ref, rst_text_keep_roles(summary)])
+    lines += list_table(["name", "is", "summary"], rows, [25, 35, 40])
+    return "\n".join(lines) + "\n"
+
+
+def _attribute_doc(module: str, name: str) -> str:
+    """The docstring written under a module-level assignment (as autodoc reads it)."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    try:
+        docs = ModuleAnalyzer.for_module(module).find_attr_docs()
+    except Exception:  # a module without readable source documents nothing here
+        return ""
+    return "\n".join(docs.get(("", name), []))
+
+
+def _defining_module(package, name: str) -> str | None:
+    """The module a non-callable public name (a registry, a table of constants) comes from,
+    as the package's lazy-import table or its stub file says."""
+    table = getattr(package, "_API", None)
+    if isinstance(table, dict) and name in table:
+        return f"{package.__name__}.{table[name]}"
+    stub = Path(package.__file__).with_suffix(".pyi")
+    if stub.is_file():
+        for node in ast.walk(ast.parse(stub.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and any(
+                (alias.asname or alias.name) == name for alias in node.names
+            ):
+                base = package.__name__.rsplit(".", node.level - 1)[0] if node.level else ""
+                return f"{base}.{node.module}" if base else node.module
+    return None
+
+
+# --- the command line ---------------------------------------------------------------------
+
+
+def cli_help() -> str:
+    """``stereovar --help`` and each command's ``--help``, as the parser prints them."""
+    import argparse
+    import os
+
+    from stereovar.cli import build_parser
+
+    lines = [
+        ".. This file is generated from stereovar.cli.build_parser by",
+        "   docs/_ext/stereovar_docs.py.",
+        "",
+    ]
+    saved = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "92"
+    try:
+        parser = build_parser()
+        pages = [("stereovar", parser)]
+        queue = [("stereovar", parser)]
+        while queue:
+            prefix, current = queue.pop(0)
+            for action in current._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    for name, sub in action.choices.items():
+                        pages.append((f"{prefix} {name}", sub))
+                        queue.append((f"{prefix} {name}", sub))
+        for title, sub in pages:
+            lines += [f"``{title} --help``", "", "::", ""]
+            lines += [f"   {line}".rstrip() for line in sub.format_help().splitlines()]
+            lines.append("")
+    finally:
+        if saved is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = saved
+    return "\n".join(lines) + "\n"
+
+
+# --- Sphinx -------------------------------------------------------------------------------
+
+
+def generate(app) -> None:
+    docs = Path(app.confdir)
+    repo = docs.parent
+    out = docs / GENERATED
+    schema = yaml.safe_load(schema_path(repo).read_text(encoding="utf-8"))
+    config_file = repo / "config.yaml"
+    config = {}
+    if config_file.is_file():
+        config = yaml.safe_load(config_file.read_text(encoding="utf-8")) or {}
+    write_if_changed(out / "config_keys.rst", config_reference(schema, config))
+    write_if_changed(out / "source_tree.rst", source_tree(repo / "src"))
+    layout = importlib.import_module("stereovar.layout")
+    write_if_changed(out / "result_paths.rst", result_paths(layout))
+    write_if_changed(out / "layout_doc.rst", layout_doc(layout))
+    write_if_changed(out / "top_level_names.rst", top_level_names())
+    write_if_changed(out / "cli.rst", cli_help())
+
+
+def setup(app):
+    app.connect("builder-inited", generate)
+    return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
