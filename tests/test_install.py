@@ -112,25 +112,43 @@ def test_installed_stereovar_says_its_version_and_runs_its_own_workflow(installe
     assert str(package / "_workflow") in version
 
 
-def test_audit_in_an_empty_directory_writes_the_verdict_page_there(installed, tmp_path):
-    """From ``pip install`` of the wheel to a verdict page, in a directory that holds nothing
-    else, without touching the checkout."""
-    before = checkout_state()
-    work = tmp_path / "renders_here"
-    work.mkdir()
+def test_init_writes_starter_configs_and_an_example_that_reads_its_files(installed, tmp_path):
     env = clean_env(installed)
     cli = installed.parent / "stereovar"
-    run([cli, "init", "--example"], work, env)
-    config = yaml.safe_load((work / "audit.yaml").read_text())["audit"]
-    assert (work / Path(config["disparity"].format(frame="f00"))).is_file()
-    out = run([cli, "audit", "audit.yaml"], work, env).stdout
-    page = work / "results" / "audit" / config["name"] / "verdict.html"
+    out = run([cli, "init", "--example"], tmp_path, env).stdout
+    config = yaml.safe_load((tmp_path / "audit.yaml").read_text())["audit"]
+    for frame in ("f00", "f01"):
+        assert (tmp_path / config["disparity"].format(frame=frame)).is_file()
+        for view in config["views"].values():
+            assert (
+                tmp_path / config["renders"].format(frame=frame, view=view, seed="000")
+            ).is_file()
+    package = installed.parent.parent
+    (shipped,) = package.glob("lib/python*/site-packages/stereovar/_workflow/config.yaml")
+    assert (tmp_path / "config.yaml").read_text() == shipped.read_text()
+    again = run([cli, "init"], tmp_path, env).stdout  # kept, never overwritten
+    assert again.count("kept") == 2 and "wrote" in out
+    # the default run plans from here: the workflow's rules, the scenes generated here
+    plan = run([cli, "run", "-j1", "--", "-n"], tmp_path, env).stdout
+    assert "generate_scene" in plan
+
+
+def test_audit_in_an_empty_directory_writes_the_verdict_page_there(installed, tmp_path):
+    """From ``pip install`` of the wheel to a verdict page, in a directory that holds only the
+    renders the test writes, without touching the checkout."""
+    before = checkout_state()
+    env = clean_env(installed)
+    write = (
+        "import yaml; from stereovar.audit.synthetic import write_synthetic_audit as w; "
+        "s, _ = w('data', n_frames=1, width=64, height=48, n_seeds=4); "
+        "yaml.safe_dump({'audit': s}, open('audit.yaml', 'w'))"
+    )
+    run([installed, "-c", write], tmp_path, env)
+    out = run([installed.parent / "stereovar", "audit", "audit.yaml"], tmp_path, env).stdout
+    page = tmp_path / "results" / "audit" / "synthetic" / "verdict.html"
     assert page.is_file() and f"verdict page: {page}" in out
     assert "intensity-controlled rho" in out
     assert checkout_state() == before
-    # the scene-less default run plans from here too: the workflow's own config, no scenes/
-    plan = run([cli, "run", "-j1", "--", "-n"], tmp_path / "renders_here", env)
-    assert "generate_scene" in plan.stdout + plan.stderr
 
 
 def test_run_refuses_an_unknown_preset_and_options_after_dashes_elsewhere(installed, tmp_path):
