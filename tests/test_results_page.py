@@ -122,6 +122,19 @@ def numbers(text: str) -> list[float]:
     return [float(x) for x in NUMBER.findall(text)]
 
 
+def shown_interval(value, low, high) -> list[float]:
+    """The numbers a value with its interval should show: none for a missing value, the
+    value alone when either end is missing, else all three."""
+
+    def finite(x):
+        return x not in (None, "") and math.isfinite(float(x))
+
+    if not finite(value):
+        return []
+    return [float(value)] if not (finite(low) and finite(high)) else [
+        float(value), float(low), float(high)]
+
+
 def close(shown: float, value: float, digits: int = 3) -> bool:
     """Whether ``shown`` is ``value`` to ``digits`` significant digits or decimals."""
     return math.isclose(shown, value, rel_tol=10 ** (1 - digits), abs_tol=10**-digits)
@@ -249,14 +262,13 @@ def check_claims(page: Page, claims: list[dict]) -> None:
         claim, paper, ours, control, verdict = page.claims[str(c["id"])]
         assert claim.startswith(html.unescape(str(c["claim"])))
         assert verdict == c["verdict"]
-        expected = [c["ours"], c["ours_low"], c["ours_high"]]
-        shown = numbers(ours)
-        if not math.isfinite(float(c["ours"])):
+        expected = shown_interval(c["ours"], c["ours_low"], c["ours_high"])
+        if not expected:
             assert ours == "n/a"
         else:
-            finite = [x for x in expected if math.isfinite(float(x))]
-            assert len(shown) == len(finite)
-            assert all(close(s, float(v)) for s, v in zip(shown, finite, strict=True)), ours
+            shown = numbers(ours)
+            assert len(shown) == len(expected), ours
+            assert all(close(s, v) for s, v in zip(shown, expected, strict=True)), ours
         if isinstance(c["paper"], (int, float)) and math.isfinite(c["paper"]):
             assert close(numbers(paper)[0], c["paper"])
         if c["control"] and math.isfinite(float(c["control_value"] or math.nan)):
@@ -278,25 +290,25 @@ def check_headline(page: Page, summary: dict) -> None:
     assert close(float(interval.group(2)), main["boot_high"])
     # one row per statistic (and a heading row per group): label, then a cell per region
     labels = {label: m for _, _, methods in CONTROL_GROUPS for m, label in methods}
+    labels["ρ after the warp (Eq. 3)"] = "warp"
     shown = {}
     for cells in page.controls:
         if len(cells) == 1 + len(REGIONS):
-            shown[labels.get(cells[0], "warp")] = cells[1:]
+            shown[labels[cells[0]]] = cells[1:]
     methods = {m for _, m in stats}
     expected_controls = {m for m in labels.values() if m in methods}
     assert set(shown) == {"warp", *expected_controls}
     assert expected_controls & {"sensor_sim", "partial", "null_shift"}  # baseline, intensity, null
     for method, cells in shown.items():
         for region, cell in zip(REGIONS, cells, strict=True):
-            row = stats.get((region, method))
-            if row is None or row["mean_rho"] is None:
-                assert cell == "n/a"
+            row = stats.get((region, method)) or {}
+            expected = shown_interval(*(row.get(k) for k in ("mean_rho", "boot_low", "boot_high")))
+            if not expected:
+                assert cell == "n/a", (method, region, cell)
                 continue
-            values = [row["mean_rho"], row["boot_low"], row["boot_high"]]
             got = numbers(cell)
-            finite = [v for v in values if v is not None and math.isfinite(v)]
-            assert len(got) == len(finite), (method, region, cell)
-            assert all(close(g, v) for g, v in zip(got, finite, strict=True)), (method, cell)
+            assert len(got) == len(expected), (method, region, cell)
+            assert all(close(g, v) for g, v in zip(got, expected, strict=True)), (method, cell)
 
 
 def check_links(page: Page, results: Path) -> None:
@@ -386,3 +398,129 @@ def test_mitigations_and_probe_sections_appear_when_they_have_run(synthetic):
         assert Path(kwargs[key]).read_bytes() in embedded
     assert "tables/mitigations.csv" in page.links and "tables/probe.csv" in page.links
     assert text.index('id="figures"') < text.index('id="mitigations"') < text.index('id="probe"')
+
+
+# ----------------------------------------------------------------------------- in a browser
+
+VIEWPORT = (1280, 900)
+"""The browser window the page is checked in (a laptop's)."""
+
+CLAIMS_PROBE = """JSON.stringify((() => {
+  const table = document.getElementById("claims-table");
+  const r = table ? table.getBoundingClientRect() : {left: 0, top: 0, right: 0, bottom: 0};
+  return {rect: [r.left, r.top, r.right, r.bottom],
+          ids: [...document.querySelectorAll("#claims-table tr[data-claim]")]
+                 .map(row => row.dataset.claim)};
+})())"""
+"""What the page shows of the claims table: its box in the viewport and its rows' claims."""
+
+HIDDEN = {
+    "display none": "table.claims { display: none; }",
+    "visibility hidden": "table.claims { visibility: hidden; }",
+    "below the fold": "#claims { margin-top: 2000px; }",
+    "covered": "body::after { content: ''; position: fixed; inset: 0; background: #fff; }",
+}
+"""Ways to hide the claims table, each of which the visibility check must catch."""
+
+
+def band_share(screenshot: bytes, rect, *, min_height: int = 120) -> float:
+    """The share of the claims table's box, as the DOM places it in the viewport, that the
+    screenshot paints in the claims band's colour (0 when less than ``min_height`` pixels
+    of the box are on screen)."""
+    import io
+
+    from PIL import Image
+
+    from stereovar.pages.results import CLAIMS_BAND
+
+    image = np.asarray(Image.open(io.BytesIO(screenshot)).convert("RGB")).astype(int)
+    height, width = image.shape[:2]
+    left, top, right, bottom = (int(round(v)) for v in rect)
+    left, right = max(left, 0), min(right, width)
+    top, bottom = max(top, 0), min(bottom, height)
+    if bottom - top < min_height or right - left < 1:
+        return 0.0
+    band = np.array([int(CLAIMS_BAND[i : i + 2], 16) for i in (1, 3, 5)])
+    box = image[top:bottom, left:right]
+    return float((np.abs(box - band).max(axis=-1) <= 3).mean())
+
+
+def claims_visibility(headless_chromium, page: Path) -> tuple[float, list[str], object]:
+    """Open ``page`` in Chromium: (band share of the claims table in the first viewport,
+    the claims its rows name, the load)."""
+    load = headless_chromium(page, width=VIEWPORT[0], height=VIEWPORT[1], expression=CLAIMS_PROBE)
+    shown = json.loads(load.value)
+    return band_share(load.screenshot, shown["rect"]), shown["ids"], load
+
+
+VISIBLE = 0.4
+"""The least share of the claims table's box in the band colour for it to count as visible
+(the rest is text, rules and verdict badges)."""
+
+
+@pytest.fixture
+def synthetic_page(synthetic):
+    """The synthetic results' page with the mitigations and the probe (a path)."""
+    root, _, _, _ = synthetic(mitigations=True, probe=True)
+    return root / layout.results_page()
+
+
+def test_synthetic_page_loads_in_chromium_with_the_claims_table_visible(
+    headless_chromium, synthetic_page, tmp_path
+):
+    share, ids, load = claims_visibility(headless_chromium, synthetic_page)
+    assert load.errors == []
+    assert share >= VISIBLE, share
+    assert ids == [str(r["id"]) for r in read_rows(synthetic_page.parent / "tables/claims.csv")]
+
+
+@pytest.mark.parametrize("how", sorted(HIDDEN))
+def test_the_visibility_check_fails_when_the_claims_table_is_hidden(
+    headless_chromium, synthetic_page, how
+):
+    text = synthetic_page.read_text(encoding="utf-8")
+    hidden = synthetic_page.with_name("hidden.html")
+    hidden.write_text(text.replace("</style>", HIDDEN[how] + "\n</style>", 1), encoding="utf-8")
+    share, _, load = claims_visibility(headless_chromium, hidden)
+    assert load.errors == []
+    assert share < VISIBLE, (how, share)
+
+
+def test_a_missing_image_is_a_console_error(headless_chromium, synthetic_page):
+    """The error check sees what a broken page would log (a figure that is not there)."""
+    text = synthetic_page.read_text(encoding="utf-8")
+    broken = synthetic_page.with_name("broken.html")
+    broken.write_text(text.replace("</body>", '<img src="missing.png" alt=""></body>'))
+    load = headless_chromium(broken, width=VIEWPORT[0], height=VIEWPORT[1])
+    assert any("missing.png" in e for e in load.errors), load.errors
+
+
+# ----------------------------------------------------------------------------- the tiny run
+
+
+@pytest.mark.workflow
+def test_tiny_run_writes_its_results_page(tiny_run):
+    results = tiny_run / "results"
+    page = Page((tiny_run / layout.results_page()).read_text(encoding="utf-8"))
+    check_claims(page, read_rows(results / "tables/claims.csv"))
+    check_headline(page, json.loads((tiny_run / layout.summary_json()).read_text()))
+    check_links(page, results)
+    figures = sorted(results.rglob("figures/*.png"))
+    assert figures and len(page.images) == len(figures)
+    embedded = {base64.b64decode(i["src"].split(",", 1)[1]) for i in page.images}
+    assert {f.read_bytes() for f in figures} == embedded
+    tables = {p.resolve() for p in results.rglob("tables/*")
+              if p.suffix[1:] in layout.TABLE_FORMATS}
+    linked = {(results / h).resolve() for h in page.links if not h.startswith("#")}
+    assert tables and tables <= linked
+    assert (tiny_run / "logs/results_page.log").is_file()
+
+
+@pytest.mark.workflow
+def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path):
+    share, ids, load = claims_visibility(headless_chromium, tiny_run / layout.results_page())
+    (tmp_path / "index.png").write_bytes(load.screenshot)
+    assert load.errors == []
+    assert share >= VISIBLE, f"claims table not visible ({share:.2f}): {tmp_path / 'index.png'}"
+    claims = read_rows(tiny_run / layout.claims_tables()[0])
+    assert ids == [str(r["id"]) for r in claims]
