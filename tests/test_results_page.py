@@ -37,23 +37,22 @@ CAPTIONS = {
 
 
 class Page(HTMLParser):
-    """The parts of a page the tests read: every element's attributes and text by id, the
-    claims rows by claim id, images, links and the headline table's rows."""
+    """The parts of a page the tests read: every element's text by id, the claims table's
+    rows by claim, the headline table's rows by statistic, images and links."""
 
     def __init__(self, text: str):
         super().__init__(convert_charrefs=True)
         self.stack: list[tuple[str, dict]] = []
         self.text_by_id: dict[str, str] = {}
         self.claims: dict[str, list[str]] = {}
-        self.controls: list[list[str]] = []
+        self.controls: dict[str, list[str]] = {}
         self.images: list[dict] = []
         self.links: list[str] = []
         self.scripts = 0
         self._open_ids: list[str] = []
-        self._claim: str | None = None
+        self._row: dict = {}
         self._cells: list[str] | None = None
         self._cell: list[str] | None = None
-        self._in_controls = False
         self.feed(text)
 
     BLOCKS = {"p", "div", "td", "th", "tr", "li", "h1", "h2", "h3", "caption", "figcaption"}
@@ -79,10 +78,8 @@ class Page(HTMLParser):
             self.links.append(a["href"])
         if tag == "script":
             self.scripts += 1
-        if tag == "table" and "controls" in a.get("class", ""):
-            self._in_controls = True
         if tag == "tr":
-            self._claim = a.get("data-claim")
+            self._row = a
             self._cells = []
         if tag == "td" and self._cells is not None:
             self._cell = []
@@ -99,13 +96,11 @@ class Page(HTMLParser):
             self._cells.append(" ".join("".join(self._cell).split()))
             self._cell = None
         elif tag == "tr" and self._cells is not None:
-            if self._claim:
-                self.claims[self._claim] = self._cells
-            elif self._in_controls:
-                self.controls.append(self._cells)
-            self._cells, self._claim = None, None
-        elif tag == "table":
-            self._in_controls = False
+            if "data-claim" in self._row:
+                self.claims[self._row["data-claim"]] = self._cells
+            elif "data-method" in self._row:
+                self.controls[self._row["data-method"]] = self._cells
+            self._cells, self._row = None, {}
 
     def handle_data(self, data):
         for ident in self._open_ids:
@@ -288,18 +283,14 @@ def check_headline(page: Page, summary: dict) -> None:
     interval = re.search(r"95% interval \[(\S+), (\S+)\]", text)
     assert interval and close(float(interval.group(1)), main["boot_low"])
     assert close(float(interval.group(2)), main["boot_high"])
-    # one row per statistic (and a heading row per group): label, then a cell per region
-    labels = {label: m for _, _, methods in CONTROL_GROUPS for m, label in methods}
-    labels["ρ after the warp (Eq. 3)"] = "warp"
-    shown = {}
-    for cells in page.controls:
-        if len(cells) == 1 + len(REGIONS):
-            shown[labels[cells[0]]] = cells[1:]
-    methods = {m for _, m in stats}
-    expected_controls = {m for m in labels.values() if m in methods}
+    # one row per statistic: its label, then a cell per region
+    controls = {m for _, _, methods in CONTROL_GROUPS for m, _ in methods}
+    expected_controls = controls & {m for _, m in stats}
+    shown = {m: cells[1:] for m, cells in page.controls.items()}
     assert set(shown) == {"warp", *expected_controls}
-    assert expected_controls & {"sensor_sim", "partial", "null_shift"}  # baseline, intensity, null
+    assert {"sensor_sim", "partial", "null_shift"} <= expected_controls  # baseline, intensity, null
     for method, cells in shown.items():
+        assert len(cells) == len(REGIONS)
         for region, cell in zip(REGIONS, cells, strict=True):
             row = stats.get((region, method)) or {}
             expected = shown_interval(*(row.get(k) for k in ("mean_rho", "boot_low", "boot_high")))

@@ -3,13 +3,14 @@
 :func:`page_sections` puts the run's results in reading order, and :func:`to_html_page`
 writes them as one self-contained page (figures embedded, links relative to ``results/``):
 
-1. the run (renderer, estimator, scenes, N and SPP, the config digest);
+1. what the run is (the report's ``workflow.rst``) and its settings (renderer, estimator,
+   scenes, N and SPP, the config digest);
 2. the headline :math:`\\rho` (all valid pixels, Eq. 3) with its 95% interval, and beside it
    the controls that bear on it (:data:`CONTROL_GROUPS`: the sensor baseline, the
    intensity-controlled :math:`\\rho`, the null warps) in every region, each with its
    interval (:func:`headline`, :func:`control_rows`), so the number is never read alone;
-3. the claims table (:func:`claim_cells`), on a band of colour :data:`CLAIMS_BAND`, the
-   verdicts' rules folded below it;
+3. the claims table (:func:`claim_cells`), on a band of colour :data:`CLAIMS_BAND`, what
+   it holds and the verdicts' rules (folded) below it;
 4. the figures with their captions (``workflow/report/*.rst``);
 5. the mitigations and the learned probe, when they have run;
 6. links to every table in each format, and to Snakemake's report or how to make it.
@@ -51,17 +52,18 @@ HEADLINE_METHOD = "warp"
 CONTROL_GROUPS = (
     (
         "sensor baseline",
-        "the same statistic on a camera's noise: what any stereo pair shows",
-        (("sensor_sim", "simulated sensor, same N"), ("sensor", "analytic camera a·μ + b")),
+        "the same statistic on a simulated camera's noise over the same N frames: what any "
+        "stereo pair shows",
+        (("sensor_sim", "simulated camera"),),
     ),
     (
         "intensity-controlled",
-        "ρ once brightness is removed: the Monte Carlo-specific part",
-        (("partial", "partial: ln σ² given ln μ"), ("relative", "relative: σ² / μ²")),
+        "ρ of ln σ² once ln μ is regressed out of each view: the Monte Carlo-specific part",
+        (("partial", "partial ρ"),),
     ),
     (
         "null warps",
-        "wrong alignments: the warp matters when these sit near 0",
+        "wrong alignments: the warp matters when these sit well below ρ",
         (
             ("null_shift", "disparity shifted"),
             ("null_flip", "right field flipped"),
@@ -69,7 +71,8 @@ CONTROL_GROUPS = (
         ),
     ),
 )
-"""The controls shown beside the headline: (group, what it tells, ((method, label), ...))."""
+"""The controls shown beside the headline: (group, what it tells, ((method, label), ...));
+every other statistic and control is in the statistics table and figure."""
 
 VERDICT_CLASSES = {
     "holds": "holds",
@@ -102,6 +105,7 @@ p, li {{ max-width: 70em; }}
 nav {{ font-size: 0.9em; margin: 0.3em 0 0.8em; }}
 nav a {{ margin-right: 1em; }}
 .run {{ color: #555; margin: 0.2em 0 0.8em; }}
+.intro p {{ margin: 0.2em 0; color: #333; font-size: 0.92em; }}
 code {{ font-size: 0.92em; background: #f3f3f3; padding: 0 0.2em; border-radius: 3px; }}
 .headline {{ display: flex; flex-wrap: wrap; gap: 1.5em; align-items: flex-start;
   border: 1px solid #ccc; border-radius: 6px; padding: 0.8em 1.2em; }}
@@ -110,12 +114,11 @@ code {{ font-size: 0.92em; background: #f3f3f3; padding: 0 0.2em; border-radius:
 .headline .value {{ font-size: 2.3em; font-weight: 600; margin: 0.1em 0 0; }}
 .headline .interval {{ font-size: 1.15em; margin: 0 0 0.4em; }}
 .headline .tally {{ font-size: 0.9em; margin: 0.4em 0 0; }}
-.headline table.controls {{ flex: 1 1 30em; font-size: 0.88em; }}
-table.controls th, table.controls td {{ padding: 0.12em 0.7em; }}
-table.controls td.group {{ font-weight: 600; padding-top: 0.4em; color: #333;
-  white-space: normal; }}
-table.controls td.group span {{ font-weight: normal; color: #666; }}
+.headline div.controls {{ flex: 1 1 30em; }}
+table.controls {{ font-size: 0.88em; width: 100%; }}
+table.controls th, table.controls td {{ padding: 0.15em 0.7em; }}
 table.controls tr.main td {{ font-weight: 600; }}
+.headline .notes {{ font-size: 0.8em; color: #555; margin: 0.4em 0 0; }}
 table.controls tbody tr {{ background: none; }}
 table.claims {{ background: {CLAIMS_BAND}; width: 100%; font-size: 0.9em; }}
 table.claims thead th, table.claims tbody tr, table.claims tbody tr:hover {{
@@ -130,6 +133,7 @@ table.claims .sub {{ color: #555; font-size: 0.88em; }}
 .verdict.fails {{ background: #f8d7da; border-color: #d9534f; }}
 .verdict.explained {{ background: #fff3cd; border-color: #e6a700; }}
 .verdict.untestable {{ background: #eeeeee; border-color: #aaa; color: #444; }}
+.about p {{ font-size: 0.88em; color: #444; margin: 0.5em 0; max-width: 70em; }}
 details {{ margin: 0.5em 0; font-size: 0.9em; max-width: 70em; }}
 figure {{ margin: 1.4em 0; }}
 figure img {{ border: 1px solid #eee; }}
@@ -222,25 +226,23 @@ def headline(statistics: list[dict]) -> dict:
 
 
 def control_rows(statistics: list[dict]) -> list[dict]:
-    """The headline table: the headline statistic, then each :data:`CONTROL_GROUPS` group
-    that ``statistics`` holds, one row per method with its interval in every region.
+    """The headline table: the headline statistic, then each control of
+    :data:`CONTROL_GROUPS` that ``statistics`` holds, with its interval in every region.
 
     Returns
     -------
     list of dict
-        ``kind`` (``main``, ``group`` or ``control``), ``label``, ``note`` (groups) and
-        ``cells`` (region to :func:`interval_text`; empty for groups).
+        ``method``, ``group`` (empty for the headline), ``label`` and ``cells`` (region to
+        :func:`interval_text`).
 
     Examples
     --------
     >>> stats = [{"region": g, "method": m, "mean_rho": 0.5, "boot_low": 0.4, "boot_high": 0.6}
     ...          for g in ("all", "glass") for m in ("warp", "partial")]
-    >>> [r["kind"] for r in control_rows(stats)]
-    ['main', 'group', 'control']
-    >>> [r["label"] for r in control_rows(stats)][1:]
-    ['intensity-controlled', 'partial: ln σ² given ln μ']
-    >>> control_rows(stats)[0]["cells"]["non_glass"]
-    'n/a'
+    >>> [(r["method"], r["label"]) for r in control_rows(stats)]
+    [('warp', 'ρ after the warp (Eq. 3)'), ('partial', 'intensity-controlled: partial ρ')]
+    >>> control_rows(stats)[1]["cells"]
+    {'all': '0.500 [0.400, 0.600]', 'non_glass': 'n/a', 'glass': '0.500 [0.400, 0.600]'}
     """
 
     def cells(method):
@@ -252,17 +254,14 @@ def control_rows(statistics: list[dict]) -> list[dict]:
             for region in REGIONS
         }
 
-    rows = [{"kind": "main", "label": "ρ after the warp (Eq. 3)", "note": "",
+    rows = [{"method": HEADLINE_METHOD, "group": "", "label": "ρ after the warp (Eq. 3)",
              "cells": cells(HEADLINE_METHOD)}]
     present = {r.get("method") for r in statistics}
-    for group, note, methods in CONTROL_GROUPS:
-        chosen = [(m, label) for m, label in methods if m in present]
-        if not chosen:
-            continue
-        rows.append({"kind": "group", "label": group, "note": note, "cells": {}})
+    for group, _, methods in CONTROL_GROUPS:
         rows += [
-            {"kind": "control", "label": label, "note": "", "cells": cells(m)}
-            for m, label in chosen
+            {"method": m, "group": group, "label": f"{group}: {label}", "cells": cells(m)}
+            for m, label in methods
+            if m in present
         ]
     return rows
 
@@ -416,19 +415,20 @@ def _headline_html(s: dict) -> str:
     head = "".join(f"<th>{_e(label)}</th>" for label in REGIONS.values())
     rows = []
     for r in s["controls"]:
-        if r["kind"] == "group":
-            rows.append(
-                f'<tr><td class="group" colspan="{1 + len(REGIONS)}">{_e(r["label"])} '
-                f"<span>({_e(r['note'])})</span></td></tr>"
-            )
-            continue
         cells = "".join(f'<td class="num">{_e(r["cells"][g])}</td>' for g in REGIONS)
-        cls = ' class="main"' if r["kind"] == "main" else ""
-        rows.append(f"<tr{cls}><td>{_e(r['label'])}</td>{cells}</tr>")
+        cls = ' class="main"' if not r["group"] else ""
+        rows.append(f'<tr{cls} data-method="{_e(r["method"])}"><td>{_e(r["label"])}</td>'
+                    f"{cells}</tr>")
+    shown = {r["group"] for r in s["controls"]}
+    notes = "; ".join(
+        f"<b>{_e(group)}</b>: {_e(note)}" for group, note, _ in CONTROL_GROUPS if group in shown
+    )
     controls = (
-        '<table class="controls"><caption>ρ and its controls by region, with 95% '
-        f"intervals</caption><thead><tr><th>statistic</th>{head}</tr></thead>"
+        '<div class="controls"><table class="controls"><caption>ρ and its controls by region, '
+        f"with 95% intervals</caption><thead><tr><th>statistic</th>{head}</tr></thead>"
         f"<tbody>{''.join(rows)}</tbody></table>"
+        + (f'<p class="notes">{notes}.</p>' if notes else "")
+        + "</div>"
     )
     return f'<section id="headline" class="headline">{left}{controls}</section>'
 
@@ -459,8 +459,8 @@ def _claims_html(s: dict) -> str:
     rules = "".join(f"<p>{_e(r)}</p>" for r in s["rules"])
     return (
         '<section id="claims"><h2>Claims of the paper on this run</h2>'
-        + rst_to_html(s["claims_text"])
         + table
+        + f'<div class="about">{rst_to_html(s["claims_text"])}</div>'
         + (f"<details><summary>How the verdicts are given</summary>{rules}</details>"
            if rules else "")
         + "</section>"
@@ -499,6 +499,7 @@ def to_html_page(s: dict) -> str:
     nav += [("tables", "Tables"), ("report", "Snakemake report")]
     body = [
         f"<h1>{_e(s['title'])}</h1>",
+        f'<div class="intro">{rst_to_html(s["intro"])}</div>' if s["intro"] else "",
         _run_line(s["run"]),
         "<nav>" + "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in nav) + "</nav>",
         _headline_html(s),
@@ -551,7 +552,5 @@ def to_html_page(s: dict) -> str:
             f"provenance, was not made when this page was written: run {command} in the run's "
             "folder.</p>"
         )
-    if s["intro"]:
-        body.append(f'<div class="intro">{rst_to_html(s["intro"])}</div>')
     body.append("</section>")
     return document(s["title"], [b for b in body if b], _CSS)
