@@ -66,13 +66,16 @@ numpydoc_validation_checks: set[str] = set()
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"stereovar {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["stereovar.css"]
 html_theme_options = {
     "navigation_with_keys": False,
+    "header_links_before_dropdown": 6,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
-html_sidebars = {"**": ["sidebar-nav-bs"]}
+html_sidebars = {"**": ["sidebar-nav-bs"], "index": [], "getting-started": [],
+                 "configuration": [], "performance": [], "citing": [], "development": []}
 html_show_sourcelink = False

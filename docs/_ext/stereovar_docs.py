@@ -539,6 +539,16 @@ def generate(app) -> None:
     write_if_changed(out / "cli.rst", cli_help())
 
 
+# The docstrings cite the paper as "Eq. 1", "Sec. 3.4", "Fig. 2": not the end of a sentence
+# when autosummary picks a docstring's first sentence for its tables.
+PAPER_ABBREVIATIONS = ("Eq.", "Eqs.", "Sec.", "Secs.", "Fig.", "Figs.", "cf.", "vs.")
+
+
 def setup(app):
+    from sphinx.ext import autosummary
+
+    autosummary.WELL_KNOWN_ABBREVIATIONS = tuple(
+        dict.fromkeys((*autosummary.WELL_KNOWN_ABBREVIATIONS, *PAPER_ABBREVIATIONS))
+    )
     app.connect("builder-inited", generate)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
