@@ -429,24 +429,26 @@ def top_level_names() -> str:
             warnings.simplefilter("always")
             obj = getattr(stereovar, name)
         deprecated = any(issubclass(w.category, DeprecationWarning) for w in caught)
-        module = getattr(obj, "__module__", None)
-        qualname = getattr(obj, "__qualname__", None)
         owner = None
         if inspect.isclass(obj) or inspect.isfunction(obj):
-            target = f"{module}.{qualname}"
+            module = obj.__module__
             kind = "class" if inspect.isclass(obj) else "func"
-            ref = f":{kind}:`{target}`"
+            ref = f":{kind}:`{name} <{module}.{obj.__qualname__}>`"
         else:
-            owner = _defining_module(stereovar, name)
-            target = f"{owner}.{name}" if owner else name
-            ref = f":data:`{target}`" if owner else f"``{name}``"
+            owner = module = _defining_module(stereovar, name)
+            ref = f":data:`{name} <{owner}.{name}>`" if owner else f"``{name}``"
         if callable(obj):
             summary = first_sentence(inspect.getdoc(obj))
         else:
             summary = first_sentence(_attribute_doc(owner, name)) if owner else ""
-        note = " (deprecated alias)" if deprecated else ""
-        rows.append([f"``stereovar.{name}``{note}", ref, rst_text_keep_roles(summary)])
-    lines += list_table(["name", "is", "summary"], rows, [25, 35, 40])
+        where = [f":mod:`{module}`"] if module else []
+        if deprecated:
+            where.append("deprecated alias")
+        summary = rst_text_keep_roles(summary)
+        if where:
+            summary = f"{summary} ({'; '.join(where)})" if summary else "; ".join(where)
+        rows.append([ref, summary])
+    lines += list_table(["name", "what it is"], rows, [30, 70])
     return "\n".join(lines) + "\n"
 
 
