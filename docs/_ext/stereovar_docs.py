@@ -20,6 +20,8 @@ own):
     the ``--help`` of the ``stereovar`` command and of each of its commands.
 
 A file is rewritten only when its content changes, so an unchanged build stays incremental.
+Before autosummary writes the API pages (``docs/api/``), the pages of modules that no longer
+exist are removed, so a renamed module cannot leave a page behind that fails to import.
 """
 
 from __future__ import annotations
@@ -217,7 +219,7 @@ def config_reference(schema: dict, config: dict) -> str:
             if "default" in ksub:
                 default = literal(ksub["default"])
             else:
-                default = "none (optional)" if not required else "none"
+                default = "no default" if required else "not set"
             try:
                 set_here = lookup(config, key)
             except KeyError:
@@ -546,7 +548,29 @@ def generate(app) -> None:
 PAPER_ABBREVIATIONS = ("Eq.", "Eqs.", "Sec.", "Secs.", "Fig.", "Figs.", "cf.", "vs.")
 
 
+def module_names(src: Path) -> set[str]:
+    """Every module and package under ``src/stereovar`` by its dotted name."""
+    names = set()
+    for path in (src / "stereovar").rglob("*.py"):
+        parts = path.relative_to(src).with_suffix("").parts
+        names.add(".".join(parts[:-1] if parts[-1] == "__init__" else parts))
+    return names
+
+
+def remove_stale_api_pages(app) -> None:
+    """Remove the API pages of modules that no longer exist (autosummary writes pages but
+    never removes one), before autosummary writes the current ones."""
+    api = Path(app.confdir) / "api"
+    if not api.is_dir():
+        return
+    current = module_names(Path(app.confdir).parent / "src")
+    for stub in api.glob("stereovar*.rst"):
+        if stub.stem not in current:
+            stub.unlink()
+
+
 def setup(app):
+    app.connect("builder-inited", remove_stale_api_pages, priority=100)
     from sphinx.ext import autosummary
 
     autosummary.WELL_KNOWN_ABBREVIATIONS = tuple(
