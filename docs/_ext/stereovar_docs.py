@@ -386,14 +386,14 @@ def result_paths(layout) -> str:
         if not patterns:
             continue
         doc = first_sentence(inspect.getdoc(func))
-        what = re.split(r":\s*``|:$", doc)[0].rstrip(" :,")
-        rows.append([
-            "\n\n".join(f"``{p}``" for p in patterns),
-            rst_text_keep_roles(what),
-            f":func:`~stereovar.layout.{name}`",
-        ])
+        what = rst_text_keep_roles(re.split(r":\s*``|:$", doc)[0].rstrip(" :,"))
+        rows.append((patterns, what, name))
     rows.sort()
-    lines += list_table(["path", "what", "function"], rows, [50, 35, 15])
+    # a definition list: long paths do not fit a table column
+    for patterns, what, name in rows:
+        lines.append(", ".join(f"``{p}``" for p in patterns))
+        lines.append(f"   {what} (:func:`~stereovar.layout.{name}`).")
+        lines.append("")
     return "\n".join(lines) + "\n"
 
 
