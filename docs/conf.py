@@ -71,6 +71,9 @@ html_css_files = ["stereovar.css"]
 html_theme_options = {
     "navigation_with_keys": False,
     "header_links_before_dropdown": 6,
+    # the side navigation shows the current page's branch only: much faster to write with
+    # one page per module
+    "collapse_navigation": True,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
