@@ -569,8 +569,50 @@ def remove_stale_api_pages(app) -> None:
             stub.unlink()
 
 
+def reuse_numpydoc_template() -> None:
+    """Let numpydoc compile its docstring template once per build instead of once per
+    docstring (numpydoc 1.8 builds a new Jinja environment for each of the ~2000 docstrings,
+    a fifth of the time to read the API pages). Nothing changes when numpydoc's internals
+    are not the ones this relies on."""
+    from numpydoc import docscrape_sphinx, numpydoc
+
+    original = getattr(docscrape_sphinx, "get_doc_object_orig", None)
+    if original is None or not hasattr(numpydoc, "get_doc_object"):
+        return
+    from jinja2 import FileSystemLoader
+    from jinja2.sandbox import SandboxedEnvironment
+    from sphinx.jinja2glue import BuiltinTemplateLoader
+
+    templates = {}
+
+    def get_doc_object(obj, what=None, doc=None, config=None, builder=None):
+        config = {} if config is None else config
+        if builder not in templates:
+            dirs = [str(Path(docscrape_sphinx.__file__).parent / "templates")]
+            if builder is None:
+                loader = FileSystemLoader(dirs)
+            else:
+                loader = BuiltinTemplateLoader()
+                loader.init(builder, dirs=dirs)
+            env = SandboxedEnvironment(loader=loader)
+            templates[builder] = env.get_template("numpydoc_docstring.rst")
+        config["template"] = templates[builder]
+        return original(
+            obj,
+            what=what,
+            doc=doc,
+            config=config,
+            class_doc=docscrape_sphinx.SphinxClassDoc,
+            func_doc=docscrape_sphinx.SphinxFunctionDoc,
+            obj_doc=docscrape_sphinx.SphinxObjDoc,
+        )
+
+    numpydoc.get_doc_object = get_doc_object
+
+
 def setup(app):
     app.connect("builder-inited", remove_stale_api_pages, priority=100)
+    reuse_numpydoc_template()
     from sphinx.ext import autosummary
 
     autosummary.WELL_KNOWN_ABBREVIATIONS = tuple(
