@@ -17,7 +17,7 @@ test: setup
 	$(PYTHON) -m pytest
 
 # The suite as another x86-64 CPU would run it: Dr.Jit's kernels compiled for a generic AVX2
-# CPU with 4 lanes, numpy without its AVX2, FMA and AVX-512 kernels (README: Results across
+# CPU with 4 lanes, numpy without its AVX2, FMA and AVX-512 kernels (docs/development.md: Results across
 # machines).
 test-other-cpu: setup
 	STEREOVAR_JIT_TARGET=avx2-w4 NPY_DISABLE_CPU_FEATURES="AVX2 FMA3 AVX512F AVX512CD AVX512_SKX" \

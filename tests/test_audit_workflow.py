@@ -190,7 +190,7 @@ def test_export_to_a_symbolic_link_is_refused_and_a_real_one_reported(exported, 
 
 
 def test_a_masked_audit_has_its_c_sigma_line_and_opens_with_the_decision(tmp_path):
-    # the README's recommended set-up: a glass mask per frame
+    # the recommended set-up (docs/audit.md): a glass mask per frame
     root = copy_workflow(tmp_path / "wf", TINY)
     settings, frames = write_synthetic_audit(
         root / "data", n_frames=2, width=96, height=64, n_seeds=8

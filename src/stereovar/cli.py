@@ -510,7 +510,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     if not isinstance(settings, dict):
         raise StereovarError(
             f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
-            "convention; see the README's 'Audit your own renders')"
+            "convention; see the documentation's Auditing your renders page, docs/audit.md)"
         )
     # The whole config, as the workflow will see it, before any file is read; then the
     # files, found (not read) as the workflow finds them; the import is the workflow's (one

@@ -4,7 +4,7 @@ A cluster scheduler needs every job's memory (``mem_mb``) and wall time (``runti
 minutes) up front. These functions derive them from what the job does: the resolution, the
 samples per pixel and the number of renders, seeds or disparities. Each request grows with
 the retry ``attempt`` (1, 2, ...), so a job killed for exceeding it is resubmitted with more.
-The constants are measured on the default and paper configurations (see the README).
+The constants are measured on the default and paper configurations (docs/performance.md).
 """
 
 from __future__ import annotations
