@@ -515,3 +515,28 @@ def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path
     assert share >= VISIBLE, f"claims table not visible ({share:.2f}): {tmp_path / 'index.png'}"
     claims = read_rows(tiny_run / layout.claims_tables()[0])
     assert ids == [str(r["id"]) for r in claims]
+
+
+def page_job_inputs(root: Path) -> str:
+    """The input line of the results_page job in a dry run of ``results/index.html``."""
+    from .test_workflow import snakemake
+
+    out = snakemake(root, "-n", "-p", layout.results_page()).stdout
+    block = out.split("rule results_page:", 1)[1]
+    return next(line for line in block.splitlines() if line.strip().startswith("input:"))
+
+
+@pytest.mark.workflow
+def test_the_page_takes_the_mitigations_and_the_probe_once_they_exist(tmp_path):
+    from .test_workflow import TINY, copy_workflow
+
+    root = copy_workflow(tmp_path / "wf", {**TINY, "mitigations": {"names": ["equalise"]}})
+    inputs = page_job_inputs(root)
+    assert layout.mitigation_tables()[0] in inputs and layout.mitigation_figure() in inputs
+    assert layout.probe_verdict() not in inputs and layout.probe_figure() not in inputs
+    # the probe's outputs, as `snakemake probe` leaves them
+    for path in (*layout.probe_tables(), layout.probe_figure(), layout.probe_verdict()):
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text("{}")
+    inputs = page_job_inputs(root)
+    assert layout.probe_verdict() in inputs and layout.probe_figure() in inputs
