@@ -1,7 +1,8 @@
 """Synthetic stereo renders with a known cross-view variance correlation, written as files.
 
-The audit's test data and the stereovar init --example files: a textured slanted plane whose disparity is an
-integer per row (so the warp of Eq. 2 is exact and nothing is occluded), per-pixel variance
+The audit's test data and the files of ``stereovar init --example``: a textured slanted
+plane whose disparity is an integer per row (so the warp of Eq. 2 is exact and nothing is
+occluded), per-pixel variance
 fields of the two views whose Pearson correlation after the warp is known, and N noisy
 "renders" per view, each the clean image plus zero-mean Gaussian noise scaled by the view's
 variance field.
