@@ -83,6 +83,29 @@ DEFAULTS = {
         "aux_spp": 16,
         "seed": 0,
     },
+    "probe": {
+        "conditions": None,
+        "folds": 2,
+        "train_seeds": 3,
+        "test_frames": 2,
+        "conflict_shift": 3,
+        "reps": 1000,
+        "seed": 0,
+        "training": {
+            "steps": 200,
+            "crops": 4,
+            "crop_rows": 16,
+            "crop_cols": 64,
+            "pos": 0.5,
+            "neg_low": 1.5,
+            "neg_high": 6.0,
+            "margin": 0.2,
+            "optimiser": "adam",
+            "learning_rate": 0.001,
+            "momentum": 0.9,
+            "threads": 1,
+        },
+    },
 }
 
 
@@ -295,10 +318,10 @@ def test_conda_env_pins_match_pyproject():
     env = yaml.safe_load((REPO_ROOT / "envs" / "stereovar.yaml").read_text())
     pip = next(item["pip"] for item in env["dependencies"] if isinstance(item, dict))
     # the env is Python 3.11, so it carries the cycles extra too (without its marker), and
-    # the mitigations extra that the default run needs
+    # the mitigations extra that the default run needs, and the probe's PyTorch
     extras = [
         r.split(";")[0].strip()
-        for extra in ("cycles", "mitigations")
+        for extra in ("cycles", "mitigations", "probe")
         for r in project["optional-dependencies"][extra]
     ]
     assert sorted(pip) == sorted(project["dependencies"] + extras)
