@@ -189,9 +189,12 @@ def test_export_to_a_symbolic_link_is_refused_and_a_real_one_reported(exported, 
         assert (exported / f"results/export/mitsuba/seeds/exr/{scene}/audit.yaml").is_file()
 
 
-def test_a_masked_audit_has_its_c_sigma_line_and_opens_with_the_decision(tmp_path):
-    # the recommended set-up (docs/audit.md): a glass mask per frame
-    root = copy_workflow(tmp_path / "wf", TINY)
+def test_a_masked_audit_has_its_c_sigma_line_and_opens_with_the_decision(
+    tmp_path, tiny_run_copy
+):
+    # the recommended set-up (docs/audit.md): a glass mask per frame; in a copy of the tiny
+    # run, whose renders the audit's `all` would otherwise render again
+    root = tiny_run_copy(tmp_path / "wf")
     settings, frames = write_synthetic_audit(
         root / "data", n_frames=2, width=96, height=64, n_seeds=8
     )
