@@ -326,6 +326,13 @@ def test_conda_env_pins_match_pyproject():
     ]
     assert sorted(pip) == sorted(project["dependencies"] + extras)
     assert "python=3.11" in env["dependencies"]
+    # and this environment, set up from pyproject.toml, satisfies every pin
+    from importlib.metadata import version
+
+    from packaging.requirements import Requirement
+
+    for req in map(Requirement, pip):
+        assert req.specifier.contains(version(req.name), prereleases=True), req
 
 
 @pytest.mark.parametrize(

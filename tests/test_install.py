@@ -165,33 +165,6 @@ def test_run_refuses_an_unknown_preset_and_options_after_dashes_elsewhere(instal
 # --- the conda environment of --sdm conda jobs -------------------------------------------
 
 
-def requirement_names(requirements) -> dict:
-    from packaging.requirements import Requirement
-
-    return {Requirement(r).name.lower(): Requirement(r) for r in requirements}
-
-
-def test_conda_environment_pins_what_pyproject_requires_and_this_environment_has():
-    from importlib.metadata import version
-
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python 3.10
-        import tomli as tomllib
-
-    env = yaml.safe_load((REPO / "envs/stereovar.yaml").read_text())
-    (pip,) = [d["pip"] for d in env["dependencies"] if isinstance(d, dict)]
-    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
-    extras = project["optional-dependencies"]
-    wanted = [*project["dependencies"], *extras["cycles"], *extras["mitigations"],
-              *extras["probe"]]  # fmt: skip
-    pinned, required = requirement_names(pip), requirement_names(wanted)
-    assert pinned.keys() == required.keys()
-    for name, req in pinned.items():
-        assert str(req.specifier) == str(required[name].specifier), name
-        assert req.specifier.contains(version(name), prereleases=True), (name, version(name))
-
-
 def test_conda_post_deploy_script_installs_the_running_stereovar(tmp_path):
     """Snakemake runs ``envs/stereovar.post-deploy.sh`` in a new job environment; with the
     requirement the Snakefile exports (this checkout), ``import stereovar`` works there."""

@@ -701,12 +701,12 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
 def _configfiles(args) -> list:
     """``--preset`` configs (the workflow's) then ``--configfile`` configs, as given."""
+    from pathlib import Path
+
     from .workflow_home import preset_path
 
     files = [str(preset_path(name)) for name in args.preset or []]
     for f in args.configfile or []:
-        from pathlib import Path
-
         if not Path(f).is_file():
             raise StereovarError(f"{f}: no such config file; give an existing --configfile")
         files.append(f)
