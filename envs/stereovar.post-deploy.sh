@@ -10,4 +10,6 @@ if [ -z "${STEREOVAR_REQUIREMENT:-}" ]; then
     exit 1
 fi
 python -m pip install --no-deps --disable-pip-version-check --quiet "$STEREOVAR_REQUIREMENT"
-python -c "import stereovar, sys; sys.stdout.write(f'stereovar {stereovar.__version__} installed from $STEREOVAR_REQUIREMENT\n')"
+# The requirement reaches Python as an argument, never as part of its source: a path or
+# version with quotes or braces in it is printed as it is, not run.
+python -c 'import stereovar, sys; sys.stdout.write(f"stereovar {stereovar.__version__} installed from {sys.argv[1]}\n")' "$STEREOVAR_REQUIREMENT"
