@@ -4,11 +4,19 @@ and the fix, or handled by a documented law, never run as code, never left to ha
 
 from __future__ import annotations
 
+import io
 import os
 import shlex
 import subprocess
 import sys
 from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stereovar import cli
+from stereovar.controls.sensor import SensorFrames, SensorModel
+from stereovar.transforms import TransformInputs, get_transform
 
 REPO = Path(__file__).resolve().parents[1]
 POST_DEPLOY = REPO / "envs" / "stereovar.post-deploy.sh"
@@ -59,3 +67,83 @@ def test_post_deploy_takes_a_checkout_path_with_a_quote(tmp_path):
     import stereovar
 
     assert proc.stdout == f"stereovar {stereovar.__version__} installed from {requirement}\n"
+
+
+# --- the camera model on very bright pixels --------------------------------------------------
+
+
+def _inputs(seed_mean, *, render=None, seed_var=None, rng_seed=7) -> TransformInputs:
+    seed_mean = np.asarray(seed_mean, dtype=np.float64)
+    return TransformInputs(
+        render=(seed_mean if render is None else render).astype(np.float32),
+        view="left",
+        seed_index=0,
+        rng_seed=rng_seed,
+        seed_mean=seed_mean,
+        seed_var=seed_var,
+        n_seeds=None if seed_var is None else 4,
+    )
+
+
+def test_sensor_only_gives_a_very_bright_pixel_its_value_and_keeps_the_other_draws():
+    mean = np.full((3, 4, 3), 0.5)
+    bright = mean.copy()
+    bright[1, 2, 0] = 1e20  # 1e23 electrons at the default gain: past numpy's Poisson sampler
+    dark = mean.copy()
+    dark[1, 2, 0] = 0.0
+    sensor_only = get_transform("sensor_only")
+    out = sensor_only(_inputs(bright))
+    assert np.isfinite(out).all()
+    # shot noise sqrt(1e23) / 1000 = 3e8 is far below float32's spacing at 1e20 (9e12)
+    assert out[1, 2, 0] == np.float32(1e20)
+    others = np.ones(mean.shape, bool)
+    others[1, 2, 0] = False
+    np.testing.assert_array_equal(out[others], sensor_only(_inputs(dark))[others])
+
+
+def test_counts_above_the_exact_range_have_the_poisson_mean_and_variance():
+    from stereovar.controls.sensor import normal_counts, photon_counts
+
+    # 1e20 electrons, past numpy's exact sampler: sd 1e10, resolved in float64
+    lam = np.full(30_000, 1e20)
+    exact, large = photon_counts(lam, np.random.default_rng(5))
+    counts = normal_counts(lam, large, np.random.default_rng(6))
+    assert large.all() and not exact.any()
+    # 30 000 draws: the sample mean within 5 standard errors, the sd within 4 %
+    sd = np.sqrt(1e20)
+    assert abs(counts.mean() - 1e20) < 5 * sd / np.sqrt(counts.size)
+    assert counts.std(ddof=1) == pytest.approx(sd, rel=0.04)
+    # the frames, gain 1 and 4e12 electrons: Var = lambda + r^2 in electrons^2
+    frame = SensorFrames(np.full((100, 100, 3), 4e12), 1, SensorModel(gain=1.0), seed=3)[0]
+    values = frame.astype(np.float64).ravel()
+    sd = np.sqrt(4e12 + 4.0)
+    assert abs(values.mean() - 4e12) < 5 * sd / np.sqrt(values.size)
+    assert values.std(ddof=1) == pytest.approx(sd, rel=0.04)
+
+
+def test_a_stage_that_fails_before_its_line_began_is_named(capsys):
+    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: 1 frame", source="audit/a")
+    transcript = [
+        "Job stats:",
+        "job            count",
+        "-----------  -------",
+        "audit_import       1",
+        "variance           1",
+        "transform          1",
+        "total              3",
+        "",
+        "localrule audit_import:",
+        "    jobid: 1",
+        "Finished jobid: 1 (Rule: audit_import)",
+        "rule transform:",
+        "    jobid: 3",
+        "    wildcards: renderer=audit/a, transform=sensor_only",
+        "Error in rule transform:",
+        "    jobid: 3",
+        "    log: logs/transform.log (check log file(s) for error details)",
+    ]
+    for line in transcript:
+        monitor.feed(line + "\n")
+    monitor.finish(1)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == ["import: 1 frame ... done", "statistics ... stopped", "mitigations ... failed"]

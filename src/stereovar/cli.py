@@ -406,8 +406,8 @@ class _AuditMonitor:
         if self.open:
             self._end("failed" if self.open in failed else "stopped")
         for stage in AUDIT_STAGES:
-            if stage in failed and stage not in self.shown:
-                self.open = stage
+            if stage in failed and stage not in self.shown:  # failed before its line began
+                self._begin(stage)
                 self._end("failed")
 
     # -- errors -------------------------------------------------------------------------------

@@ -19,6 +19,10 @@ and ``read_noise`` high for a read-noise-limited (dark, fast-exposure) camera.
 
 The two views' noise streams are independent; only :math:`\\mu` is shared. The clean value
 is the per-channel seed mean of the renders (:mod:`stereovar.estimators.seeds`).
+
+Photon counts are drawn exactly up to :data:`POISSON_EXACT_MAX` electrons and from
+:math:`\\mathcal N(\\lambda, \\lambda)` above it (:func:`photon_counts`), so a firefly or a
+very bright pixel gets its shot noise instead of stopping the run.
 """
 
 from __future__ import annotations
@@ -39,11 +43,64 @@ class SensorModel:
     seed: int = 0
 
     def __post_init__(self):
-        if not self.gain > 0 or not self.read_noise >= 0:
+        if not 0 < self.gain < np.inf or not 0 <= self.read_noise < np.inf:
             raise ValueError(
-                f"controls.sensor needs gain > 0 and read_noise >= 0, got gain {self.gain}, "
-                f"read_noise {self.read_noise}"
+                f"controls.sensor needs a finite gain > 0 and read_noise >= 0, got gain "
+                f"{self.gain}, read_noise {self.read_noise}"
             )
+
+
+POISSON_EXACT_MAX = 1e12
+"""Largest mean (electrons) whose photon count is drawn from the exact Poisson law.
+
+Above it the count is drawn from :math:`\\mathcal N(\\lambda, \\lambda)`. The two laws' CDFs
+differ there by less than :math:`0.5/\\sqrt\\lambda = 5\\cdot 10^{-7}` (Berry-Esseen), the
+integer steps of the Poisson law are invisible in the float32 frames (their spacing at
+:math:`10^{12}` is :math:`6\\cdot 10^4` electrons), and numpy's exact sampler refuses means above
+about :math:`9.2\\cdot 10^{18}` (``lam value too large``), which a pixel of radiance
+:math:`10^{16}` reaches at the default gain. Below it the draws are the exact law's."""
+
+
+def photon_counts(electrons, rng: np.random.Generator):
+    """Photon counts of mean ``electrons``: :math:`\\mathrm{Poisson}(\\lambda)` up to
+    :data:`POISSON_EXACT_MAX`, :math:`\\mathcal N(\\lambda, \\lambda)` above.
+
+    Only the exact draws are made here, in one call, so an image without large means draws
+    exactly what ``rng.poisson(electrons)`` draws.
+
+    Parameters
+    ----------
+    electrons : numpy.ndarray
+        :math:`\\lambda \\ge 0`, float64.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    counts : numpy.ndarray, int64, the shape of ``electrons``
+        The exact draws; 0 where the mean is large.
+    large : numpy.ndarray of bool, or None
+        Where the mean is above :data:`POISSON_EXACT_MAX` or not finite (their counts come
+        from :func:`normal_counts`, drawn after the caller's other draws); None where none is.
+
+    Examples
+    --------
+    >>> counts, large = photon_counts(np.array([4.0, 1e20]), np.random.default_rng(0))
+    >>> int(counts[1]), large.tolist()
+    (0, [False, True])
+    """
+    electrons = np.asarray(electrons, dtype=np.float64)
+    large = ~(electrons <= POISSON_EXACT_MAX)
+    if not large.any():
+        return rng.poisson(electrons), None
+    return rng.poisson(np.where(large, 0.0, electrons)), large
+
+
+def normal_counts(electrons, large, rng: np.random.Generator) -> np.ndarray:
+    """The :math:`\\mathcal N(\\lambda, \\lambda)` counts of the ``large`` entries of
+    ``electrons`` (:func:`photon_counts`), float64, in C order; NaN or Inf where the mean is."""
+    lam = np.asarray(electrons, dtype=np.float64)[large]
+    with np.errstate(invalid="ignore", over="ignore"):
+        return lam + np.sqrt(lam) * rng.standard_normal(lam.shape)
 
 
 def floored_intensity(mu) -> tuple[np.ndarray, int]:
@@ -82,7 +139,8 @@ def sensor_variance(mu, model: SensorModel) -> tuple[np.ndarray, int]:
 class SensorFrames(Sequence):
     """``n`` simulated frames of one view, each drawn on access from its own seed.
 
-    Frame :math:`k` is :math:`(P + R)/g` with :math:`P \\sim \\mathrm{Poisson}(g\\mu)` and
+    Frame :math:`k` is :math:`(P + R)/g` with :math:`P \\sim \\mathrm{Poisson}(g\\mu)` (its
+    normal approximation above :data:`POISSON_EXACT_MAX` electrons, :func:`photon_counts`) and
     :math:`R \\sim \\mathcal N(0, r^2)` drawn from ``numpy.random.default_rng((seed, k))``,
     so the sequence can be iterated twice (as the intervention does) and always gives the
     same frames, while holding only :math:`\\mu` in memory.
@@ -100,7 +158,8 @@ class SensorFrames(Sequence):
 
     def __init__(self, mu, n: int, model: SensorModel, seed):
         self.mu, self.n_floored = floored_intensity(mu)
-        self._electrons = self.mu * float(model.gain)
+        with np.errstate(over="ignore"):  # Inf electrons give a non-finite frame entry
+            self._electrons = self.mu * float(model.gain)
         self.n = int(n)
         self.model = model
         self.seed = tuple(np.atleast_1d(seed).tolist())
@@ -115,11 +174,18 @@ class SensorFrames(Sequence):
             raise IndexError(k)
         k %= self.n
         rng = np.random.default_rng((*self.seed, k))
-        counts = rng.poisson(self._electrons).astype(np.float32)
+        exact, large = photon_counts(self._electrons, rng)
+        counts = exact.astype(np.float32)
         counts += rng.normal(0.0, float(self.model.read_noise), size=counts.shape).astype(
             np.float32
         )
-        return counts / np.float32(self.model.gain)
+        if large is None:
+            return counts / np.float32(self.model.gain)
+        shot = normal_counts(self._electrons, large, rng)
+        frame = counts / np.float32(self.model.gain)
+        with np.errstate(invalid="ignore", over="ignore"):
+            frame[large] = (shot + counts[large]) / float(self.model.gain)
+        return frame
 
 
 def eq1_moments(mu, n: int, model: SensorModel) -> tuple[np.ndarray, np.ndarray]:
