@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import resource
 import shutil
 import subprocess
@@ -309,24 +308,45 @@ def test_a_huge_resolution_stops_the_dry_run_with_the_request(tmp_path):
 
 
 def test_the_dry_run_requests_what_the_check_computes(tmp_path):
+    """Every job's memory request, read from Snakemake's API (not its printed text, whose
+    order varies), is one the memory check bounds: render jobs ask the render request,
+    ground truth and previews (one-image renders) at most that, every other job at most the
+    analysis request. On a cluster the chains grouped into one job (``scene_setup``: ground
+    truth then preview; ``analysis``: variance, warp, correlation) run one after another,
+    so a group job asks the largest of its members, within the same bounds."""
+    import json
+
     root = copy_workflow(tmp_path / "wf", {**TINY, "resolution": {"width": 1000, "height": 600}})
-    snakemake = [sys.executable, "-m", "snakemake", "-n", "all", "estimators"]
-    proc = run_bounded([*snakemake, "--configfile", "tiny.yaml"], root)
+    script = Path(__file__).with_name("planned_resources.py")
+    proc = run_bounded(
+        [sys.executable, str(script), "--configfile", "tiny.yaml", "--", "all", "estimators"],
+        root,
+    )
     assert proc.returncode == 0, proc.stderr
+    planned = json.loads(proc.stdout)
     asked: dict[str, int] = {}
-    rule = None
-    for line in proc.stdout.splitlines():
-        named = re.match(r"^(?:local)?rule (\w+):", line)
-        rule = named.group(1) if named else rule
-        mem = re.search(r"\bmem_mb=(\d+)", line)
-        if mem and "resources:" in line:
-            asked[rule] = max(asked.get(rule, 0), int(mem.group(1)))
+    for job in planned:
+        if "rule" in job and "mem_mb" in job["resources"]:
+            asked[job["rule"]] = max(asked.get(job["rule"], 0), job["resources"]["mem_mb"])
+    groups: dict[str, int] = {}
+    for group in planned:
+        if "group" in group:
+            name = group["group"]
+            groups[name] = max(groups.get(name, 0), group["resources"]["mem_mb"])
+            members = max(asked[rule] for rule in group["rules"])
+            assert group["resources"]["mem_mb"] == members, group
     config = load_config([root / "config.yaml", root / "tiny.yaml"], SCHEMA)
     requests = sizing.job_mem_requests(config)
     assert asked.pop("render") == requests["render"]
     assert asked.pop("render_moments") == requests["moments"]
-    assert {"intervention", "estimator_check"} <= set(asked)
+    for one_image in ("ground_truth", "preview"):
+        assert asked.pop(one_image) == sizing.render_mem_mb(1000, 600, batch=1)
+    assert sizing.render_mem_mb(1000, 600, batch=1) <= requests["render"]
+    assert {"intervention", "estimator_check", "variance", "warp", "correlation"} <= set(asked)
     assert max(asked.values()) == requests["analysis"]
+    assert set(groups) == {"scene_setup", "analysis"}
+    assert groups["scene_setup"] <= requests["render"]
+    assert groups["analysis"] <= requests["analysis"]
 
 
 # --------------------------------------------------------------------- read-only results
