@@ -15,11 +15,14 @@ import numpy as np
 import pytest
 
 from stereovar import cli
+from stereovar.config import validate_config
 from stereovar.controls.sensor import SensorFrames, SensorModel
+from stereovar.errors import ConfigError
 from stereovar.transforms import TransformInputs, get_transform
 
 REPO = Path(__file__).resolve().parents[1]
 POST_DEPLOY = REPO / "envs" / "stereovar.post-deploy.sh"
+SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
 
 
 # --- the conda post-deploy script ------------------------------------------------------------
@@ -147,3 +150,61 @@ def test_a_stage_that_fails_before_its_line_began_is_named(capsys):
     monitor.finish(1)
     lines = capsys.readouterr().err.splitlines()
     assert lines == ["import: 1 frame ... done", "statistics ... stopped", "mitigations ... failed"]
+
+
+# --- extreme camera settings -----------------------------------------------------------------
+
+
+def _one_line(err) -> str:
+    message = str(err.value)
+    assert "\n" not in message
+    return message
+
+
+def test_the_config_bounds_the_camera_to_settings_whose_frames_are_finite():
+    from stereovar.controls.sensor import GAIN_RANGE, READ_NOISE_MAX
+
+    with pytest.raises(ConfigError) as err:
+        validate_config({"controls": {"sensor": {"gain": 1e-300}}}, SCHEMA)
+    assert "controls.sensor.gain" in _one_line(err)
+    with pytest.raises(ConfigError) as err:
+        validate_config({"controls": {"sensor": {"read_noise": 1e300}}}, SCHEMA)
+    assert "controls.sensor.read_noise" in _one_line(err)
+    with pytest.raises(ConfigError, match="controls.sensor.gain"):
+        validate_config({"controls": {"sensor": {"gain": GAIN_RANGE[1] * 10}}}, SCHEMA)
+    # every corner of the bounds is accepted, and gives finite frames and equalised renders
+    rng = np.random.default_rng(0)
+    mean = rng.uniform(0.0, 1e4, (4, 5, 3))
+    mean[0, 0] = np.finfo(np.float32).max / 2  # the brightest a float32 render's mean gets
+    render = mean + rng.normal(0.0, 1.0, mean.shape)
+    var = np.full(mean.shape, 1.0)
+    for gain in GAIN_RANGE:
+        for read_noise in (0.0, READ_NOISE_MAX):
+            sensor = {"gain": gain, "read_noise": read_noise}
+            assert validate_config({"controls": {"sensor": sensor}}, SCHEMA)["controls"][
+                "sensor"
+            ] == {**sensor, "seed": 0}
+            inputs = _inputs(mean, render=render, seed_var=var)
+            for name in ("sensor_only", "equalise"):
+                assert np.isfinite(get_transform(name)(inputs, **sensor)).all(), (name, sensor)
+
+
+@pytest.mark.parametrize(
+    "name, sensor, shown",
+    [
+        ("sensor_only", {"gain": 1e-300}, "gain 1e-300"),
+        ("sensor_only", {"read_noise": 1e300}, "read_noise 1e+300"),
+        ("equalise", {"gain": 1e-300}, "gain 1e-300"),
+        ("equalise", {"read_noise": 1e300}, "read_noise 1e+300"),
+    ],
+)
+def test_a_transform_refuses_a_non_finite_output_naming_itself_and_the_camera(
+    name, sensor, shown
+):
+    mean = np.full((2, 3, 3), 0.5)
+    inputs = _inputs(mean, render=mean + 0.1, seed_var=np.full(mean.shape, 0.01))
+    with pytest.raises(ConfigError) as err:
+        get_transform(name)(inputs, **sensor)
+    message = _one_line(err)
+    assert f"transform '{name}'" in message and shown in message
+    assert "controls.sensor.gain within [0.001, 1e+07]" in message

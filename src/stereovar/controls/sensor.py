@@ -32,6 +32,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+GAIN_RANGE = (1e-3, 1e7)
+"""Bounds of ``controls.sensor.gain`` (e- per radiance unit) in the config schema.
+
+From a camera that collects one electron at :math:`\\mu = 1000` (read noise alone below
+that) to ten times the largest full well of a real pixel (about :math:`10^6` e-) at
+:math:`\\mu = 1`. Within them and :data:`READ_NOISE_MAX`, the read-noise floor
+:math:`r/g \\le 10^6` and the variance law :math:`a\\mu + b` stay far inside float32 and
+float64, so no camera frame or equalised render overflows."""
+
+READ_NOISE_MAX = 1e3
+"""Upper bound of ``controls.sensor.read_noise`` (e-) in the config schema: fifty times a slow
+CCD's (3-20 e-; CMOS 1-3 e-)."""
+
 
 @dataclass(frozen=True)
 class SensorModel:

@@ -15,14 +15,23 @@ Table 1.
 
 Non-finite inputs: a (pixel, channel) entry whose render, seed mean or seed variance is NaN or
 Inf is NaN in the output, so the stores' finite flags drop it as they would without the
-transform.
+transform. A non-finite output from finite inputs (a camera past the schema's bounds on
+``controls.sensor``, :data:`~stereovar.controls.sensor.GAIN_RANGE`) is refused in one line
+naming the transform and the camera (:func:`check_finite`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..controls.sensor import SensorFrames, SensorModel, floored_intensity
+from ..controls.sensor import (
+    GAIN_RANGE,
+    READ_NOISE_MAX,
+    SensorFrames,
+    SensorModel,
+    floored_intensity,
+)
+from ..errors import ConfigError
 from .base import TransformInputs
 from .denoise import apply_denoise
 
@@ -41,11 +50,53 @@ def camera_coefficients(*, gain: float = DEFAULT_GAIN, read_noise: float = DEFAU
         ``gain`` is not positive or ``read_noise`` is negative.
     """
     model = SensorModel(gain=float(gain), read_noise=float(read_noise))
-    return 1.0 / model.gain, (model.read_noise / model.gain) ** 2
+    with np.errstate(over="ignore"):  # Inf for a camera past the bounds: check_finite says so
+        b = (np.float64(model.read_noise) / model.gain) ** 2
+    return 1.0 / model.gain, float(b)
+
+
+def check_finite(out, expected, *, name: str, gain: float, read_noise: float, source) -> None:
+    """Refuse non-finite output where the input is finite.
+
+    Parameters
+    ----------
+    out : numpy.ndarray
+        What the camera model or transform gives.
+    expected : numpy.ndarray of bool, the shape of ``out``
+        Where the input is finite, so the output must be.
+    name : str, keyword-only
+        The transform (``"transform 'equalise'"``), for the message.
+    gain, read_noise : float, keyword-only
+        The camera.
+    source : numpy.ndarray, keyword-only
+        The finite input (its largest magnitude goes in the message).
+
+    Raises
+    ------
+    ConfigError
+        One line: the transform, the camera, how many values and the bounds to keep.
+    """
+    bad = expected & ~np.isfinite(out)
+    n = int(bad.sum())
+    if not n:
+        return
+    largest = float(np.abs(np.asarray(source, dtype=np.float64)[expected]).max())
+    raise ConfigError(
+        f"{name} with gain {float(gain):g} e-/unit and read_noise {float(read_noise):g} e- "
+        f"gives {n} non-finite value{'s' * (n != 1)} from finite input (largest input "
+        f"{largest:g}); keep controls.sensor.gain within [{GAIN_RANGE[0]:g}, "
+        f"{GAIN_RANGE[1]:g}] and read_noise within [0, {READ_NOISE_MAX:g}], and the input "
+        "within float32's range"
+    )
 
 
 def camera_noise(
-    clean, *, gain: float = DEFAULT_GAIN, read_noise: float = DEFAULT_READ_NOISE, rng_seed: int
+    clean,
+    *,
+    gain: float = DEFAULT_GAIN,
+    read_noise: float = DEFAULT_READ_NOISE,
+    rng_seed: int,
+    name: str = "the camera model",
 ) -> np.ndarray:
     """One Poisson-Gaussian camera frame of a clean image.
 
@@ -66,15 +117,25 @@ def camera_noise(
     gain, read_noise : float, keyword-only
         :math:`g` and :math:`r`.
     rng_seed : int, keyword-only
+    name : str, keyword-only
+        Who asks, for the error message (``"transform 'sensor_only'"``).
 
     Returns
     -------
     numpy.ndarray, float32, the shape of ``clean``
+
+    Raises
+    ------
+    ConfigError
+        A finite clean value gives a non-finite frame value (:func:`check_finite`).
     """
     clean = np.asarray(clean, dtype=np.float64)
     model = SensorModel(gain=float(gain), read_noise=float(read_noise), seed=int(rng_seed))
-    frame = SensorFrames(clean, 1, model, seed=int(rng_seed))[0]
-    frame[~np.isfinite(clean)] = np.nan
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        frame = SensorFrames(clean, 1, model, seed=int(rng_seed))[0]
+    finite = np.isfinite(clean)
+    check_finite(frame, finite, name=name, gain=gain, read_noise=read_noise, source=clean)
+    frame[~finite] = np.nan
     return frame.astype(np.float32, copy=False)
 
 
@@ -114,6 +175,7 @@ def apply_sensor_only(
         gain=gain,
         read_noise=read_noise,
         rng_seed=inputs.rng_seed,
+        name="transform 'sensor_only'",
     )
 
 
@@ -148,7 +210,13 @@ def apply_denoise_sensor(
         NaN where the render is non-finite.
     """
     denoised = apply_denoise(inputs, clean_aux=clean_aux, quality=quality, threads=threads)
-    return camera_noise(denoised, gain=gain, read_noise=read_noise, rng_seed=inputs.rng_seed)
+    return camera_noise(
+        denoised,
+        gain=gain,
+        read_noise=read_noise,
+        rng_seed=inputs.rng_seed,
+        name="transform 'denoise_sensor'",
+    )
 
 
 def equalise_residual(
@@ -193,6 +261,11 @@ def equalise_residual(
     equalised : numpy.ndarray, float32, the shape of ``render``
     n_zero_variance : int
         Finite (pixel, channel) entries with :math:`\\hat\\sigma^2 = 0`, left at :math:`\\bar I`.
+
+    Raises
+    ------
+    ConfigError
+        Finite inputs give a non-finite output (:func:`check_finite`).
     """
     a, b = camera_coefficients(gain=gain, read_noise=read_noise)
     render = np.asarray(render, dtype=np.float64)
@@ -205,15 +278,19 @@ def equalise_residual(
     good = np.isfinite(render) & np.isfinite(mean) & np.isfinite(var) & (var >= 0)
     zero = good & (var == 0)
     target, _ = floored_intensity(mean)
-    target *= a
-    target += b
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        target *= a
+        target += b
         scale = np.sqrt(target / var)
-    out = render - mean
-    out *= np.where(zero, 0.0, scale)
-    out += mean
+        out = render - mean
+        out *= np.where(zero, 0.0, scale)
+        out += mean
+        out = out.astype(np.float32)
+    check_finite(
+        out, good, name="transform 'equalise'", gain=gain, read_noise=read_noise, source=render
+    )
     out[~good] = np.nan
-    return out.astype(np.float32), int(zero.sum())
+    return out, int(zero.sum())
 
 
 def apply_equalise(
