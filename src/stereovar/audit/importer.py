@@ -58,7 +58,7 @@ from ..layout import import_record
 from ..rig import VIEWS
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
-from .sign import sign_check
+from .sign import HIGH_ERROR, sign_check
 
 IMPORT_KEYS = (
     "views",
@@ -348,6 +348,8 @@ class _Reads:
 
 WARNING_KINDS = {
     "sign_check": "sign check inconclusive",
+    "sign_check_error": "sign check error high",
+    "outside": "matches outside the other view",
     "transfer": "PNG transfer assumed",
     "quantisation": "variance quantised",
     "clipped": "clipped pixels",
@@ -358,6 +360,15 @@ WARNING_KINDS = {
 QUANTISED_WARNING = 0.001
 """Share of a view's valid pixels whose renders are all identical (8-bit PNG) from which the
 import warns: quantisation floored their variance to 0."""
+
+HALF_STEPS = 2.0
+"""A pixel of half-float renders (:func:`_half_precision`) is quantised when its spread
+across the seeds is below this many half-float steps (at its seed mean) in every channel:
+its few distinct values distort its variance."""
+
+OUTSIDE_WARNING = 0.5
+"""Share of a frame's left pixels whose match falls outside the right image above which the
+import warns: the disparity is too large for the image (a depth map, another unit)."""
 
 CLIPPED_WARNING = 0.001
 """Share of a view's valid pixels at full scale in some render (PNG) above which the
@@ -377,6 +388,9 @@ class FrameReport:
     floored: dict = field(default_factory=dict)
     clipped: dict = field(default_factory=dict)
     """View to the share of its valid pixels at full scale in some render (PNG only)."""
+    half: dict = field(default_factory=dict)
+    """View to the share of its valid pixels whose spread across the seeds is below
+    :data:`HALF_STEPS` half-float steps (renders in half precision only)."""
     sign: dict = field(default_factory=dict)
     n_seeds: int = 0
 
@@ -389,6 +403,7 @@ class FrameReport:
             "nonfinite_pixels": self.nonfinite_pixels,
             "floored": self.floored,
             "clipped": self.clipped,
+            "half": self.half,
             "sign": self.sign,
             "n_seeds": self.n_seeds,
         }
@@ -670,6 +685,39 @@ def _clipped_fraction(stack: np.ndarray, valid: np.ndarray, scale: float) -> flo
     return float((clipped & valid).sum() / max(int(valid.sum()), 1))
 
 
+def _half_precision(stack: np.ndarray) -> bool:
+    """Whether every value of the renders is a half-float (16-bit) number: half-float EXR
+    channels, or renders rounded to half precision before they were saved. Float32 renders
+    fail at their first render."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        for image in stack:
+            half = image.astype(np.float16).astype(np.float32)
+            if not np.array_equal(half, image, equal_nan=True):
+                return False
+    return True
+
+
+def _half_quantised_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
+    r"""Fraction of ``valid`` pixels whose spread across the N renders is below
+    :data:`HALF_STEPS` half-float steps in every channel.
+
+    .. math:: s_c(x) < k\,\Delta_{16}(\bar I_c(x))
+
+    with :math:`s_c` the sample standard deviation over the seeds of channel :math:`c`,
+    :math:`\bar I_c` its mean, :math:`\Delta_{16}` the spacing of half floats there and
+    :math:`k` = :data:`HALF_STEPS`.
+    """
+    mean = stack.mean(axis=0, dtype=np.float64)
+    squares = np.zeros_like(mean)
+    for image in stack:  # one render at a time: no temporary the size of the stack
+        squares += (image - mean) ** 2
+    spread = np.sqrt(squares / max(len(stack) - 1, 1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        step = np.spacing(np.abs(mean).astype(np.float16)).astype(np.float64)
+    coarse = (spread < HALF_STEPS * step).all(axis=-1)
+    return float((coarse & valid).sum() / max(int(valid.sum()), 1))
+
+
 def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     """Fraction of ``valid`` pixels whose N renders are identical in every channel (their
     estimated variance is 0: quantisation floored it)."""
@@ -733,6 +781,8 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             fr.floored[view] = _floored_fraction(images, valid)
         if any(image_format(p) == "png" for p in paths):
             fr.clipped[view] = _clipped_fraction(images, valid, scale)
+        elif _half_precision(images):
+            fr.half[view] = _half_quantised_fraction(images, valid)
         datasets[view] = render_dataset(
             images,
             view=view,
@@ -780,6 +830,18 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "
             f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
             "identical); export 16-bit PNG or EXR for an audit that can see small variance",
+            frame.name,
+        )
+    for view, fraction in fr.half.items():
+        if fraction < QUANTISED_WARNING:
+            continue
+        report.warn(
+            "quantisation",
+            f"frame {frame.name}, {view}: the renders hold half-float (16-bit) values, and at "
+            f"{100 * fraction:.1f}% of the valid pixels their spread across the "
+            f"{frame.n_seeds} renders is below {HALF_STEPS:g} half-float steps, so "
+            "quantisation distorts the variance; export 32-bit float EXR (Blender: Color "
+            "Depth Float (Full)) for an audit that can see small variance",
             frame.name,
         )
     for view, fraction in fr.clipped.items():
@@ -830,6 +892,18 @@ def _frame_ground_truth(
         counts["outside"],
         counts["valid"],
     )
+    total = int(gt.sizes["y"] * gt.sizes["x"])
+    if counts["outside"] > OUTSIDE_WARNING * total:
+        report.warn(
+            "outside",
+            f"frame {frame.name}: {counts['outside']} of the {total} left pixels "
+            f"({100 * counts['outside'] / total:.1f}%) have a disparity whose match falls "
+            f"outside the right image ({gt.sizes['x']} px wide, x_R = x_L "
+            f"{'+' if sign == 1 else '-'} d): the disparity is too large for these images, "
+            "as a depth map or a disparity in another unit or scale is; check audit.disparity "
+            "(or audit.depth), its channel and audit.disparity_scale",
+            frame.name,
+        )
     return gt, gt_files
 
 
@@ -870,11 +944,22 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
             f"audit.convention: {convention} is taken as given (audit.sign_check: warn)",
             frame.name,
         )
+    if check.conclusive and check.high_error:
+        report.warn(
+            "sign_check_error",
+            f"frame {frame.name}: the declared convention wins the sign check but matches "
+            f"poorly ({errors}; above {100 * HIGH_ERROR:.0f}% the right seed mean warped "
+            "into the left does not reproduce it): the disparity may not be this frame's (a "
+            "depth map, another frame, file or channel, a wrong scale) or the seed means are "
+            "very noisy; check audit.disparity or audit.depth and audit.channels",
+            frame.name,
+        )
     gt.attrs.update(check.attrs())
     fr.sign = {
         "error": check.error,
         "opposite_error": check.opposite_error,
         "conclusive": check.conclusive,
+        "high_error": check.high_error,
         "reason": check.reason,
     }
 

@@ -2,7 +2,8 @@
 
 :func:`page_sections` puts what :mod:`stereovar.audit.verdict` computed in reading order:
 
-1. banners (an inconclusive sign check the audit went on with, ``audit.sign_check: warn``);
+1. banners (an inconclusive sign check the audit went on with, ``audit.sign_check: warn``,
+   and a sign check won with a high error);
 2. the decision: a traffic light and two or three sentences (what was found, how sure,
    what to do; :func:`stereovar.audit.verdict.decision`);
 3. the import's facts: frames, seeds and files, each frame's sign check and valid pixels,
@@ -43,7 +44,13 @@ FACT_COLUMNS = [
 ]
 """Columns of the import-facts table (one row per frame): ``clipped`` is the share of a
 view's valid pixels at a PNG's full scale in some render, ``quantised`` the share whose
-8-bit renders are all identical (PNG only; ``n/a`` for float formats)."""
+8-bit renders are all identical (8-bit PNG) or whose spread across the seeds is below
+:data:`~stereovar.audit.importer.HALF_STEPS` half-float steps (half-float renders, marked
+``half float``; ``n/a`` for 16-bit PNG and 32-bit float formats)."""
+
+BANNER_KINDS = ("sign_check", "sign_check_error")
+"""Import warnings the page opens with, above the decision: the sign check the disparity
+rests on was inconclusive, or won with a high error."""
 
 FLAG_COLUMNS = ["flag", "frame", "what"]
 """Columns of the flags table (one row per warning or flag)."""
@@ -70,7 +77,8 @@ def _sign_fact(sign: dict) -> str:
     text = (
         f"{100 * sign['error']:.1f}% declared vs {100 * sign['opposite_error']:.1f}% opposite"
     )
-    return text + ("" if sign.get("conclusive", True) else " (inconclusive)")
+    text += "" if sign.get("conclusive", True) else " (inconclusive)"
+    return text + (" (error high)" if sign.get("high_error") else "")
 
 
 def import_facts(records: list[dict]) -> list[dict]:
@@ -80,7 +88,10 @@ def import_facts(records: list[dict]) -> list[dict]:
     for record in records:
         found = record.get("found") or {}
         clipped = found.get("clipped") or {}
-        floored = found.get("floored") or {}
+        quantised = [f"{v} {100 * f:.2f}%" for v, f in (found.get("floored") or {}).items()]
+        quantised += [
+            f"{v} {100 * f:.2f}% (half float)" for v, f in (found.get("half") or {}).items()
+        ]
         rows.append(
             {
                 "frame": record.get("frame", ""),
@@ -92,8 +103,7 @@ def import_facts(records: list[dict]) -> list[dict]:
                 "nonfinite_render_px": sum((found.get("nonfinite_pixels") or {}).values()),
                 "sign_check": _sign_fact(found.get("sign") or {}),
                 "clipped": ", ".join(f"{v} {100 * f:.2f}%" for v, f in clipped.items()) or "n/a",
-                "quantised": ", ".join(f"{v} {100 * f:.2f}%" for v, f in floored.items())
-                or "n/a",
+                "quantised": ", ".join(quantised) or "n/a",
             }
         )
     return rows
@@ -144,7 +154,7 @@ def page_sections(
     ``thumbnails`` and ``figures`` are paths relative to the page; ``probe`` is the learned
     probe's verdict paragraph (``audit.probe: true``).
     """
-    banners = [f["text"] for f in flags if f["kind"] == "sign_check"]
+    banners = [f["text"] for f in flags if f["kind"] in BANNER_KINDS]
     return {
         "title": f"Audit {name}: verdict",
         "banners": banners,

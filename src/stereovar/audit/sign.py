@@ -17,7 +17,9 @@ random disparities of 20-40 px), as noisy renders with the right disparity do.
 The check can only tell the signs apart where the right image differs between the two
 matches: where it is flat (black, saturated, or made flat by 8-bit quantisation of a dark
 render) both warps give the same value and both errors are the same. A check whose declared
-sign is not settled says so, with the reason (:attr:`SignCheck.reason`).
+sign is not settled says so, with the reason (:attr:`SignCheck.reason`). A declared sign that
+wins with a median error above :data:`HIGH_ERROR` is flagged (:attr:`SignCheck.high_error`):
+a depth map read as disparity can win against the opposite sign with a poor match.
 """
 
 from __future__ import annotations
@@ -32,6 +34,11 @@ from ..statistics.warp import WarpPlan
 
 CLEARLY_BETTER = 0.5
 """The opposite sign wins when its error is below this fraction of the declared one's."""
+
+HIGH_ERROR = 0.15
+"""A declared sign whose median error is above this matches poorly even when it wins: the
+disparity may not be this frame's (a depth map, another frame, a wrong scale), or the seed
+means are very noisy; the import flags it."""
 
 MIN_PIXELS = 100
 """Fewer compared pixels than this leave the check inconclusive."""
@@ -166,6 +173,11 @@ class SignCheck:
                 f"{100 * share:.1f}% [{100 * low:.1f}, {100 * high:.1f}] of the pixels)"
             )
         return "neither sign matches clearly better"
+
+    @property
+    def high_error(self) -> bool:
+        """Whether the declared sign's median error is above :data:`HIGH_ERROR`."""
+        return math.isfinite(self.error) and self.error > HIGH_ERROR
 
     def attrs(self) -> dict:
         """The check as store attributes."""

@@ -28,10 +28,14 @@ role                      passes
 ========================  ===============================================================
 
 BlenderProc's ``distance`` is the distance along the camera ray, not planar depth, and is
-refused for depth. A file with one channel is that field whatever its name. Anything else is
-one :class:`~stereovar.errors.ImageError` line naming the file, the role, the channels it
-has and the fix: ``audit.channels`` names the channel (for ``render``, the layer whose
-``R, G, B`` are read).
+refused for depth. A file with one channel is that field unless its name says it holds
+something else (:func:`named_as`): a one-channel ``ViewLayer.Depth.Z`` given as disparity,
+a ``disparity`` given as depth, a normal, albedo or mist pass given as any field, or a
+field given as a render is refused; a plain ``Z``, ``V`` or ``Y`` (our own field files,
+Blender's BW output) says nothing and is read. Anything else is one
+:class:`~stereovar.errors.ImageError` line naming the file, the role, the channels it has
+and the fix: ``audit.channels`` names the channel (for ``render``, the layer whose
+``R, G, B`` are read), and a channel it names is read as that role whatever its name.
 
 The functions here work on channel names only; :mod:`stereovar.io.images` reads the pixels.
 """
@@ -62,6 +66,41 @@ PASSES = {
 
 PLAIN = {"z": "depth"}
 """Undotted channel names whose meaning is not their pass name: OpenEXR's ``Z`` is depth."""
+
+RENDER_PASSES = frozenset({"combined", "rgba", "colors", "noisyimage"})
+"""Pass names (normalised) that mean a render, and no field, by themselves (``Image``, the
+default input name of Blender's File Output node, may hold any field)."""
+
+OTHER_PASSES = {
+    "surface normals": frozenset({"normal", "normals", "denoisingnormal"}),
+    "albedo": frozenset(
+        {"albedo", "denoisingalbedo", "diffcol", "diffusecolor", "glosscol", "glossycolor",
+         "transcol", "transmissioncolor"}
+    ),
+    "mist (a 0-1 distance ramp)": frozenset({"mist"}),
+    "motion vectors": frozenset({"vector", "flow", "forwardflow", "backwardflow"}),
+    "UV coordinates": frozenset({"uv"}),
+    "positions": frozenset({"position", "objectcoordinates"}),
+    "a material index": frozenset({"indexma", "materialindex"}),
+    "a light pass": frozenset(
+        {"emit", "emission", "env", "environment", "ao", "shadow", "diffdir", "diffind",
+         "glossdir", "glossind", "transdir", "transind", "volumedir", "volumeind",
+         "diffusedirect", "diffuseindirect", "glossydirect", "glossyindirect",
+         "transmissiondirect", "transmissionindirect", "volumedirect", "volumeindirect"}
+    ),
+}
+"""Passes (normalised names) that hold none of :data:`ROLES`, by what they hold (Blender's
+and Kubric's names)."""
+
+WORDS = {
+    "render": "a render",
+    "depth": "depth",
+    "disparity": "disparity",
+    "segmentation": "a segmentation",
+    "glass_mask": "a glass mask",
+    "distance": "ray distance",
+}
+"""What a role (and ray distance) holds, in words, for error lines."""
 
 SEGMAPS_SUFFIX = "segmaps"
 """BlenderProc names its segmentation maps ``<attribute>_segmaps``."""
@@ -117,6 +156,83 @@ def meaning(channel: str) -> str | None:
     if key.endswith(SEGMAPS_SUFFIX):
         return "segmentation"
     return None
+
+
+def named_as(channel: str) -> str | None:
+    """What the name of a channel says it holds, whatever it is read as: a
+    :data:`FIELD_ROLES` role, ``"distance"``, ``"render"`` or a key of
+    :data:`OTHER_PASSES`; None when the name says nothing (a plain ``Z``, ``V`` or ``Y``,
+    the one channel of a field file, or an unknown pass).
+
+    Examples
+    --------
+    >>> [named_as(c) for c in ("ViewLayer.Depth.Z", "Z", "V", "ViewLayer.Normal.X")]
+    ['depth', None, None, 'surface normals']
+    >>> named_as("ViewLayer.Combined.R"), named_as("Image.V"), named_as("disparity")
+    ('render', None, 'disparity')
+    """
+    if "." not in channel and normalised(channel) in PLAIN:
+        return None
+    what = meaning(channel)
+    if what is not None:
+        return what
+    key = normalised(pass_name(channel))
+    if key in RENDER_PASSES:
+        return "render"
+    return next((word for word, names in OTHER_PASSES.items() if key in names), None)
+
+
+def _what(what: str) -> str:
+    return WORDS.get(what, what)
+
+
+def foreign_channel(channel: str, role: str, path) -> None:
+    """Refuse the one channel of a file read as ``role`` when its name says it holds
+    something else (:func:`named_as`), e.g. a one-channel ``ViewLayer.Depth.Z`` file given
+    as disparity.
+
+    Parameters
+    ----------
+    channel : str
+        The file's only channel.
+    role : {"render", "depth", "segmentation", "disparity", "glass_mask"}
+        What the file was given as.
+    path : path-like
+        The file, for the error line.
+
+    Raises
+    ------
+    ImageError
+        One line naming the channel, what its name says and the fix.
+
+    Examples
+    --------
+    >>> foreign_channel("Z", "disparity", "d.exr")  # plain Z says nothing: read
+    >>> foreign_channel("ViewLayer.Depth.Z", "disparity", "d.exr")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.ImageError: d.exr: its one channel 'ViewLayer.Depth.Z' holds depth ...
+    """
+    check_role(role)
+    what = named_as(channel)
+    if what is None or what == role:
+        return
+    if role == "disparity" and what == "depth":
+        fix = (
+            "give it as audit.depth (with audit.focal_px and audit.baseline_m: d = f B / z) "
+            "and leave audit.disparity out, or give the disparity in px"
+        )
+    elif role == "render":
+        fix = "give the renders' files in audit.renders"
+    else:
+        fix = (
+            f"give the {_what(role)} file, or set audit.channels: {{{role}: {channel}}} if "
+            f"it does hold {_what(role)}"
+        )
+    raise ImageError(
+        f"{path}: its one channel {channel!r} holds {_what(what)} by its name, not "
+        f"{_what(role)}; {fix}"
+    )
 
 
 def listing(names) -> str:
@@ -183,9 +299,10 @@ def field_channel(names, role: str | None, path, channel: str | None = None) -> 
     Raises
     ------
     ImageError
-        The named channel is missing; ray distance as depth; several channels hold the
-        role; or none does and the file has more than one channel (one line listing the
-        channels and naming the fix).
+        The named channel is missing; ray distance as depth; the file's one channel is named
+        as something else (:func:`foreign_channel`); several channels hold the role; or none
+        does and the file has more than one channel (one line listing the channels and
+        naming the fix).
 
     Examples
     --------
@@ -209,6 +326,8 @@ def field_channel(names, role: str | None, path, channel: str | None = None) -> 
         picked = [n for n in names if _holds(n, role)]
     if role == "depth" and len(picked) == 1 and meaning(picked[0]) == "distance":
         raise _distance_error(path, picked[0])
+    if channel is None and len(names) == 1 and role is not None:
+        foreign_channel(names[0], role, path)
     if len(picked) == 1:
         return picked[0]
     if picked:
@@ -274,7 +393,8 @@ def render_channels(names, path, channel: str | None = None) -> tuple:
     ------
     ImageError
         The named layer is missing; several RGB layers and not exactly one render layer
-        among them; or no RGB layer and more than one channel (one line).
+        among them; no RGB layer and more than one channel; or one channel whose name says
+        it holds a field (:func:`foreign_channel`) (one line).
 
     Examples
     --------
@@ -303,6 +423,7 @@ def render_channels(names, path, channel: str | None = None) -> tuple:
     if layers:
         return next(iter(layers.values()))
     if len(names) == 1:
+        foreign_channel(names[0], "render", path)
         return tuple(names)
     raise ImageError(
         f"{path}: no R, G, B channels (has {listing(names)}); write an RGB image, or "

@@ -1,0 +1,235 @@
+"""The audit reads its inputs by what they mean: a one-channel file named for another role
+(a depth pass given as disparity) is refused, a sign check won with a high error and a
+disparity whose matches mostly fall outside the other view are flagged, half-float renders
+whose noise is near the half-float step are flagged, segment ids stay integers, user text is
+escaped on the Markdown verdict page, and Snakemake path variables in audit paths are
+refused before any file is read.
+
+Each frame is a tiny synthetic one (:func:`stereovar.audit.synthetic.write_synthetic_audit`,
+64 x 40 px, 4 or 8 seeds) in a fresh working directory.
+"""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+import pytest
+
+from stereovar.audit.importer import import_audit, import_record
+from stereovar.audit.sign import sign_check
+from stereovar.audit.synthetic import write_synthetic_audit
+from stereovar.errors import ImageError
+from stereovar.io.images import read_field, read_image, write_field, write_image
+from stereovar.jobs.audit import verdict_job
+
+SMALL = {"width": 64, "height": 40, "n_seeds": 4}
+
+
+def one_line(err) -> str:
+    text = str(err.value)
+    assert "\n" not in text
+    return text
+
+
+def write_exr(path, channels: dict) -> Path:
+    """A one-part EXR with these channels (name to pixels, dtype kept)."""
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {k: np.ascontiguousarray(v) for k, v in channels.items()}) as f:
+        f.write(str(path))
+    return Path(path)
+
+
+def record_of(name="synthetic", frame="f00") -> dict:
+    return json.loads(Path(import_record(name, frame)).read_text())
+
+
+def flags_of(record: dict, kind: str) -> list:
+    return [f for f in record["found"]["warnings"] if f["kind"] == kind]
+
+
+def verdict_of(records: list) -> tuple:
+    """``summary.json``, ``verdict.md`` and ``verdict.html`` of an audit whose statistics are
+    not computed yet (the import's records only)."""
+    base = Path("results/audit/synthetic")
+    outputs = {"md": base / "verdict.md", "html": base / "verdict.html",
+               "summary": base / "summary.json"}
+    imports = [import_record("synthetic", r["frame"]) for r in records]
+    summary = verdict_job([], [], [], outputs, name="synthetic", found="1 frame",
+                          imports=imports)
+    return summary, outputs["md"].read_text(), outputs["html"].read_text()
+
+
+# -- A: a depth map given as disparity ---------------------------------------------------------
+
+
+def test_a_depth_pass_given_as_disparity_is_refused_before_anything_is_written(
+    tmp_path, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    settings, frames = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
+    depth = write_exr(tmp_path / "d" / "disparity" / "f00.exr",
+                      {"ViewLayer.Depth.Z": (100.0 / frames[0].disparity).astype(np.float32)})
+    settings = {**settings, "disparity": str(tmp_path / "d/disparity/{frame}.exr"),
+                "sign_check": "warn"}
+    with pytest.raises(ImageError) as err:
+        import_audit(settings)
+    assert one_line(err) == (
+        f"{depth}: its one channel 'ViewLayer.Depth.Z' holds depth by its name, not "
+        "disparity; give it as audit.depth (with audit.focal_px and audit.baseline_m: "
+        "d = f B / z) and leave audit.disparity out, or give the disparity in px"
+    )
+    assert not Path("results").exists()
+
+
+def test_one_channel_named_for_another_role_is_refused_and_a_plain_one_is_read(tmp_path):
+    field = np.linspace(1.0, 9.0, 35, dtype=np.float32).reshape(5, 7)
+    refused = [
+        ("disparity", "depth", "disparity", "depth"),  # vice versa
+        ("ViewLayer.Normal.X", "disparity", "surface normals", "disparity"),
+        ("ViewLayer.Mist.Z", "depth", "mist (a 0-1 distance ramp)", "depth"),
+        ("ViewLayer.Object Index.X", "glass_mask", "a segmentation", "a glass mask"),
+    ]
+    for k, (channel, role, holds, wanted) in enumerate(refused):
+        path = write_exr(tmp_path / f"f{k}.exr", {channel: field})
+        with pytest.raises(ImageError) as err:
+            read_field(path, role=role)
+        assert one_line(err).startswith(
+            f"{path}: its one channel {channel!r} holds {holds} by its name, not {wanted}; "
+        )
+        # named in audit.channels, it is read as that role
+        np.testing.assert_array_equal(read_field(path, role=role, channel=channel), field)
+    depth = write_exr(tmp_path / "depth.exr", {"ViewLayer.Depth.Z": field})
+    with pytest.raises(ImageError, match="holds depth by its name, not a render"):
+        read_image(depth)
+    # names that say nothing (our own writer's Z, Blender's BW V) are read as any field
+    write_field(tmp_path / "plain.exr", field)
+    np.testing.assert_array_equal(read_field(tmp_path / "plain.exr", role="disparity"), field)
+    grey = write_exr(tmp_path / "grey.exr", {"V": field})
+    np.testing.assert_array_equal(read_field(grey, role="depth"), field)
+
+
+def test_a_sign_check_won_with_a_high_error_is_flagged_on_the_summary_and_page(
+    tmp_path, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    # noisy seed means: the declared sign wins, but its median error is above 15%
+    settings, frames = write_synthetic_audit(tmp_path / "d", n_frames=1, level=0.1, **SMALL)
+    frame = frames[0]
+    expected = sign_check(frame.renders["left"].mean(0), frame.renders["right"].mean(0),
+                          frame.disparity, sign=-1, valid=frame.valid)
+    assert expected.conclusive and expected.error > 0.15
+    report = import_audit(settings)
+    record = record_of()
+    assert record["found"]["sign"]["error"] == pytest.approx(expected.error, abs=1e-6)
+    (flag,) = flags_of(record, "sign_check_error")
+    assert flag["text"].startswith(
+        f"frame f00: the declared convention wins the sign check but matches poorly (median "
+        f"error {100 * expected.error:.1f}% declared, {100 * expected.opposite_error:.1f}% "
+        "opposite; above 15%"
+    )
+    assert f"  warning: {flag['text']}" in report.lines()
+    summary, md, html = verdict_of([record])
+    assert flag in summary["flags"] and f"  flag: {flag['text']}" in summary["summary"]
+    assert summary["light"] == "amber"
+    assert f"> **Warning.** {flag['text']}" in md  # a banner above the decision
+    assert md.index("> **Warning.**") < md.index("**AMBER")
+    assert "(error high)" in md and "sign check error high" in html
+
+
+def test_a_low_sign_check_error_raises_no_flag(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    settings, frames = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
+    import_audit(settings)
+    record = record_of()
+    assert record["found"]["sign"]["error"] < 0.15
+    assert record["found"]["sign"]["high_error"] is False
+    assert not flags_of(record, "sign_check_error") and not flags_of(record, "outside")
+
+
+def test_most_matches_outside_the_other_view_are_flagged(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    settings, frames = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
+    # eight times the disparity (24-64 px on a 64 px wide image), as a depth map in the
+    # wrong unit would give
+    disparity = 8 * frames[0].disparity
+    write_field(settings["disparity"].format(frame="f00"), disparity)
+    report = import_audit({**settings, "sign_check": "warn"})
+    # conventional x_R = x_L - d: a left pixel x matches inside the right image iff x >= d
+    height, width = disparity.shape
+    outside = int((np.arange(width)[None, :] < disparity).sum())
+    assert outside > 0.5 * height * width
+    record = record_of()
+    assert record["found"]["outside"] == outside
+    (flag,) = flags_of(record, "outside")
+    assert flag["text"].startswith(
+        f"frame f00: {outside} of the {height * width} left pixels "
+        f"({100 * outside / (height * width):.1f}%) have a disparity whose match falls "
+        "outside the right image (64 px wide, x_R = x_L - d)"
+    )
+    assert f"  warning: {flag['text']}" in report.lines()
+    summary, md, html = verdict_of([record])
+    assert flag in summary["flags"] and flag["text"] in md
+    assert "matches outside the other view" in html
+
+
+# -- B: half-float renders -----------------------------------------------------------------
+
+
+def half_audit(root, *, level, half=True):
+    """One synthetic frame of 8 seeds whose renders are written as half-float EXR."""
+    settings, frames = write_synthetic_audit(root, n_frames=1, level=level,
+                                             width=64, height=40, n_seeds=8)
+    for letter, view in (("L", "left"), ("R", "right")):
+        for s, image in enumerate(frames[0].renders[view]):
+            write_image(root / f"renders/f00/{letter}/seed_{s:03d}.exr", image, half=half)
+    return settings, frames[0]
+
+
+def coarse_share(renders, valid) -> float:
+    """Share of ``valid`` pixels whose half-float values spread by less than two half-float
+    steps (the spacing of half floats at the pixel's mean) in every channel."""
+    values = renders.astype(np.float16).astype(np.float64)
+    mean = values.mean(axis=0)
+    spread = values.std(axis=0, ddof=1)
+    exponent = np.vectorize(lambda m: math.frexp(float(np.float16(m)))[1])(np.abs(mean))
+    step = np.exp2(exponent - 11.0)  # 10 mantissa bits: the spacing in [2^(e-1), 2^e)
+    coarse = (spread < 2 * step).all(axis=-1)
+    return float((coarse & valid).sum() / valid.sum())
+
+
+def test_half_float_renders_with_noise_near_the_half_step_are_flagged(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    # a per-pixel spread of about one half-float step: 3 distinct values in 8 seeds
+    settings, frame = half_audit(tmp_path / "d", level=1e-7)
+    report = import_audit(settings)
+    record = record_of()
+    expected = coarse_share(frame.renders["left"], frame.valid)
+    assert expected > 0.5
+    assert record["found"]["half"]["left"] == pytest.approx(expected, abs=1e-12)
+    flags = flags_of(record, "quantisation")
+    assert [f["text"].split(":")[0] for f in flags] == ["frame f00, left", "frame f00, right"]
+    assert flags[0]["text"].startswith(
+        f"frame f00, left: the renders hold half-float (16-bit) values, and at "
+        f"{100 * expected:.1f}% of the valid pixels their spread across the 8 renders is "
+        "below 2 half-float steps"
+    )
+    assert f"  warning: {flags[0]['text']}" in report.lines()
+    summary, md, _ = verdict_of([record])
+    assert flags[0] in summary["flags"] and flags[0]["text"] in md
+    assert f"left {100 * expected:.2f}% (half float)" in md  # the facts' quantised column
+
+
+def test_half_float_with_ample_noise_and_float_renders_are_not_flagged(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    settings, frame = half_audit(tmp_path / "a", level=0.004)  # spread >> the half step
+    import_audit(settings)
+    record = record_of()
+    assert coarse_share(frame.renders["left"], frame.valid) == 0.0
+    assert record["found"]["half"] == {"left": 0.0, "right": 0.0}
+    assert not flags_of(record, "quantisation")
+    settings, _ = half_audit(tmp_path / "b", level=1e-7, half=False)  # 32-bit float EXR
+    import_audit({**settings, "name": "float"})
+    record = record_of("float")
+    assert record["found"]["half"] == {} and not flags_of(record, "quantisation")
