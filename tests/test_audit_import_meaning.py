@@ -22,6 +22,7 @@ from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.errors import ImageError
 from stereovar.io.images import read_field, read_image, write_field, write_image
+from stereovar.io.store import open_dataset
 from stereovar.jobs.audit import verdict_job
 
 SMALL = {"width": 64, "height": 40, "n_seeds": 4}
@@ -233,3 +234,46 @@ def test_half_float_with_ample_noise_and_float_renders_are_not_flagged(tmp_path,
     import_audit({**settings, "name": "float"})
     record = record_of("float")
     assert record["found"]["half"] == {} and not flags_of(record, "quantisation")
+
+
+# -- C: segment ids above 2**24 ---------------------------------------------------------------
+
+
+def segmentation_audit(tmp_path, seg, fmt, glass_ids):
+    """One synthetic frame with the segmentation ``seg`` written as ``fmt``, imported."""
+    settings, _ = write_synthetic_audit(tmp_path / "d", n_frames=1, **SMALL)
+    path = tmp_path / f"seg_f00.{fmt}"
+    if fmt == "npy":
+        np.save(path, seg)
+    else:
+        write_exr(path, {"ViewLayer.Object Index.X": seg})
+    template = str(tmp_path / f"seg_{{frame}}.{fmt}")
+    return import_audit({**settings, "segmentation": template, "glass_ids": glass_ids}), path
+
+
+@pytest.mark.parametrize("fmt", ["npy", "exr"])  # integer NPY, EXR UINT channel
+def test_segment_ids_above_two_to_the_24_stay_apart(tmp_path, monkeypatch, fmt):
+    monkeypatch.chdir(tmp_path)
+    seg = np.zeros((SMALL["height"], SMALL["width"]), np.uint32)
+    seg[5:15, 10:30] = 16777217  # glass
+    seg[20:30, 10:30] = 16777216  # another segment: through float32 both are 16777216
+    assert np.float32(16777217) == np.float32(16777216)
+    segmentation_audit(tmp_path, seg, fmt, [16777217])
+    gt = open_dataset("results/audit/synthetic/ground_truth/f00.zarr")
+    glass = gt["glass"].sel(view="left").transpose("y", "x").values
+    np.testing.assert_array_equal(glass, seg == 16777217)
+    assert not flags_of(record_of(), "glass_ids")
+
+
+def test_float_segment_ids_beyond_float32_precision_are_refused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    seg = np.zeros((SMALL["height"], SMALL["width"]), np.float32)
+    seg[5:15, 10:30] = 16777218  # a float32 that 16777217 was rounded to
+    with pytest.raises(ImageError) as err:
+        segmentation_audit(tmp_path, seg, "npy", [16777217])
+    assert one_line(err) == (
+        f"{tmp_path / 'seg_f00.npy'}: segment ids up to 16777218 stored as float32, "
+        "which holds whole numbers exactly only up to 16777216, so two ids there can read as "
+        "one; write the segmentation as integers (EXR UINT, 16-bit PNG or an integer .npy)"
+    )
+    assert not Path("results/audit/synthetic/ground_truth").exists()

@@ -45,6 +45,7 @@ from ..io.images import (
     not_regular_error,
     read_field,
     read_image,
+    read_labels,
 )
 from ..io.renders import render_dataset
 from ..io.store import (
@@ -617,9 +618,8 @@ def _glass(settings: dict, frame: Frame, reads: _Reads):
             )
         path = gt["segmentation"][VIEWS[0]]
         channel = settings["channels"].get("segmentation")
-        seg = np.rint(reads(read_field, path, role="segmentation", channel=channel))
-        seg = seg.astype(np.int64)
-        glass = np.isin(seg, ids)
+        seg = reads(read_labels, path, channel=channel)  # int64: ids above 2**24 stay apart
+        glass = np.isin(seg, np.asarray(ids, dtype=np.int64))
         return glass, f"segmentation {path}", _unmatched_ids(seg, ids, path)
     return None, None, None
 

@@ -1,10 +1,12 @@
 """Image files other tools write and read: OpenEXR, PFM, PNG (8 and 16 bit), NPY and NPZ.
 
 The audit (:mod:`stereovar.audit`) reads renders, disparity, depth and masks made elsewhere
-through :func:`read_image` and :func:`read_field`; the export writes ours through
-:func:`write_image` and :func:`write_field`. Every reader returns float32 (images: ``(H, W,
-3)`` linear RGB; fields: ``(H, W)``) and raises :class:`~stereovar.errors.ImageError`, one
-line naming the file and the fix, for anything it cannot read.
+through :func:`read_image`, :func:`read_field` and :func:`read_labels`; the export writes
+ours through :func:`write_image` and :func:`write_field`. The readers return float32 (images:
+``(H, W, 3)`` linear RGB; fields: ``(H, W)``), or int64 segment ids (:func:`read_labels`:
+integer files keep their ids exactly, however large), and raise
+:class:`~stereovar.errors.ImageError`, one line naming the file and the fix, for anything
+they cannot read.
 
 Libraries: OpenEXR through the ASWF ``OpenEXR`` bindings (the reference implementation: half
 and float channels, multi-part files, header-only reads, multithreaded decoding; ``imageio``
@@ -478,6 +480,69 @@ def read_field(
     if a.ndim != 2:
         raise ImageError(f"{path}: a field has shape (H, W), got {a.shape}; store one per file")
     return np.asarray(a, dtype=np.float32)
+
+
+def read_labels(path, *, channel: str | None = None) -> np.ndarray:
+    """A segmentation map's segment ids as int64 ``(H, W)``, never through a float.
+
+    Integer files keep their ids exactly: PNG (8 or 16 bit, first channel), an EXR ``UINT``
+    channel, an integer NPY or NPZ. Float files (an EXR ``HALF`` or ``FLOAT`` channel such
+    as Blender's ``IndexOB``, PFM, a float NPY) hold whole numbers only up to
+    :math:`2^{p}` (:math:`p` the mantissa bits plus one: :math:`2^{24}` = 16777216 for
+    float32, 2048 for half): their values are rounded, and a file whose ids reach past that
+    is refused, since two ids there can be stored as one; NaN and Inf read as -1 (no
+    segment).
+
+    Parameters
+    ----------
+    path : path-like
+        ``.png``, ``.exr`` (its one channel, or the channel holding the segmentation,
+        :func:`~stereovar.io.channels.field_channel`), ``.pfm``, ``.npy`` or ``.npz``.
+    channel : str, optional, keyword-only
+        EXR only (``audit.channels.segmentation``): the channel's name.
+
+    Raises
+    ------
+    ImageError
+        The file cannot be read, is not one ``(H, W)`` map, holds no numbers, or holds float
+        ids beyond what its float type tells apart (one line naming the fix).
+    """
+    fmt = image_format(path)
+
+    def decode():
+        if fmt == "exr":
+            return _exr_field(_exr_channels(path), path, "segmentation", channel)
+        if fmt == "pfm":
+            return read_pfm(path)
+        if fmt == "png":
+            return _png(path)[0]
+        return _array(path, fmt)
+
+    a = _decoded(path, decode)
+    if a.ndim == 3:
+        a = a[..., 0]
+    if a.ndim != 2:
+        raise ImageError(
+            f"{path}: a segmentation map has shape (H, W), got {a.shape}; store one per file"
+        )
+    if a.dtype.kind in "biu":
+        return a.astype(np.int64)
+    if a.dtype.kind != "f":
+        raise ImageError(
+            f"{path}: segment ids of type {a.dtype}; store them as integers (16-bit PNG, EXR "
+            "UINT or an integer .npy)"
+        )
+    exact = 2 ** (np.finfo(a.dtype).nmant + 1)
+    with np.errstate(invalid="ignore"):
+        beyond = np.isfinite(a) & (np.abs(a) > exact)
+    if beyond.any():
+        raise ImageError(
+            f"{path}: segment ids up to {np.nanmax(np.abs(a[beyond])):.0f} stored as "
+            f"{a.dtype}, which holds whole numbers exactly only up to {exact}, so two "
+            "ids there can read as one; write the segmentation as integers (EXR UINT, 16-bit "
+            "PNG or an integer .npy)"
+        )
+    return np.rint(np.where(np.isfinite(a), a, -1.0)).astype(np.int64)  # NaN, Inf: no id
 
 
 def write_image(
