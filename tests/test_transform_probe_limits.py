@@ -9,15 +9,18 @@ import os
 import shlex
 import subprocess
 import sys
+import threading
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 import pytest
+import torch  # the probe extra, which the set-up installs
 
 from stereovar import cli
 from stereovar.config import validate_config
 from stereovar.controls.sensor import SensorFrames, SensorModel
-from stereovar.errors import ConfigError
+from stereovar.errors import ConfigError, StoreError
 from stereovar.transforms import TransformInputs, get_transform
 
 REPO = Path(__file__).resolve().parents[1]
@@ -208,3 +211,104 @@ def test_a_transform_refuses_a_non_finite_output_naming_itself_and_the_camera(
     message = _one_line(err)
     assert f"transform '{name}'" in message and shown in message
     assert "controls.sensor.gain within [0.001, 1e+07]" in message
+
+
+# --- the learned probe: a diverged network, a network path that is not a file ----------------
+
+
+def _tiny_frame():
+    """A 16x48 random texture and its copy shifted by 3 px (sign -1): a frame crops of 4x16
+    features fit."""
+    from stereovar.probe.training import TrainingFrame
+
+    d, height, width = 3, 16, 48
+    t = np.random.default_rng(0).normal(size=(height, width + d)).astype(np.float32)
+    disparity = np.full((height, width), float(d), np.float32)
+    return TrainingFrame(t[:, d:], t[:, :width], disparity, -1)  # right(x - 3) = left(x)
+
+
+TINY_TRAINING = {"steps": 4, "crops": 1, "crop_rows": 4, "crop_cols": 16}
+
+
+def test_training_refuses_a_diverging_loss_with_the_step_and_the_fix():
+    from stereovar.probe.training import TrainSettings, train_matcher
+
+    with pytest.raises(ConfigError, match="probe.training.learning_rate"):
+        validate_config({"probe": {"training": {"learning_rate": 1e30}}}, SCHEMA)
+    settings = TrainSettings(**TINY_TRAINING, learning_rate=1e30)
+    with pytest.raises(ConfigError) as err:
+        train_matcher([_tiny_frame()], settings, seed=0)
+    message = _one_line(err)
+    # step 1 scores the finite initial weights; Adam's first update moves every weight by
+    # about the learning rate, 1e30, so step 2's four layers overflow float32 to NaN
+    assert "at step 2 the loss is nan" in message
+    assert "lower probe.training.learning_rate (now 1e+30, default 0.001)" in message
+    # a learning rate that does not diverge trains as before
+    net, history = train_matcher([_tiny_frame()], TrainSettings(**TINY_TRAINING), seed=0)
+    assert np.isfinite(history["loss"]).all()
+
+
+def _nan_network():
+    """A probe network whose first bias is NaN, and its training settings."""
+    from stereovar.probe.network import MatchingNet
+    from stereovar.probe.training import TrainSettings
+
+    net = MatchingNet(features=4, layers=2)
+    with torch.no_grad():
+        net.body[0].bias[1] = float("nan")
+    return net, TrainSettings(**TINY_TRAINING)
+
+
+def test_a_network_with_nan_weights_is_neither_saved_nor_loaded(tmp_path):
+    from stereovar.probe.training import load_matcher, save_matcher
+
+    net, settings = _nan_network()
+    path = tmp_path / "net.pt"
+    with pytest.raises(ConfigError) as err:
+        save_matcher(path, net, settings=settings, seed=0, meta={"condition": "none"})
+    message = _one_line(err)
+    assert str(path) in message and "body.0.bias" in message and "learning_rate" in message
+    assert not any(tmp_path.iterdir())
+    # the same network written by torch.save itself, as save_matcher lays it out
+    payload = {
+        "state_dict": net.state_dict(),
+        "architecture": {"features": 4, "layers": 2, "kernel": 3},
+        "settings": asdict(settings),
+        "seed": 0,
+        "meta": {"condition": "none"},
+        "torch": str(torch.__version__),
+    }
+    torch.save(payload, path)
+    with pytest.raises(ValueError) as err:
+        load_matcher(path)
+    assert isinstance(err.value, StoreError)  # a job reports it in one line
+    message = _one_line(err)
+    assert str(path) in message and "body.0.bias" in message and "learning_rate" in message
+
+
+def test_load_matcher_refuses_a_fifo_and_a_folder_without_waiting(tmp_path):
+    from stereovar.probe.training import load_matcher
+
+    fifo = tmp_path / "net.pt"
+    os.mkfifo(fifo)
+    outcome = []
+
+    def load():
+        try:
+            load_matcher(fifo)
+        except Exception as err:  # noqa: BLE001 - the test inspects it
+            outcome.append(err)
+
+    worker = threading.Thread(target=load, daemon=True)
+    worker.start()
+    worker.join(5)
+    if worker.is_alive():  # it opened the FIFO and waits for a writer: give it end of file
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        worker.join(5)
+        pytest.fail("load_matcher waited on a FIFO")
+    (err,) = outcome
+    assert isinstance(err, ValueError) and isinstance(err, StoreError)
+    assert "\n" not in str(err) and str(fifo) in str(err) and "not a regular file" in str(err)
+    assert "FIFO" in str(err)
+    with pytest.raises(ValueError, match="not a regular file [(]a folder[)]"):
+        load_matcher(tmp_path)

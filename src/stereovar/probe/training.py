@@ -22,16 +22,20 @@ Importing this module imports PyTorch (the ``probe`` extra).
 
 from __future__ import annotations
 
+import stat
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 
+from ..errors import ConfigError, StoreError
 from .network import MatchingNet, border
 
 __all__ = [
     "OPTIMISERS",
+    "MatcherFileError",
     "TrainSettings",
     "TrainingFrame",
     "draw_batch",
@@ -42,6 +46,11 @@ __all__ = [
 ]
 
 OPTIMISERS = ("adam", "sgd")
+
+
+class MatcherFileError(StoreError, ValueError):
+    """A path that is not a network written by :func:`save_matcher` (missing, not a regular
+    file, not such a file, or with non-finite weights); a job reports it in one line."""
 
 
 @dataclass(frozen=True)
@@ -205,6 +214,12 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     net : MatchingNet
     history : dict
         ``loss`` per step, ``triplets`` per step, ``seconds`` of the loop and ``step_seconds``.
+
+    Raises
+    ------
+    ConfigError
+        The loss or the weights stop being finite (the training diverged): one line with the
+        step, the loss and the fix (a lower ``probe.training.learning_rate``).
     """
     settings = settings or TrainSettings()
     frames = list(frames)
@@ -237,9 +252,9 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     losses, counts = [], []
     start = time.perf_counter()
     net.train()
-    for _ in range(int(settings.steps)):
+    for step in range(1, int(settings.steps) + 1):
         left, right, c_pos, c_neg, keep = draw_batch(frames, settings, rng, reach=reach)
-        if not bool(keep.any()):
+        if not bool(keep.any()):  # no triplet in this batch: NaN marks the skipped step
             losses.append(float("nan"))
             counts.append(0)
             continue
@@ -247,11 +262,20 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
         s_pos = (fl * _gather(fr, c_pos)).sum(1)[keep]
         s_neg = (fl * _gather(fr, c_neg)).sum(1)[keep]
         loss = hinge_loss(s_pos, s_neg, settings.margin)
+        value = float(loss.detach())
+        if not np.isfinite(value):
+            raise ConfigError(
+                _diverged(f"probe training diverged: at step {step} the loss is {value}", settings)
+            )
         opt.zero_grad()
         loss.backward()
         opt.step()
-        losses.append(float(loss.detach()))
+        losses.append(value)
         counts.append(int(keep.sum()))
+    bad = nonfinite_weights(net)
+    if bad:
+        what = f"after step {int(settings.steps)} the weights {bad} are NaN or Inf"
+        raise ConfigError(_diverged(f"probe training diverged: {what}", settings))
     seconds = time.perf_counter() - start
     net.eval()
     history = {
@@ -268,11 +292,47 @@ def _seeded_net(seed: int) -> MatchingNet:
     return MatchingNet()
 
 
+def _diverged(what: str, settings: TrainSettings) -> str:
+    """``what`` went wrong in a diverged training, and the fix."""
+    return (
+        f"{what}; lower probe.training.learning_rate (now {settings.learning_rate:g}, default "
+        f"{TrainSettings.learning_rate:g}) and train again"
+    )
+
+
+def nonfinite_weights(net: torch.nn.Module) -> str | None:
+    """The first parameter or buffer of ``net`` with a NaN or Inf entry, by name, else None.
+
+    Examples
+    --------
+    >>> net = MatchingNet(features=2, layers=1)
+    >>> nonfinite_weights(net) is None
+    True
+    >>> _ = net.body[0].bias.data.fill_(float("nan"))
+    >>> nonfinite_weights(net)
+    'body.0.bias'
+    """
+    for name, value in net.state_dict().items():
+        if value.is_floating_point() and not bool(torch.isfinite(value).all()):
+            return name
+    return None
+
+
 def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, meta: dict):
     """Write a trained network with its training settings, seed and ``meta`` (condition,
-    training scenes, ...) to ``path`` atomically (a ``torch.save`` file)."""
+    training scenes, ...) to ``path`` atomically (a ``torch.save`` file).
+
+    Raises
+    ------
+    ConfigError
+        A weight is NaN or Inf (a diverged training); nothing is written.
+    """
     from ..io.store import write_file
 
+    bad = nonfinite_weights(net)
+    if bad:
+        what = f"{path}: not written, the network's weights {bad} are NaN or Inf (diverged)"
+        raise ConfigError(_diverged(what, settings))
     payload = {
         "state_dict": net.state_dict(),
         "architecture": {"features": net.features, "layers": net.layers, "kernel": net.kernel},
@@ -290,19 +350,52 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
 
     Raises
     ------
-    ValueError
-        ``path`` is not such a file (one line naming it).
+    MatcherFileError
+        A :class:`ValueError` and :class:`~stereovar.errors.StoreError`: ``path`` is missing,
+        not a regular file (a FIFO, which reading would wait on forever, a folder, a device),
+        not such a file, or holds NaN or Inf weights (one line naming it and the fix).
     """
+    try:
+        mode = Path(path).stat().st_mode
+    except OSError as err:
+        raise MatcherFileError(
+            f"{path}: cannot read the probe network ({err.strerror or err}); rerun the probe "
+            "to train it"
+        ) from None
+    if not stat.S_ISREG(mode):
+        raise MatcherFileError(
+            f"{path}: not a regular file (a {_file_kind(mode)}), so not a probe network; "
+            "remove it and rerun the probe to train the network"
+        )
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         net = MatchingNet(**payload["architecture"])
         net.load_state_dict(payload["state_dict"])
     except Exception as err:  # torch.load raises many types (EOFError, UnpicklingError, ...)
         detail = " ".join(str(err).split())[:160]  # torch's messages span several lines
-        raise ValueError(
+        raise MatcherFileError(
             f"{path}: not a stereovar probe network ({type(err).__name__}: {detail}); delete it "
             "and rerun the probe to train it again"
         ) from None
+    bad = nonfinite_weights(net)
+    if bad:
+        raise MatcherFileError(
+            f"{path}: the probe network's weights {bad} are NaN or Inf (its training "
+            "diverged); delete it and rerun the probe with a lower "
+            "probe.training.learning_rate"
+        )
     net.eval()
     record = {k: v for k, v in payload.items() if k != "state_dict"}
     return net, record
+
+
+def _file_kind(mode: int) -> str:
+    """What a non-regular file is, in words."""
+    kinds = [
+        (stat.S_ISDIR, "folder"),
+        (stat.S_ISFIFO, "FIFO"),
+        (stat.S_ISSOCK, "socket"),
+        (stat.S_ISCHR, "character device"),
+        (stat.S_ISBLK, "block device"),
+    ]
+    return next((word for test, word in kinds if test(mode)), "special file")
