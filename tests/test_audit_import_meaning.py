@@ -9,13 +9,16 @@ Each frame is a tiny synthetic one (:func:`stereovar.audit.synthetic.write_synth
 64 x 40 px, 4 or 8 seeds) in a fresh working directory.
 """
 
+import html
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 import OpenEXR
 import pytest
+from markdown_it import MarkdownIt
 
 from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.sign import sign_check
@@ -277,3 +280,32 @@ def test_float_segment_ids_beyond_float32_precision_are_refused(tmp_path, monkey
         "one; write the segmentation as integers (EXR UINT, 16-bit PNG or an integer .npy)"
     )
     assert not Path("results/audit/synthetic/ground_truth").exists()
+
+
+# -- D: user text on the Markdown verdict page ------------------------------------------------
+
+
+def test_user_text_is_escaped_on_the_markdown_verdict_page(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    root = tmp_path / "d<img src=x onerror=alert(1)>"
+    settings, _ = write_synthetic_audit(root, n_frames=1, **SMALL)
+    seg = np.zeros((SMALL["height"], SMALL["width"]), np.uint8)
+    seg[5:15, 10:30] = 3
+    np.save(root / "seg_f00.npy", seg)
+    import_audit({**settings, "segmentation": str(root / "seg_{frame}.npy"), "glass_ids": [7]})
+    record = record_of()
+    (flag,) = flags_of(record, "glass_ids")  # names the segmentation's path
+    assert "<img src=x onerror=alert(1)>" in flag["text"]
+    base = Path("results/audit/synthetic")
+    outputs = {"md": base / "verdict.md", "html": base / "verdict.html",
+               "summary": base / "summary.json"}
+    found = "1 frame [from](javascript:alert(2)) <b>here</b>"
+    verdict_job([], [], [], outputs, name="synthetic", found=found,
+                imports=[import_record("synthetic", "f00")])
+    md = outputs["md"].read_text()
+    rendered = MarkdownIt("commonmark", {"html": True}).enable("table").render(md)
+    assert "<img" not in rendered and "<b>" not in rendered and "<a " not in rendered
+    # shown as text, once rendered
+    shown = html.unescape(re.sub(r"<[^>]+>", "", rendered))
+    assert flag["text"] in shown and f"{found}." in shown
+    assert "<img" not in outputs["html"].read_text()  # the HTML page escapes it too

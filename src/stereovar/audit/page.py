@@ -15,14 +15,19 @@
 
 :func:`to_markdown_page` and :func:`to_html_page` write the same sections; the HTML page is
 self-contained (its own stylesheet, images by relative path), built from the blocks of
-:mod:`stereovar.pages.html`.
+:mod:`stereovar.pages.html`. Every text the sections carry (file paths, audit and frame
+names, warnings) is escaped on both pages: HTML-escaped on the HTML page, and on the
+Markdown page made inert (:func:`markdown_text`), so a folder named
+``d<img src=x onerror=alert(1)>`` is shown, not run.
 """
 
 from __future__ import annotations
 
 import html
 import math
+import re
 from pathlib import Path
+from urllib.parse import quote
 
 from ..io.tables import to_markdown
 from ..pages.html import document, figure
@@ -69,6 +74,38 @@ p, li { max-width: 60em; }
 .flags td { white-space: normal; vertical-align: top; }
 .flags td.col2 { min-width: 30em; max-width: 60em; }
 """
+
+
+_MARKDOWN_ACTIVE = re.compile(r"[&<>]|\](?=\()|[\r\n]+")
+_MARKDOWN_INERT = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "]": "]\\"}
+
+
+def markdown_text(text) -> str:
+    r"""``text`` made inert in a Markdown page, reading as it did once rendered.
+
+    ``&``, ``<`` and ``>`` become HTML entities (no raw HTML, no autolink), a ``]`` before
+    ``(`` is escaped (no inline link or image) and line breaks become spaces (no new
+    block); anything else is left as it is, so a path, ``x_R = x_L - d`` or an interval
+    reads the same in the file.
+
+    Examples
+    --------
+    >>> markdown_text("d<img src=x onerror=alert(1)>/seg.png")
+    'd&lt;img src=x onerror=alert(1)&gt;/seg.png'
+    >>> print(markdown_text("[click](https://example.com) [0.1, 0.2]"))
+    [click]\(https://example.com) [0.1, 0.2]
+    """
+    return _MARKDOWN_ACTIVE.sub(lambda m: _MARKDOWN_INERT.get(m.group(), " "), str(text))
+
+
+def _markdown_rows(rows: list[dict]) -> list[dict]:
+    """Table rows with every text cell through :func:`markdown_text`."""
+    return [{k: markdown_text(v) if isinstance(v, str) else v for k, v in r.items()} for r in rows]
+
+
+def _markdown_image(path: str) -> str:
+    """A Markdown image of a relative path: its alt text inert, its address URL-quoted."""
+    return f"![{markdown_text(Path(path).stem)}]({quote(path, safe='/')})"
 
 
 def _sign_fact(sign: dict) -> str:
@@ -174,40 +211,47 @@ def page_sections(
 
 
 def to_markdown_page(s: dict) -> str:
-    """The page as Markdown."""
+    """The page as Markdown; every text of the sections through :func:`markdown_text`."""
     d = s["decision"]
-    lines = [f"# {s['title']}", ""]
-    lines += [f"> **Warning.** {b}" for b in s["banners"]] + ([""] if s["banners"] else [])
+    m = markdown_text
+    lines = [f"# {m(s['title'])}", ""]
+    lines += [f"> **Warning.** {m(b)}" for b in s["banners"]] + ([""] if s["banners"] else [])
     lines += [
-        f"**{d['light'].upper()}: {d['headline']}** " + " ".join(d["sentences"]),
+        f"**{m(d['light'].upper())}: {m(d['headline'])}** "
+        + " ".join(m(x) for x in d["sentences"]),
         "",
         "## What was imported",
         "",
-        f"{s['found']}.",
+        f"{m(s['found'])}.",
         "",
-        to_markdown(s["facts"], FACT_COLUMNS),
+        to_markdown(_markdown_rows(s["facts"]), FACT_COLUMNS),
         "",
     ]
     if s["flags"]:
-        lines += ["### Warnings and flags", "", to_markdown(s["flags"], FLAG_COLUMNS), ""]
+        lines += [
+            "### Warnings and flags",
+            "",
+            to_markdown(_markdown_rows(s["flags"]), FLAG_COLUMNS),
+            "",
+        ]
     else:
         lines += ["No warnings or flags.", ""]
-    lines += [f"![{Path(t).stem}]({t})" for t in s["thumbnails"]] + [""]
+    lines += [_markdown_image(t) for t in s["thumbnails"]] + [""]
     lines += [
         "## Details",
         "",
-        f"**Verdict.** {s['verdict']}",
+        f"**Verdict.** {m(s['verdict'])}",
         "",
-        f"**Seeding.** {s['seeding']}",
+        f"**Seeding.** {m(s['seeding'])}",
         "",
-        to_markdown(s["table"], VERDICT_COLUMNS, caption=s["caption"]),
+        to_markdown(_markdown_rows(s["table"]), VERDICT_COLUMNS, caption=m(s["caption"])),
         "",
     ]
     if s["mitigations"]:
-        lines += ["## Mitigations", "", *[f"- {f}" for f in s["mitigations"]], ""]
+        lines += ["## Mitigations", "", *[f"- {m(f)}" for f in s["mitigations"]], ""]
     if s.get("probe"):
-        lines += ["## Learned probe", "", s["probe"], ""]
-    lines += [f"![{Path(f).stem}]({f})" for f in s["figures"]] + [""]
+        lines += ["## Learned probe", "", m(s["probe"]), ""]
+    lines += [_markdown_image(f) for f in s["figures"]] + [""]
     return "\n".join(lines)
 
 
