@@ -21,9 +21,10 @@ import pytest
 from markdown_it import MarkdownIt
 
 from stereovar.audit.importer import import_audit, import_record
+from stereovar.audit.run import discover_audit
 from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import write_synthetic_audit
-from stereovar.errors import ImageError
+from stereovar.errors import AuditError, ImageError
 from stereovar.io.images import read_field, read_image, write_field, write_image
 from stereovar.io.store import open_dataset
 from stereovar.jobs.audit import verdict_job
@@ -309,3 +310,67 @@ def test_user_text_is_escaped_on_the_markdown_verdict_page(tmp_path, monkeypatch
     shown = html.unescape(re.sub(r"<[^>]+>", "", rendered))
     assert flag["text"] in shown and f"{found}." in shown
     assert "<img" not in outputs["html"].read_text()  # the HTML page escapes it too
+
+
+# -- E: Snakemake path variables in audit paths ------------------------------------------------
+
+
+def snakemake_changes(path: str) -> bool:
+    """Whether Snakemake's default path variables change ``path`` or stop on it."""
+    from snakemake.exceptions import UndefinedPathvarException
+    from snakemake.pathvars import Pathvars
+
+    try:
+        return Pathvars.with_defaults().apply(path) != path
+    except UndefinedPathvarException:
+        return True
+
+
+PLAIN_AUDIT = {
+    "name": "a",
+    "renders": "data/{frame}/{view}/seed_{seed}.exr",
+    "views": {"left": "L", "right": "R"},
+    "disparity": "data/{frame}.pfm",
+}
+
+
+@pytest.mark.parametrize(
+    "key, value",
+    [
+        ("root", "/data/<b>"),
+        ("renders", "data/<b>/{frame}/{view}/seed_{seed}.exr"),
+        ("disparity", "data/<results>/{frame}.pfm"),
+        ("depth", "data/<logs>/{frame}.exr"),
+        ("segmentation", "seg/<b>{frame}.png"),
+        ("glass_mask", "masks/<mask_1>/{frame}.png"),
+        ("views.right", "R<b>"),
+    ],
+)
+def test_snakemake_path_variables_in_audit_paths_are_refused_in_one_line(key, value):
+    assert snakemake_changes(value)
+    settings = {**PLAIN_AUDIT, "views": dict(PLAIN_AUDIT["views"])}
+    if key.startswith("views."):
+        settings["views"]["right"] = value
+    else:
+        settings[key] = value
+    word = re.search(r"<[^>]*>", value).group()
+    with pytest.raises(AuditError) as err:
+        discover_audit(settings)
+    assert one_line(err) == (
+        f"audit.{key} {value!r} holds {word}, which Snakemake reads as a path variable (an "
+        "unknown one stops the workflow, a known one such as <results> is replaced by its "
+        "folder); rename the folder or file so that no <word> is in the path, and set "
+        f"audit.{key} to the new path"
+    )
+
+
+def test_an_audit_in_a_folder_named_like_a_path_variable_is_refused(tmp_path):
+    settings, _ = write_synthetic_audit(tmp_path / "<results>", n_frames=1, **SMALL)
+    assert snakemake_changes(settings["renders"])  # Snakemake would read results/...
+    with pytest.raises(AuditError, match=r"^audit.renders .* holds <results>, which Snakemake"):
+        discover_audit(settings)
+    # what Snakemake leaves as it is is read
+    for name in ("<img src=x>", "<B>", "a<1>"):
+        assert not snakemake_changes(name)
+        settings, _ = write_synthetic_audit(tmp_path / name, n_frames=1, **SMALL)
+        assert discover_audit(settings).summary() == "1 frame × 2 views × 4 seeds"

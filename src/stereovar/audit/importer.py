@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import stat
 import threading
 import time
@@ -964,8 +965,58 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
     }
 
 
+PATH_KEYS = ("root", "renders", "disparity", "depth", "glass_mask", "segmentation")
+"""``audit:`` settings that are paths (or path templates) of the audit's files."""
+
+PATH_VARIABLE = re.compile(r"<[a-z][a-z0-9_]*>")
+"""What Snakemake (9.x) reads as a path variable in an input or output path: ``<word>``,
+replaced by its folder (``<results>``, ``<resources>``, ...) or an error when unknown."""
+
+
+def check_paths(settings: dict) -> None:
+    """Refuse an audit path that holds a Snakemake path variable (:data:`PATH_VARIABLE`).
+
+    The audit's files are the inputs of its ``audit_import`` jobs: Snakemake stops on an
+    unknown ``<b>`` in them (``UndefinedPathvarException``) and silently puts its own folder
+    in place of a known one (``<results>``).
+
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` config section: :data:`PATH_KEYS` and the ``views`` values, which
+        become parts of the render and ground-truth paths.
+
+    Raises
+    ------
+    AuditError
+        One line naming the key, the path variable and the fix.
+
+    Examples
+    --------
+    >>> check_paths({"renders": "data/{frame}/{view}/seed_{seed}.exr"})
+    >>> check_paths({"renders": "data/<results>/{view}/{seed}.exr"})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.AuditError: audit.renders 'data/<results>/{view}/{seed}.exr' holds ...
+    """
+    views = settings.get("views") or {}
+    given = [(key, settings.get(key)) for key in PATH_KEYS]
+    given += [(f"views.{view}", views.get(view)) for view in VIEWS]
+    for key, value in given:
+        match = PATH_VARIABLE.search(str(value)) if value is not None else None
+        if match:
+            raise AuditError(
+                f"audit.{key} {value!r} holds {match.group()}, which Snakemake reads as a "
+                "path variable (an unknown one stops the workflow, a known one such as "
+                "<results> is replaced by its folder); rename the folder or file so that "
+                f"no <word> is in the path, and set audit.{key} to the new path"
+            )
+
+
 def check_settings(settings: dict) -> None:
-    """The ``audit:`` settings that need no file: the name and the convention."""
+    """The ``audit:`` settings that need no file: the name, the convention and the paths
+    (:func:`check_paths`)."""
+    check_paths(settings)
     name = str(settings.get("name") or "")
     if not NAME.fullmatch(name):
         raise AuditError(
