@@ -700,14 +700,11 @@ def _half_precision(stack: np.ndarray) -> bool:
 
 def _half_quantised_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     r"""Fraction of ``valid`` pixels whose spread across the N renders is below
-    :data:`HALF_STEPS` half-float steps in every channel.
-
-    .. math:: s_c(x) < k\,\Delta_{16}(\bar I_c(x))
-
-    with :math:`s_c` the sample standard deviation over the seeds of channel :math:`c`,
-    :math:`\bar I_c` its mean, :math:`\Delta_{16}` the spacing of half floats there and
-    :math:`k` = :data:`HALF_STEPS`.
-    """
+    :data:`HALF_STEPS` half-float steps in every channel:
+    :math:`s_c(x) < k\,\Delta_{16}(\bar I_c(x))` for every channel :math:`c`, with
+    :math:`s_c` the sample standard deviation over the seeds, :math:`\bar I_c` the seed
+    mean, :math:`\Delta_{16}` the spacing of half floats there and :math:`k` =
+    :data:`HALF_STEPS`."""
     mean = stack.mean(axis=0, dtype=np.float64)
     squares = np.zeros_like(mean)
     for image in stack:  # one render at a time: no temporary the size of the stack
