@@ -102,9 +102,10 @@ def dense_features(net: MatchingNet, image) -> torch.Tensor:
     Returns
     -------
     torch.Tensor, shape (F, H - 2b, W - 2b)
-        With :math:`b` = :func:`border`.
+        With :math:`b` = :func:`border`; on the network's device.
     """
     x = torch.as_tensor(np.ascontiguousarray(image, dtype=np.float32))[None, None]
+    x = x.to(next(net.parameters()).device)
     return net.eval()(x)[0]
 
 
@@ -129,6 +130,7 @@ def score_volume(feat_left, feat_right, *, sign: int, max_disparity: int) -> tor
     Returns
     -------
     torch.Tensor, shape (D + 1, h, w)
+        On the features' device.
 
     Examples
     --------
@@ -146,7 +148,7 @@ def score_volume(feat_left, feat_right, *, sign: int, max_disparity: int) -> tor
             f"{tuple(feat_right.shape)}"
         )
     _, h, w = feat_left.shape
-    out = torch.full((int(max_disparity) + 1, h, w), -torch.inf)
+    out = torch.full((int(max_disparity) + 1, h, w), -torch.inf, device=feat_left.device)
     for d in range(int(max_disparity) + 1):
         if d >= w:
             break
@@ -215,5 +217,5 @@ def wta_from_features(
     b = int(border_px)
     volume = score_volume(feat_left, feat_right, sign=sign, max_disparity=max_disparity)
     out = np.full((h + 2 * b, w + 2 * b), np.nan)
-    out[b : b + h, b : b + w] = volume.argmax(0).numpy().astype(np.float64)
+    out[b : b + h, b : b + w] = volume.argmax(0).cpu().numpy().astype(np.float64)
     return out

@@ -159,7 +159,7 @@ def _columns(d, starts, signs, offset, width: int):
 
 
 def _gather(features: torch.Tensor, cols: np.ndarray) -> torch.Tensor:
-    idx = torch.from_numpy(cols)[:, None].expand(-1, features.shape[1], -1, -1)
+    idx = torch.from_numpy(cols).to(features.device)[:, None].expand(-1, features.shape[1], -1, -1)
     return torch.gather(features, 3, idx)
 
 
@@ -197,7 +197,7 @@ def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, rea
     return left, right, c_pos, c_neg, torch.from_numpy(ok_pos & ok_neg)
 
 
-def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
+def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int, device="cpu"):
     """Train one :class:`~stereovar.probe.network.MatchingNet` on ``frames``.
 
     Parameters
@@ -208,10 +208,14 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     seed : int, keyword-only
         Seeds Torch's initialisation and the draws of crops and offsets; the same seed, data
         and thread count give the same weights on one machine.
+    device : str or torch.device, keyword-only, default "cpu"
+        Where the network trains (``"cuda"`` for a GPU). The weights are initialised on the
+        CPU and the crops are drawn there, so only the arithmetic moves.
 
     Returns
     -------
     net : MatchingNet
+        On the CPU, whatever ``device`` trained it.
     history : dict
         ``loss`` per step, ``triplets`` per step, ``seconds`` of the loop and ``step_seconds``.
 
@@ -229,7 +233,8 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     heights = {f.left.shape[0] for f in frames}
     if len(widths) != 1:
         raise ValueError(f"training frames differ in width: {sorted(widths)}")
-    net = _seeded_net(seed)
+    device = torch.device(device)
+    net = _seeded_net(seed).to(device)
     b = border(net.layers, net.kernel)
     reach = _reach(frames, settings)
     if (
@@ -254,6 +259,7 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
     net.train()
     for step in range(1, int(settings.steps) + 1):
         left, right, c_pos, c_neg, keep = draw_batch(frames, settings, rng, reach=reach)
+        left, right, keep = left.to(device), right.to(device), keep.to(device)
         if not bool(keep.any()):  # no triplet in this batch: NaN marks the skipped step
             losses.append(float("nan"))
             counts.append(0)
@@ -277,7 +283,7 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int):
         what = f"after step {int(settings.steps)} the weights {bad} are NaN or Inf"
         raise ConfigError(_diverged(f"probe training diverged: {what}", settings))
     seconds = time.perf_counter() - start
-    net.eval()
+    net.to("cpu").eval()
     history = {
         "loss": losses,
         "triplets": counts,
