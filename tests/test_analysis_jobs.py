@@ -140,7 +140,7 @@ def test_damaged_store_is_a_one_line_error_naming_it(tmp_path):
     chunk.unlink()
     with pytest.raises(StoreError) as err:
         variance_job(paths["left"], paths["right"], tmp_path / "var.zarr")
-    assert str(broken) in str(err.value) and f"--force {broken}" in str(err.value)
+    assert str(broken) in str(err.value) and f" {broken} -- --force`" in str(err.value)
     assert "\n" not in str(err.value)
     assert not (tmp_path / "var.zarr").exists()
     code = (

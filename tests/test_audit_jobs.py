@@ -178,6 +178,11 @@ def test_a_truncated_file_fails_its_frames_import_in_one_line(audited, tree_snap
         record = str(Path(FRAME_OUTPUTS["f01"][3]).relative_to("results"))
         assert after[record][1] == before[record][1]  # put back by copying: bytes, not mtime
         after[record] = before[record]
+        # the verdict made from f01's old stores is set aside before the import, bytes kept
+        assert after.pop("audit/synthetic/previous")[1] is None  # the folder
+        for name in ("verdict.md", "verdict.html", "summary.json"):
+            old = before.pop(f"audit/synthetic/{name}")
+            assert after.pop(f"audit/synthetic/previous/{name}") == old
         assert kept(after) == kept(before)
         assert not any(k in after for k in gone)
     finally:

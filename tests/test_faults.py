@@ -176,21 +176,17 @@ def test_damaged_store_names_the_one_job_that_rebuilds_it(done, store, consumer,
     assert proc.returncode != 0
     command = _rebuild(proc)
     args = shlex.split(command)
-    assert args[:2] == ["snakemake", "-j1"] and args[-2:] == ["--force", store]
+    assert args[:3] == ["stereovar", "run", "-j1"] and args[-3:] == [store, "--", "--force"]
     assert "--configfile" in args and str(done / "tiny.yaml") in args
     # the printed command, as printed, plans exactly the job that writes the store
-    run = subprocess.run(
-        [sys.executable, "-m", *args[:-2], "-n", *args[-2:]],
-        cwd=done,
-        capture_output=True,
-        text=True,
-    )
+    args = [sys.executable, "-m", "stereovar.cli", *args[1:]]
+    run = subprocess.run([*args, "-n"], cwd=done, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     counts = {}
     for m in re.finditer(r"^(\w+)\s+(\d+)$", run.stdout.split("Job stats:")[1], flags=re.M):
         counts[m.group(1)] = int(m.group(2))
     assert counts == {rule: 1, "total": 1}
-    subprocess.run([sys.executable, "-m", *args], cwd=done, capture_output=True, check=True)
+    subprocess.run(args, cwd=done, capture_output=True, check=True)
     if rule == "render":
         assert render_counts(done, "scene_001") == (0, 4)
     # the failed consumer lost its output (Snakemake removes it before the job): rebuild it

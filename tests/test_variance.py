@@ -215,7 +215,7 @@ def test_variance_dataset_needs_equal_seed_counts(tmp_path):
 def assert_one_line_naming(exc_info, path):
     message = str(exc_info.value)
     assert "\n" not in message
-    assert str(path) in message and " it with `snakemake -j1" in message
+    assert str(path) in message and " it with `stereovar run -j1" in message
 
 
 def test_missing_chunk_is_a_store_error(tmp_path):

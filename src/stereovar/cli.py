@@ -182,8 +182,14 @@ _FAILED = re.compile(r"Error in rule (\S+):")
 _FAILED_LOG = re.compile(r"\s+log: (.*?)(?: \(check log file\(s\) for error details\))?")
 _JOB_LINE = re.compile(rf"{_STAMP} ([A-Z]+) (.*)")
 _EXCEPTION = re.compile(r"(\w*(?:Error|Exception))(?: in (?:rule \S+ in )?(?:file|line) .*)?:")
+#: The last line of a Python traceback: ``OSError: [Errno 28] No space left on device``.
+_RAISED = re.compile(r"(\w*(?:Error|Exception)): (.+)")
 #: Exceptions Snakemake raises to say that a job failed (the job's own error is in its log).
 _JOB_FAILED = ("RuleException", "CalledProcessError")
+#: The workflow's own one-line errors (``stereovar.errors.exit_with_one_line``), and the
+#: lines it prints with the same prefix that are not errors.
+_WORKFLOW_LINE = "stereovar: "
+_WORKFLOW_NOTES = ("warning:", "removed the lock")
 
 
 def _job_error(line: str) -> str | None:
@@ -220,10 +226,22 @@ class _AuditMonitor:
     ``mitigations``, from the moment it starts (until then, as its rule's stage).
     """
 
-    def __init__(self, log, *, import_label: str, source: str = "", verbose: bool = False):
+    def __init__(
+        self,
+        log,
+        *,
+        import_label: str,
+        source: str = "",
+        verbose: bool = False,
+        command: str = "",
+    ):
         from collections import Counter, deque
 
         self.log, self.import_label, self.verbose = log, import_label, verbose
+        self.command = command  # the stereovar command line, for the run's record
+        self.root = None  # the folder Snakemake runs in
+        self.configfiles: list = []  # its --configfile options
+        self.log_error = None  # why the log stopped being written, if it did
         self.planned: dict = {}  # stage: jobs
         self.finished: Counter = Counter()  # stage: jobs
         self.rule_of: dict = {}  # job id: rule
@@ -244,11 +262,20 @@ class _AuditMonitor:
     # -- running ------------------------------------------------------------------------------
 
     def run(self, cmd: list, root) -> int:
+        """Run ``cmd`` in ``root``, following its output (:meth:`feed`); the Snakemake
+        process is recorded in ``root/.snakemake`` while it runs
+        (:func:`stereovar.preflight.record_run`), so that another run it locks out can
+        say which process holds the lock. Returns its exit status."""
         import os
         import subprocess
+        from pathlib import Path
 
+        from .preflight import forget_run, record_run
+
+        self.root = Path(root)
+        self.configfiles = [cmd[k + 1] for k, arg in enumerate(cmd[:-1]) if arg == "--configfile"]
         header = "stereovar: running " + " ".join(cmd[1:]) + "\n"
-        self.log.write(header)
+        self._log(header)
         if self.verbose:
             sys.stderr.write(header)
         env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONIOENCODING": "utf-8"}
@@ -264,19 +291,36 @@ class _AuditMonitor:
             bufsize=1,
         )
         try:
+            record = record_run(self.root / ".snakemake", proc.pid, self.command)
+        except OSError:  # the record only names the process: the run goes on without it
+            record = None
+        try:
             for line in proc.stdout:
-                self.log.write(line)
-                self.log.flush()
+                self._log(line)
                 if self.verbose:
                     sys.stderr.write(line)
                     sys.stderr.flush()
                 self.feed(line)
         except KeyboardInterrupt:  # Snakemake got it too: let it stop, keep what it says
-            self.log.writelines(proc.stdout)
+            for line in proc.stdout:
+                self._log(line)
         finally:
             proc.stdout.close()
             rc = proc.wait()
+            if record is not None:
+                forget_run(record)
         return rc
+
+    def _log(self, text: str) -> None:
+        """Write to the log file; once that fails (a full disk), the run goes on and
+        :attr:`log_error` says why the log ends early."""
+        if self.log_error is not None:
+            return
+        try:
+            self.log.write(text)
+            self.log.flush()
+        except OSError as err:
+            self.log_error = err.strerror or str(err)
 
     def feed(self, line: str) -> None:
         """Follow one line of Snakemake's output."""
@@ -418,8 +462,10 @@ class _AuditMonitor:
 
     def errors(self, rc: int) -> list:
         """One line per distinct error of a failed run: each failed job's error line (from
-        its log file, else from the output), else Snakemake's own (an exception it raised
-        before or between jobs), else its exit status."""
+        its log file, else from the output); else, for a run stopped before its jobs, who
+        holds the lock that stopped it (:func:`stereovar.preflight.lock_message`), the
+        workflow's own ``stereovar:`` line, or the exception Snakemake stopped with (a full
+        disk said as such); else its exit status."""
         messages = []
         for job in self.failed:
             message = next(filter(None, map(_log_error, job["logs"])), None)
@@ -427,8 +473,32 @@ class _AuditMonitor:
         if self.failed and not any(map(_log_error, self.job_logs())):
             messages = self.job_errors or messages
         if not messages:
-            messages = [self._exception() or f"snakemake stopped with exit status {rc}"]
+            messages = [
+                self._locked()
+                or self._workflow_error()
+                or self._exception()
+                or f"snakemake stopped with exit status {rc}"
+            ]
         return list(dict.fromkeys(messages))
+
+    def _locked(self) -> str | None:
+        """Who holds the lock, when Snakemake stopped because the folder is locked."""
+        if self.root is None or not any(line.startswith("LockException") for line in self.tail):
+            return None
+        from .preflight import lock_message
+
+        configs = "".join(f" --configfile {f}" for f in self.configfiles)
+        return lock_message(self.root / ".snakemake", f"{PROG} run{configs} -- --unlock")
+
+    def _workflow_error(self) -> str | None:
+        """The workflow's last ``stereovar: <message>`` line (it stopped with it), without
+        the prefix; lines with that prefix that are not errors are passed over."""
+        for line in reversed(self.tail):
+            if line.startswith(_WORKFLOW_LINE):
+                message = line[len(_WORKFLOW_LINE) :].strip()
+                if message and not message.startswith(_WORKFLOW_NOTES):
+                    return message
+        return None
 
     def _exception(self) -> str | None:
         lines = list(self.tail)
@@ -440,7 +510,20 @@ class _AuditMonitor:
             if rest and "did not complete successfully" not in rest[0]:
                 ours = isinstance(getattr(error_classes, match.group(1), None), type)
                 return rest[0] if ours else f"{match.group(1)}: {rest[0]}"
-        return None
+        raised = [m for m in map(_RAISED.fullmatch, map(str.strip, lines)) if m]
+        if not raised:
+            return None
+        kind, message = raised[-1].groups()
+        if "[Errno 28]" in message:  # ENOSPC: Snakemake's lock or records, or a job's output
+            import shutil
+
+            where = self.root or "."
+            free = shutil.disk_usage(where).free / 10**6
+            return (
+                f"the disk of {where} is full ({free:.1f} MB free; Snakemake stopped with "
+                f"{kind}: {message}); free space on it, then run the same command again"
+            )
+        return f"{kind}: {message}"
 
 
 def _audit_log(root, name: str):
@@ -449,14 +532,20 @@ def _audit_log(root, name: str):
     import time
 
     folder = root / "logs" / "audit" / name
-    folder.mkdir(parents=True, exist_ok=True)
     stem = f"stereovar-audit-{time.strftime('%Y%m%d-%H%M%S')}"
-    for k in range(1, 1000):
-        path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
-        try:
-            return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (closed by caller)
-        except FileExistsError:
-            continue
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for k in range(1, 1000):
+            path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
+            try:
+                return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (caller closes)
+            except FileExistsError:
+                continue
+    except OSError as err:
+        raise StereovarError(
+            f"{folder}: cannot create the run's log file there ({err.strerror or err}); "
+            "make room or make it writable, then run the same command again"
+        ) from None
     raise StereovarError(f"{folder}: cannot create a new log file there")
 
 
@@ -492,12 +581,25 @@ def _workflow_config(root, files) -> dict:
     return load_config([first, *files], workflow / "workflow" / "schemas" / "config.schema.yaml")
 
 
+def _audit_preflight(root, config: dict, discovery) -> None:
+    """The workflow's checks of an audit, made before Snakemake starts and before anything
+    is written: the folders the run writes can be written, the disk has room for
+    Snakemake's lock (:mod:`stereovar.preflight`), and the run config's mitigations and
+    memory (:func:`stereovar.audit.run.check_audit_run`); one line for the first problem."""
+    from .audit.run import audit_run_config, check_audit_run
+    from .preflight import check_free_space, check_writable
+
+    check_writable([root / d for d in ("results", "logs", "benchmarks", ".snakemake")])
+    check_free_space(root)
+    check_audit_run({**config, **audit_run_config(config, discovery)}, discovery)
+
+
 def _cmd_audit(args: argparse.Namespace) -> int:
     import json
     import os
     from pathlib import Path
 
-    from .audit.run import audit_paths, discover_audit
+    from .audit.run import PREVIOUS, audit_paths, discover_audit
     from .layout import audit_source
     from .schema import load_yaml
 
@@ -515,9 +617,11 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     # The whole config, as the workflow will see it, before any file is read; then the
     # files, found (not read) as the workflow finds them; the import is the workflow's (one
     # audit_import job per frame).
-    settings = _workflow_config(root, [config])["audit"]
+    workflow_config = _workflow_config(root, [config])
+    settings = workflow_config["audit"]
     name = settings["name"]
     discovery = discover_audit(settings)
+    _audit_preflight(root, workflow_config, discovery)
     command = ["-j", str(args.cores), "all", "--configfile", str(config.resolve())]
     if args.import_only:
         command += ["--until", "audit_import"]
@@ -528,13 +632,17 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         import_label=f"import: {discovery.summary()}",
         source=audit_source(name),
         verbose=args.verbose,
+        command=f"{PROG} audit {args.config}",
     )
     token = _MONITOR.set(monitor)
     try:
         rc = _snakemake(command, root)
     finally:
         _MONITOR.reset(token)
-        log.close()
+        try:
+            log.close()
+        except OSError as err:  # a full disk: the end of the log is lost, not the run
+            monitor.log_error = monitor.log_error or err.strerror or str(err)
     monitor.finish(rc)
     paths = audit_paths(name)
     summary = root / paths["summary"]
@@ -543,9 +651,17 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
         if not any(warning in line for line in lines):
             print(f"warning: {warning}", file=sys.stderr)
+    if monitor.log_error:
+        print(f"warning: the log ends early: {monitor.log_error}", file=sys.stderr)
     if rc != 0:
         for message in monitor.errors(rc):
             print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+        previous = root / Path(paths["verdict_html"]).parent / PREVIOUS
+        if not (root / paths["verdict_html"]).exists() and (previous / "verdict.html").exists():
+            print(
+                f"the verdict before this run, set aside as out of date: {previous}/",
+                file=sys.stderr,
+            )
         jobs = monitor.job_logs()
         print(
             f"log: {shown_log}" + (f" (the failed job's: {', '.join(jobs)})" if jobs else ""),

@@ -154,14 +154,21 @@ def audit_mitigation_runs(config: dict) -> list[MitigationRun]:
     Raises
     ------
     ConfigError
-        A mitigation renders (``shared_seed``, ``spp_xK``): an audit's renders are given.
+        A name is no mitigation, or a mitigation renders (``shared_seed``, ``spp_xK``): an
+        audit's renders are given. The message names ``audit.mitigations``.
     """
     names = list(dict.fromkeys([NONE, *config["audit"].get("mitigations", [])]))
+    transforms = ", ".join(_store_transforms())
     runs = []
     for name in names:
-        m = resolve_mitigation(name)
+        try:
+            m = resolve_mitigation(name)
+        except ConfigError:
+            raise ConfigError(
+                f"config key 'audit.mitigations': unknown mitigation {name!r}; use store "
+                f"transforms ({transforms})"
+            ) from None
         if m.kind not in ("baseline", "transform"):
-            transforms = ", ".join(_store_transforms())
             raise ConfigError(
                 f"config key 'audit.mitigations': {name!r} renders the scenes anew, and an "
                 f"audit's renders are given; use store transforms only ({transforms}), or "

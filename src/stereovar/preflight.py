@@ -10,17 +10,22 @@ replaces. The workflow therefore checks up front (``workflow/rules/common.smk``)
   into one table came from one back end (:func:`check_backends`), in ``onstart`` for local
   runs, where the variant ``auto`` resolves to is this machine's;
 * a lock left by a run that was killed on this machine (:func:`stale_lock`), so the same
-  command resumes;
+  command resumes; a lock of a run still going is named, with its process, when Snakemake
+  refuses the run (:func:`lock_message`);
 * that the directories the run writes (``results/``, ``logs/``, ...) can be written
   (:func:`check_writable`), when the workflow is parsed: Snakemake would otherwise stop with
-  a ``ProtectedOutputException`` naming no fix, or fail inside the first job.
+  a ``ProtectedOutputException`` naming no fix, or fail inside the first job;
+* that the disk has room for Snakemake's lock and records (:func:`check_free_space`).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
 import socket
+import stat
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -31,7 +36,16 @@ BACKEND_KEYS = ("renderer", "renderer_version", "variant")
 """Render attributes that must agree across the renders a table pools."""
 
 RUN_MARKER = "stereovar-run.json"
-"""File in ``.snakemake/`` naming the host and process of the run that holds the lock."""
+"""File in ``.snakemake/`` naming the host and process of the run that holds the lock
+(:func:`mark_run`, once the run has taken it)."""
+
+RUNS_DIR = "stereovar-runs"
+"""Folder in ``.snakemake/`` with one record per Snakemake process that ``stereovar`` started
+there (:func:`record_run`), written as it starts, before the process takes the lock."""
+
+MIN_FREE_MB = 64
+"""Free space (MB) a run needs before its first job: Snakemake's lock files, its records of
+each job and the logs (:func:`check_free_space`)."""
 
 
 def check_scene_specs(paths: Iterable) -> list[dict]:
@@ -116,23 +130,100 @@ def check_backends(
     )
 
 
+def process_start(pid: int) -> float | None:
+    """When process ``pid`` of this machine started, in seconds since the epoch (from
+    ``/proc``); None where that cannot be told (no such process, no ``/proc``)."""
+    try:
+        fields = Path(f"/proc/{int(pid)}/stat").read_text().rsplit(")", 1)[1].split()
+        boot = next(
+            float(line.split()[1])
+            for line in Path("/proc/stat").read_text().splitlines()
+            if line.startswith("btime ")
+        )
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")  # field 22, starttime
+    except (OSError, ValueError, IndexError, StopIteration):
+        return None
+
+
+def _record(pid: int, command: str | None = None) -> dict:
+    record = {"host": socket.gethostname(), "pid": int(pid), "started": process_start(pid)}
+    return {**record, "command": command} if command else record
+
+
+def _write_json(path: Path, data: dict) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}")
+    tmp.write_text(json.dumps(data))
+    os.replace(tmp, path)
+
+
+def _alive(record: dict) -> bool | None:
+    """Whether the process a record names still runs: None on another host (this machine
+    cannot tell); a process of the same id started at another time is another process."""
+    if record["host"] != socket.gethostname():
+        return None
+    if not process_exists(record["pid"]):
+        return False
+    started, now = record.get("started"), process_start(record["pid"])
+    return started is None or now is None or abs(now - started) < 1.0
+
+
+def run_records(state_dir) -> list[dict]:
+    """The records of the runs of ``state_dir`` (``.snakemake``): :data:`RUN_MARKER`, then
+    each of :data:`RUNS_DIR`, each with ``host``, ``pid``, ``started`` (None if unknown),
+    ``command`` (None if unknown) and ``kind`` (``marker`` or ``started``); unreadable ones
+    are skipped."""
+    state = Path(state_dir)
+    runs = state / RUNS_DIR
+    paths = [(state / RUN_MARKER, "marker")]
+    if runs.is_dir():
+        paths += [(p, "started") for p in sorted(runs.glob("*.json"))]
+    records = []
+    for path, kind in paths:
+        try:
+            data = json.loads(path.read_text())
+            record = {"host": str(data["host"]), "pid": int(data["pid"])}
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        started = data.get("started")
+        record["started"] = float(started) if isinstance(started, int | float) else None
+        record["command"] = data.get("command") or None
+        records.append({**record, "kind": kind, "path": path})
+    return records
+
+
+def lock_holders(state_dir) -> list[dict]:
+    """The recorded runs (:func:`run_records`) that may hold the locks in ``state_dir``: each
+    one whose process still runs, or that ran on another host, once per process. A record
+    of this very process written as it started (:data:`RUNS_DIR`) names no holder: the
+    process has not taken the lock yet."""
+    holders: dict = {}
+    for record in run_records(state_dir):
+        if record["kind"] == "started" and record["host"] == socket.gethostname():
+            if record["pid"] == os.getpid():
+                continue
+        if _alive(record) is not False:
+            key = (record["host"], record["pid"])
+            holders[key] = {**holders.get(key, {}), **{k: v for k, v in record.items() if v}}
+    return list(holders.values())
+
+
+def _locked(state_dir) -> bool:
+    locks = Path(state_dir) / "locks"
+    return locks.is_dir() and any(locks.iterdir())
+
+
 def stale_lock(state_dir) -> bool:
     """Whether the locks in ``state_dir`` (``.snakemake``) belong to a run that is gone.
 
-    True only when lock files exist and :data:`RUN_MARKER` names this host and a process
-    that no longer exists (a run killed by a signal or a lost session). A lock of a live
-    run, of another host, or without a marker is not stale.
+    True only when lock files exist, a run is recorded (:func:`run_records`: the marker of
+    the run that took the lock, the records ``stereovar`` wrote as it started runs) and
+    none of them may hold the lock (:func:`lock_holders`): every recorded process was of
+    this host and no longer exists (a run killed by a signal or a lost session). A lock of
+    a live run, of another host, or of no recorded run is not stale.
     """
-    state = Path(state_dir)
-    locks = state / "locks"
-    if not locks.is_dir() or not any(locks.iterdir()):
+    if not _locked(state_dir):
         return False
-    try:
-        marker = json.loads((state / RUN_MARKER).read_text())
-        host, pid = marker["host"], int(marker["pid"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return False
-    return host == socket.gethostname() and pid != os.getpid() and not process_exists(pid)
+    return bool(run_records(state_dir)) and not lock_holders(state_dir)
 
 
 def clear_stale_lock(state_dir) -> bool:
@@ -145,12 +236,94 @@ def clear_stale_lock(state_dir) -> bool:
 
 
 def mark_run(state_dir) -> None:
-    """Record this host and process as the holder of the run's lock (:data:`RUN_MARKER`)."""
+    """Record this host and process, and when it started, as the holder of the run's lock
+    (:data:`RUN_MARKER`)."""
     state = Path(state_dir)
     state.mkdir(parents=True, exist_ok=True)
-    tmp = state / f".{RUN_MARKER}.{os.getpid()}"
-    tmp.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid()}))
-    os.replace(tmp, state / RUN_MARKER)
+    _write_json(state / RUN_MARKER, _record(os.getpid()))
+
+
+def record_run(state_dir, pid: int, command: str) -> Path:
+    """Record process ``pid``, a Snakemake run ``command`` started in the folder of
+    ``state_dir``, before it takes its lock (:data:`RUNS_DIR`); the records of processes
+    of this host that are gone are removed. Returns the record's path, for
+    :func:`forget_run` once the process has ended."""
+    runs = Path(state_dir) / RUNS_DIR
+    runs.mkdir(parents=True, exist_ok=True)
+    for record in run_records(state_dir):
+        if record["kind"] == "started" and _alive(record) is False:
+            record["path"].unlink(missing_ok=True)
+    path = runs / f"{socket.gethostname()}-{int(pid)}.json"
+    _write_json(path, _record(pid, command))
+    return path
+
+
+def forget_run(path) -> None:
+    """Remove a record of :func:`record_run` (its process has ended)."""
+    Path(path).unlink(missing_ok=True)
+
+
+def _describe_run(record: dict) -> str:
+    where = "" if record["host"] == socket.gethostname() else f" on host {record['host']}"
+    started = record.get("started")
+    when = (
+        f", started {time.strftime('%Y-%m-%d %H:%M:%S', time.localtime(started))}"
+        if started
+        else ""
+    )
+    command = f" ({record['command']})" if record.get("command") else ""
+    return f"pid {record['pid']}{where}{when}{command}"
+
+
+def lock_message(state_dir, unlock: str) -> str:
+    """What to say when Snakemake refuses a run because ``state_dir`` (``.snakemake``) is
+    locked: who holds the lock (:func:`lock_holders`) and to wait for it; that its holder
+    has ended and the same command now goes on; or, when no run is recorded, ``unlock``
+    (the command that removes the lock) for when no Snakemake runs there any more.
+
+    ``--unlock`` is never offered for a lock whose recorded holder may still run.
+    """
+    folder = Path(state_dir).absolute().parent
+    holders = lock_holders(state_dir)
+    if holders:
+        runs = "; ".join(map(_describe_run, holders))
+        return (
+            f"{folder} is locked by another run still going ({runs}); wait for it to "
+            "finish, then run the same command again"
+        )
+    if run_records(state_dir):
+        ended = "; ".join(_describe_run(r) for r in run_records(state_dir))
+        return (
+            f"{folder} was locked by a run that has ended ({ended}); run the same command "
+            "again (the lock of a run that is gone is removed)"
+        )
+    return (
+        f"{folder} is locked by a Snakemake run of which there is no record; wait for it to "
+        "finish, or, if no snakemake process runs in that folder any more, remove the lock "
+        f"with `{unlock}` and run the same command again"
+    )
+
+
+def check_free_space(folder, min_mb: int = MIN_FREE_MB) -> None:
+    """Stop a run whose disk has less than ``min_mb`` MB free (:data:`MIN_FREE_MB`):
+    Snakemake would fail to write its lock with a traceback before any job.
+
+    Raises
+    ------
+    WriteError
+        One line naming the folder, the space left and the fix.
+    """
+    from .errors import WriteError
+
+    folder = Path(folder)
+    probe = next((p for p in (folder, *folder.absolute().parents) if p.exists()), folder)
+    free = shutil.disk_usage(probe).free
+    if free < min_mb * 10**6:
+        raise WriteError(
+            f"the disk of {probe} is full ({free / 10**6:.1f} MB free, a run needs at least "
+            f"{min_mb} MB for Snakemake's lock, records and logs); free space on it, then "
+            "run the same command again"
+        )
 
 
 STORE_SUFFIX = ".zarr"
@@ -193,6 +366,33 @@ def _read_only_mount(path: Path) -> bool:
         return False
 
 
+FS_IOC_GETFLAGS = 0x80086601
+"""Linux ``ioctl`` that reads a file's attributes (``lsattr``)."""
+FS_IMMUTABLE_FL, FS_APPEND_FL = 0x10, 0x20
+
+
+def _locked_attribute(path: Path) -> str | None:
+    """``immutable`` or ``append-only`` when ``path`` (a file or a folder) carries that
+    attribute (``chattr +i``, ``chattr +a``: no one, root included, may replace it), else
+    None (also where attributes cannot be read)."""
+    try:
+        import fcntl
+        import struct
+
+        if not stat.S_ISREG(os.stat(path).st_mode) and not path.is_dir():
+            return None
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        try:
+            flags = struct.unpack_from("i", fcntl.ioctl(fd, FS_IOC_GETFLAGS, bytes(8)))[0]
+        finally:
+            os.close(fd)
+    except (ImportError, OSError):
+        return None
+    if flags & FS_IMMUTABLE_FL:
+        return "immutable"
+    return "append-only" if flags & FS_APPEND_FL else None
+
+
 def check_writable(roots: Iterable) -> None:
     """Stop a run that could not write its outputs (:func:`unwritable_paths`).
 
@@ -210,6 +410,14 @@ def check_writable(roots: Iterable) -> None:
     # the fix covers the whole tree the first path is in
     top = next((r for r in roots if r.exists() and (r == first or r in first.parents)), first)
     more = f" ({len(found) - 1} more paths there are not writable either)" if found[1:] else ""
+    attribute = _locked_attribute(first)
+    if attribute:
+        flag = "i" if attribute == "immutable" else "a"
+        raise StereovarError(
+            f"{first} is {attribute} (chattr +{flag}) and this run writes there{more}; "
+            f"clear the attribute (chattr -{flag} {first}, as root) or run from a copy of the "
+            "project"
+        )
     if _read_only_mount(first):
         raise StereovarError(
             f"{first} is on a read-only file system and this run writes there{more}; "

@@ -24,7 +24,9 @@ if AUDIT:
                 for key, path in import_outputs(AUDIT, AUDIT_DISCOVERY.n_seeds).items()
             },
         params:
-            settings=AUDIT,
+            # the digest of the settings as the import applies them: reordering the audit:
+            # keys or writing a default out reruns nothing (the job reads config["audit"])
+            settings=import_params(AUDIT),
             # changes when a file is replaced keeping its size and mtime (cp -p), not when
             # it is only touched (stereovar.audit.importer.frame_fingerprint)
             fingerprint=lambda wc: import_fingerprint(AUDIT, AUDIT_DISCOVERY, wc.scene),

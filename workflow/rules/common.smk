@@ -32,6 +32,9 @@ from stereovar.audit.run import (
     frame_pattern,
     import_fingerprint,
     import_outputs,
+    import_params,
+    check_audit_memory,
+    set_aside_verdict,
 )
 from stereovar.experiment import (
     AUDIT_PREFIX,
@@ -91,13 +94,14 @@ if AUDIT:
 # --resources mem_mb allows could never run: stop before any job (stereovar.resources).
 if workflow.is_main_process:
     _global_mem = workflow.global_resources.get("mem_mb")
+    _limit = sizing.memory_limit(
+        config, global_mem_mb=None if _global_mem is None else _global_mem.value
+    )
     with exit_with_one_line():
-        sizing.check_job_memory(
-            config,
-            *sizing.memory_limit(
-                config, global_mem_mb=None if _global_mem is None else _global_mem.value
-            ),
-        )
+        if AUDIT:  # the size is the renders', not a config key
+            check_audit_memory(config, AUDIT_DISCOVERY, *_limit)
+        else:
+            sizing.check_job_memory(config, *_limit)
 
 
 ENV = "../../envs/stereovar.yaml"
@@ -602,6 +606,10 @@ def preflight():
                 planned if "render" in renders else None,
                 allow_mixed=config["render"]["allow_mixed_backends"],
             )
+    # an audit that imports a frame again or rebuilds its verdict: the old verdict is set
+    # aside (results/audit/<name>/previous/) until the new one is written
+    if AUDIT and rules & {"audit_import", "audit_verdict"}:
+        set_aside_verdict(AUDIT["name"])
 
 
 def warn_if_report_is_stale(summary=layout.summary_json()):

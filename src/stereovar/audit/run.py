@@ -5,16 +5,23 @@ section (the files are found, not read), then replaces the run's scenes, rendere
 with the audit's (:func:`audit_run_config`), so every rule downstream of the renders (Eq. 1-3,
 the controls, the intervention, the tables) runs unchanged on the imported stores. The import
 is one job per frame (rule ``audit_import``: its inputs are :func:`frame_files`, its outputs
-:func:`import_outputs`); ``all`` builds :func:`audit_targets`, ending in the verdict page.
+:func:`import_outputs`, its params :func:`import_params`); ``all`` builds
+:func:`audit_targets`, ending in the verdict page. ``stereovar audit`` makes the workflow's
+checks of an audit before Snakemake starts (:func:`check_audit_run`); a run that rebuilds the
+verdict first sets the old one aside (:func:`set_aside_verdict`).
 """
 
 from __future__ import annotations
 
+import os
 import re
+from pathlib import Path
 
 from .. import layout
+from .. import resources as sizing
+from ..errors import AuditError, ImageError
 from ..experiment import audit_source, ground_truth_store
-from ..io.images import image_size
+from ..io.images import image_size, regular_file
 from ..rig import VIEWS
 from .importer import (
     audit_spp,
@@ -23,6 +30,7 @@ from .importer import (
     frame_stores,
     import_record,
     import_settings,
+    settings_digest,
 )
 from .layout import Discovery, discover
 
@@ -88,13 +96,46 @@ def discover_audit(settings: dict) -> Discovery:
     """
     check_settings(settings)
     import_settings(settings)
-    return discover(settings)
+    discovery = discover(settings)
+    check_files(discovery)
+    return discovery
+
+
+def check_files(discovery: Discovery) -> None:
+    """Every file of the audit is a regular file this user may read, from its kind and
+    permissions alone (nothing is opened): a named pipe, a device or an unreadable file
+    found by the import job itself would stop the run after Snakemake had deleted the
+    frame's earlier stores.
+
+    Raises
+    ------
+    ImageError
+        One line naming the first such file, what it is and the fix.
+    """
+    for frame in discovery.frames:
+        for path in frame.files():
+            regular_file(path)
+            if not os.access(path, os.R_OK):
+                raise ImageError(
+                    f"{path}: this user may not read it; make it readable (chmod u+r {path}) "
+                    "or run as its owner"
+                )
 
 
 def frame_files(discovery: Discovery, frame: str) -> list[str]:
     """Every file one frame is imported from (renders of each view and seed, then its
     ground truth): the inputs of its ``audit_import`` job."""
     return [str(p) for f in discovery.frames if f.name == frame for p in f.files()]
+
+
+def import_params(settings: dict) -> str:
+    """The ``settings`` param of every ``audit_import`` job: the digest of the settings as
+    the import applies them (:func:`~stereovar.audit.importer.settings_digest`), so that
+    reordering the ``audit:`` keys or writing a default out (``scale: 1.0``,
+    ``channels: {}``) reruns nothing, and settings the import does not read
+    (``mitigations``, ``probe``) do not import the frames again. The files' templates are
+    the job's inputs; the job reads the settings from the workflow's config."""
+    return settings_digest(settings)
 
 
 def import_fingerprint(settings: dict, discovery: Discovery, frame: str) -> str:
@@ -146,6 +187,107 @@ def audit_run_config(config: dict, discovery: Discovery) -> dict:
         },
         "intervention": {**config["intervention"], "n_seeds": None, "spp": None},
     }
+
+
+def check_audit_memory(config: dict, discovery: Discovery, limit_mb: int, source: str) -> None:
+    """Refuse an audit whose renders are too large for the memory one job may use.
+
+    Parameters
+    ----------
+    config : dict
+        The run's config with the audit's keys (:func:`audit_run_config`).
+    discovery : Discovery
+        The audit's files (:func:`discover_audit`).
+    limit_mb, source
+        The most memory one job may request and where that bound comes from
+        (:func:`stereovar.resources.memory_limit`).
+
+    Raises
+    ------
+    AuditError
+        One line: the renders' size (and one of them), the job and its request, the bound,
+        and the largest size of the same aspect ratio that fits.
+    """
+    requests = sizing.job_mem_requests(config)
+    job, request = max(requests.items(), key=lambda item: item[1])
+    if request <= limit_mb:
+        return
+    width, height = config["resolution"]["width"], config["resolution"]["height"]
+    example = next(iter(discovery.frames[0].renders[VIEWS[0]].values()))
+    fitting = sizing.largest_fitting_size(config, limit_mb)
+    fix = (
+        f"crop or downsample the renders to at most {fitting[0]}x{fitting[1]}"
+        if fitting
+        else "no image size fits"
+    )
+    if source == sizing.MACHINE:
+        fix += ", or audit them on a machine with more memory (on a cluster, set "
+        fix += "cluster.max_mem_mb to the memory of its largest node)"
+    raise AuditError(
+        f"audit.renders: the renders are {width}x{height} pixels ({example}), so each {job} "
+        f"job would request {request:,} MB of memory, more than the {limit_mb:,} MB of "
+        f"{source}; {fix}"
+    )
+
+
+def check_audit_run(config: dict, discovery: Discovery, *, global_mem_mb=None) -> None:
+    """The workflow's checks of an audit's run config, made by ``stereovar audit`` before
+    Snakemake starts: every ``audit.mitigations`` entry is a store transform
+    (:func:`stereovar.mitigations.audit_mitigation_runs`) and the largest job fits in
+    memory (:func:`check_audit_memory`, :func:`stereovar.resources.memory_limit`).
+
+    Parameters
+    ----------
+    config : dict
+        The validated workflow config with the audit's keys (:func:`audit_run_config`).
+    discovery : Discovery
+        The audit's files.
+    global_mem_mb : int, optional
+        The run's ``--resources mem_mb``.
+
+    Raises
+    ------
+    ConfigError, AuditError
+        One line naming the setting and the fix.
+    """
+    from ..mitigations import audit_mitigation_runs
+
+    if config["audit"].get("mitigations"):
+        audit_mitigation_runs(config)
+    limit = sizing.memory_limit(config, global_mem_mb=global_mem_mb)
+    check_audit_memory(config, discovery, *limit)
+
+
+PREVIOUS = "previous"
+"""Folder of an audit's results that holds the verdict a run set aside
+(:func:`set_aside_verdict`)."""
+
+
+def set_aside_verdict(name: str, root=".") -> list[Path]:
+    """Move an audit's verdict page and summary (:func:`audit_paths`) under ``root`` into
+    ``results/audit/<name>/previous/``, replacing what an earlier run set aside there.
+
+    A run that imports a frame again or rebuilds the verdict calls it before its first job
+    (``onstart``): until the verdict job has written the new page, no page claims a verdict
+    on stores that are being replaced, whether the run then succeeds, fails or is killed.
+    Each file is moved with one rename (nothing is copied or lost).
+
+    Returns
+    -------
+    list of Path
+        The files set aside, at their new paths.
+    """
+    paths = audit_paths(name)
+    moved = []
+    for key in ("verdict_md", "verdict_html", "summary"):
+        path = Path(root) / paths[key]
+        if not path.is_file():
+            continue
+        target = path.parent / PREVIOUS / path.name
+        target.parent.mkdir(exist_ok=True)
+        os.replace(path, target)
+        moved.append(target)
+    return moved
 
 
 def audit_paths(name: str) -> dict:

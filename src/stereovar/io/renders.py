@@ -126,15 +126,25 @@ def set_rerun_arguments(args: str) -> None:
 def rebuild_command(path) -> str:
     """The command that rebuilds the workflow output at ``path`` and nothing else.
 
-    ``snakemake -j1 <this run's --configfile and --config> --force <path>``: ``--force``
-    reruns the one job that writes ``path`` (whether or not the damaged copy is still there)
-    with the same config, so the rebuilt store matches the others. Outside a workflow run
-    the config options are unknown, and the command says to add them.
+    ``stereovar run -j1 <this run's --configfile options> <path> -- --force <its --config
+    options>``: ``stereovar run`` runs the workflow of the installed stereovar (a checkout's
+    or a wheel's, where a bare ``snakemake`` finds no Snakefile) in the current directory,
+    and ``--force`` reruns the one job that writes ``path`` (whether or not the damaged copy
+    is still there) with the same config, so the rebuilt store matches the others. Outside
+    a workflow run the config options are unknown, and the command says to add them.
     """
+    import shlex
+
     args = os.environ.get(RERUN_ARGS_ENV)
     if args is None:
-        args = "--configfile <the config of the run that made it>"
-    return " ".join(p for p in ("snakemake", "-j1", args, "--force", str(path)) if p)
+        files, rest = "--configfile <the config of the run that made it>", ""
+    else:
+        words = shlex.split(args)
+        pairs = [k for k, word in enumerate(words[:-1]) if word == "--configfile"]
+        files = shlex.join([w for k in pairs for w in words[k : k + 2]])
+        rest = shlex.join([w for k, w in enumerate(words) if k not in pairs and k - 1 not in pairs])
+    parts = ("stereovar run -j1", files, shlex.quote(str(path)), "-- --force", rest)
+    return " ".join(p for p in parts if p)
 
 
 def store_error(path, detail, *, what: str = "render store") -> StoreError:

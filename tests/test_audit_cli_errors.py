@@ -1,0 +1,353 @@
+"""`stereovar audit` when the workflow would stop: the workflow's checks run before Snakemake
+starts and give one line; the workflow's own line and a full disk reach the command's
+stderr; a lock names the run that holds it; cosmetic config edits import nothing again; a
+run that imports again sets the old verdict aside; the rebuild advice is a `stereovar run`
+command.
+
+Most tests call the command's pre-flight with Snakemake replaced by a stub that fails the
+test if it is started. One import-only audit (module fixture ``imported``, a few seconds) backs
+the tests that need Snakemake's own records: a dry run, a lock, an import that fails."""
+
+import io
+import json
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from stereovar import cli, preflight
+from stereovar import resources as sizing
+from stereovar.audit import run as audit_run
+from stereovar.audit.synthetic import write_synthetic_audit
+from stereovar.errors import ImageError
+from stereovar.io.renders import RERUN_ARGS_ENV, rebuild_command
+from stereovar.preflight import RUN_MARKER, clear_stale_lock, stale_lock
+
+PREVIOUS = "previous"
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def write_audit(root: Path, name: str = "t", *, render_format: str = "exr", **extra) -> str:
+    """A one-frame synthetic audit (2 views x 4 seeds, 40 x 24) under ``root/data`` and its
+    config ``root/<name>.yaml`` with ``extra`` audit settings; returns the config's name."""
+    settings, _ = write_synthetic_audit(
+        root / "data", name=name, n_frames=1, width=40, height=24, n_seeds=4,
+        render_format=render_format,
+    )
+    settings["renders"] = f"data/renders/{{frame}}/{{view}}/seed_{{seed}}.{render_format}"
+    settings["disparity"] = "data/disparity/{frame}.pfm"
+    (root / f"{name}.yaml").write_text(yaml.safe_dump({"audit": {**settings, **extra}}))
+    return f"{name}.yaml"
+
+
+@pytest.fixture
+def preflight_only(tmp_path, monkeypatch, capsys):
+    """``run(*args)``: ``stereovar audit ARGS`` in ``tmp_path`` with Snakemake replaced by a
+    stub that fails the test; returns the exit status and the stderr lines."""
+
+    def never(args, root):
+        raise AssertionError(f"snakemake started: {args}")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "_snakemake", never)
+
+    def run(*args):
+        rc = cli.main(["audit", *args])
+        captured = capsys.readouterr()
+        assert captured.out == ""
+        return rc, captured.err.splitlines()
+
+    return run
+
+
+def one_error(rc, err) -> str:
+    assert rc == 2 and len(err) == 1, err
+    assert err[0].startswith("stereovar: error: "), err
+    return err[0]
+
+
+# -- 1. the workflow's checks, before Snakemake starts ----------------------------------------
+
+
+def make_unwritable(folder: Path):
+    """Make ``folder`` unwritable (root: the immutable attribute; others: the mode) and
+    return the fix the error must name, and a function that undoes it."""
+    folder.mkdir(parents=True)
+    if os.geteuid() != 0:
+        folder.chmod(0o555)
+        return "chmod -R u+w", lambda: folder.chmod(0o755)
+    if shutil.which("chattr") is None or subprocess.run(
+        ["chattr", "+i", str(folder)], capture_output=True
+    ).returncode:
+        pytest.skip("running as root where chattr +i is unavailable")
+    return f"chattr -i {folder}", lambda: subprocess.run(["chattr", "-i", str(folder)])
+
+
+def test_an_unwritable_audit_folder_stops_before_snakemake(tmp_path, preflight_only):
+    config = write_audit(tmp_path)
+    fix, undo = make_unwritable(tmp_path / "results" / "audit" / "t")
+    try:
+        line = one_error(*preflight_only(config))
+    finally:
+        undo()
+    assert str(tmp_path / "results" / "audit" / "t") in line and fix in line
+    assert not (tmp_path / "logs").exists()  # nothing written, not even the log
+
+
+@pytest.mark.parametrize(
+    ("names", "needle"),
+    [
+        (["bogus"], "unknown mitigation 'bogus'"),
+        (["spp_x4"], "'spp_x4' renders the scenes anew"),
+        (["denoise", "shared_seed"], "'shared_seed' renders the scenes anew"),
+    ],
+)
+def test_audit_mitigations_are_checked_before_snakemake(tmp_path, preflight_only, names, needle):
+    line = one_error(*preflight_only(write_audit(tmp_path, mitigations=names)))
+    assert "config key 'audit.mitigations'" in line and needle in line, line
+    assert "mitigations.names" not in line
+    assert "denoise, denoise_sensor, equalise, sensor_only" in line  # what to use instead
+
+
+def test_renders_too_large_for_memory_stop_before_snakemake(tmp_path, preflight_only, monkeypatch):
+    config = write_audit(tmp_path, render_format="pfm")
+    for render in (tmp_path / "data" / "renders").rglob("*.pfm"):
+        render.write_bytes(b"PF\n30000 30000\n-1\n")  # the header of a 30000 x 30000 image
+    monkeypatch.setattr(sizing, "machine_mem_mb", lambda: 16000)
+    line = one_error(*preflight_only(config))
+    request = sizing.analysis_mem_mb(30000, 30000, sizing.ANALYSIS_IMAGES_MAX)
+    assert "audit.renders: the renders are 30000x30000 pixels" in line, line
+    assert f"{request:,} MB" in line and "16,000 MB of this machine's memory" in line
+    assert "config key 'resolution'" not in line and "downsample" in line
+
+
+def test_a_full_disk_stops_before_snakemake(tmp_path, preflight_only, monkeypatch):
+    config = write_audit(tmp_path)
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage._replace(free=2 * 10**6))
+    line = one_error(*preflight_only(config))
+    assert f"the disk of {tmp_path} is full (2.0 MB free" in line and "free space" in line
+
+
+def test_the_workflow_line_and_a_full_disk_traceback_reach_stderr(tmp_path):
+    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
+    for line in [
+        "Building DAG of jobs...",
+        "stereovar: removed the lock of an earlier run that was killed",
+        "stereovar: config key 'audit.mitigations': unknown mitigation 'bogus'; use store "
+        "transforms (denoise)",
+    ]:
+        monitor.feed(line + "\n")
+    assert monitor.errors(1) == [
+        "config key 'audit.mitigations': unknown mitigation 'bogus'; use store transforms "
+        "(denoise)"
+    ]
+    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
+    monitor.root = tmp_path
+    for line in [
+        "Building DAG of jobs...",
+        "OSError: [Errno 28] No space left on device",
+        "During handling of the above exception, another exception occurred:",
+        "Traceback (most recent call last):",
+        '  File "snakemake/persistence/file.py", line 255, in _write_locks',
+        "    with open(lockfile, 'w') as lock:",
+        "OSError: [Errno 28] No space left on device",
+    ]:
+        monitor.feed(line + "\n")
+    (message,) = monitor.errors(1)
+    assert message.startswith(f"the disk of {tmp_path} is full (") and "free space" in message
+
+
+# -- 3. the lock names its holder ---------------------------------------------------------------
+
+
+def ended_process() -> int:
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    return int(proc.stdout)
+
+
+def locked_state(tmp_path) -> Path:
+    state = tmp_path / ".snakemake"
+    (state / "locks").mkdir(parents=True)
+    (state / "locks" / "0.output.lock").write_text("results/x\n")
+    return state
+
+
+def test_a_record_written_as_a_run_starts_tells_a_live_lock_from_a_stale_one(tmp_path):
+    state = locked_state(tmp_path)
+    record = preflight.record_run(state, ended_process(), "stereovar audit a.yaml")
+    assert stale_lock(state)  # killed before it could write the marker: its lock is stale
+    host = json.loads(record.read_text())["host"]
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as live:
+        try:
+            # the marker names a run that is gone, a record a run still going: not stale
+            (state / RUN_MARKER).write_text(json.dumps({"host": host, "pid": ended_process()}))
+            preflight.record_run(state, live.pid, "stereovar audit a.yaml")
+            assert not stale_lock(state) and not clear_stale_lock(state)
+            assert (state / "locks" / "0.output.lock").exists()
+        finally:
+            live.kill()
+    assert clear_stale_lock(state) and not any((state / "locks").iterdir())
+
+
+def test_the_lock_message_offers_unlock_only_without_a_run_that_may_hold_it(tmp_path):
+    state = locked_state(tmp_path)
+    unlock = "stereovar run --configfile a.yaml -- --unlock"
+    nobody = preflight.lock_message(state, unlock)
+    assert "no record" in nobody and unlock in nobody and "wait" in nobody
+    preflight.record_run(state, ended_process(), "stereovar audit a.yaml")
+    ended = preflight.lock_message(state, unlock)
+    assert "has ended" in ended and "run the same command again" in ended
+    assert "--unlock" not in ended
+
+
+@pytest.fixture(scope="module")
+def imported(tmp_path_factory):
+    """A one-frame audit imported once (``stereovar audit t.yaml --import-only``)."""
+    root = tmp_path_factory.mktemp("audit_errors")
+    config = write_audit(root)
+    proc = audit(root, config, "--import-only")
+    assert proc.returncode == 0, proc.stderr
+    return root
+
+
+def audit(root, *args):
+    return subprocess.run([sys.executable, "-m", "stereovar.cli", "audit", *args],
+                          cwd=root, capture_output=True, text=True)
+
+
+def planned(root, config) -> str:
+    """A dry run of the audit's import (``snakemake -n --until audit_import``)."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"), "-n",
+         "-j1", "--until", "audit_import", "--configfile", config],
+        cwd=root, capture_output=True, text=True,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc.stdout + proc.stderr
+
+
+@pytest.mark.workflow
+def test_a_second_audit_while_one_runs_names_it_and_waits(imported):
+    state = imported / ".snakemake"
+    (state / "locks").mkdir(exist_ok=True)
+    (state / "locks" / "0.output.lock").write_text("results/audit/t/import/f00.json\n")
+    started = time.time()
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"]) as holder:
+        try:
+            record = preflight.record_run(state, holder.pid, "stereovar audit t.yaml")
+            proc = audit(imported, "t.yaml", "--import-only")
+        finally:
+            holder.kill()
+    assert proc.returncode != 0
+    (line,) = [ln for ln in proc.stderr.splitlines() if ln.startswith("stereovar: error:")]
+    assert f"{imported} is locked by another run still going (pid {holder.pid}, " in line
+    stamp = line.split(", started ")[1][:19]
+    shown = time.mktime(time.strptime(stamp, "%Y-%m-%d %H:%M:%S"))
+    assert started - 2 <= shown <= started + 2, (stamp, started)
+    assert "(stereovar audit t.yaml)" in line and "wait for it to finish" in line
+    assert "--unlock" not in proc.stderr and "LockException" not in proc.stderr
+    # its holder gone, the same command goes on: the workflow removes the stale lock
+    again = audit(imported, "t.yaml", "--import-only")
+    assert again.returncode == 0, again.stderr
+    assert not (state / "locks").exists() and not record.exists()
+
+
+# -- 2. cosmetic edits of the config rerun nothing ----------------------------------------------
+
+
+@pytest.mark.workflow
+def test_reordered_keys_and_written_defaults_import_nothing_again(imported):
+    settings = yaml.safe_load((imported / "t.yaml").read_text())["audit"]
+    same = {key: settings[key] for key in reversed(list(settings))}
+    same["views"] = dict(reversed(list(settings["views"].items())))
+    same.update(scale=1.0, channels={}, disparity_scale=256, sign_check="stop")
+    (imported / "same.yaml").write_text(yaml.safe_dump({"audit": same}, sort_keys=False))
+    assert "rule audit_import:" not in planned(imported, "same.yaml")
+    # a setting the import applies does import again (the dry run sees it)
+    (imported / "other.yaml").write_text(yaml.safe_dump({"audit": {**same, "scale": 2.0}}))
+    assert "rule audit_import:" in planned(imported, "other.yaml")
+
+
+# -- 4. an import that cannot finish leaves no verdict on stores it replaced --------------------
+
+
+def test_a_render_that_is_a_named_pipe_stops_before_snakemake(tmp_path, preflight_only):
+    config = write_audit(tmp_path)
+    settings = yaml.safe_load((tmp_path / config).read_text())["audit"]
+    fifo = tmp_path / "data" / "renders" / "f00" / "R" / "seed_002.exr"
+    fifo.unlink()
+    os.mkfifo(fifo)
+    line = one_error(*preflight_only(config))
+    assert "data/renders/f00/R/seed_002.exr: not a regular file (a named pipe)" in line, line
+    with pytest.raises(ImageError, match="named pipe"):
+        audit_run.discover_audit(settings)
+
+
+def test_setting_a_verdict_aside_moves_each_file_once(tmp_path):
+    folder = tmp_path / "results" / "audit" / "t"
+    (folder / PREVIOUS).mkdir(parents=True)
+    (folder / PREVIOUS / "verdict.html").write_text("older")
+    for name in ("verdict.md", "verdict.html", "summary.json"):
+        (folder / name).write_text(f"red {name}")
+    moved = audit_run.set_aside_verdict("t", tmp_path)
+    assert sorted(p.name for p in moved) == ["summary.json", "verdict.html", "verdict.md"]
+    assert not any((folder / n).exists() for n in ("verdict.md", "verdict.html", "summary.json"))
+    assert (folder / PREVIOUS / "verdict.html").read_text() == "red verdict.html"
+    assert audit_run.set_aside_verdict("t", tmp_path) == []
+
+
+@pytest.mark.workflow
+def test_a_failed_import_sets_the_old_verdict_aside(imported):
+    folder = imported / "results" / "audit" / "t"
+    verdict = {"verdict.html": "<p>RED</p>", "summary.json": json.dumps({"summary": ["RED"]})}
+    for name, text in verdict.items():
+        (folder / name).write_text(text)
+    render = imported / "data" / "renders" / "f00" / "L" / "seed_001.exr"
+    good = render.read_bytes()
+    render.write_bytes(good[: len(good) // 2])
+    try:
+        proc = audit(imported, "t.yaml", "--import-only")
+    finally:
+        render.write_bytes(good)
+    assert proc.returncode != 0
+    assert "truncated" in proc.stderr or "cannot read" in proc.stderr, proc.stderr
+    assert not (folder / "verdict.html").exists() and not (folder / "summary.json").exists()
+    for name, text in verdict.items():
+        assert (folder / PREVIOUS / name).read_text() == text
+    assert f"set aside as out of date: {folder / PREVIOUS}/" in proc.stderr
+
+
+# -- 5. the rebuild advice works for an installed stereovar --------------------------------------
+
+
+def test_the_rebuild_command_is_a_stereovar_run_that_forces_the_one_store(
+    tmp_path, monkeypatch
+):
+    (tmp_path / "my config.yaml").write_text("{}\n")
+    store = "results/audit/t/renders/f00/left/spp0/seeds0-3.zarr"
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(
+        RERUN_ARGS_ENV, "--configfile 'my config.yaml' --config 'render={spp: 4}'"
+    )
+    command = shlex.split(rebuild_command(store))
+    assert command[:2] == ["stereovar", "run"]
+    started = []
+    monkeypatch.setattr(cli, "_snakemake", lambda args, root: started.append(args) or 0)
+    assert cli.main(command[1:]) == 0
+    assert started == [
+        ["-j", "1", store, "--configfile", "my config.yaml", "--force", "--config",
+         "render={spp: 4}"]
+    ]
+    monkeypatch.delenv(RERUN_ARGS_ENV)
+    assert rebuild_command(store).startswith(
+        "stereovar run -j1 --configfile <the config of the run that made it> "
+    )
