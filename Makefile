@@ -13,15 +13,22 @@ setup:
 run: setup
 	$(SNAKEMAKE) -j2 all
 
+# Two pytest-xdist workers, one per core of the reference 2-core machine; tests sharing a
+# session run or a module's run stay on one worker (tests/conftest.py). The 25 slowest tests
+# are listed at the end, so a slow test shows the day it lands. PYTEST_WORKERS=0 runs the
+# suite in this process.
+PYTEST_WORKERS ?= 2
+PYTEST_ARGS := -n $(PYTEST_WORKERS) --dist loadgroup --durations=25
+
 test: setup
-	$(PYTHON) -m pytest
+	$(PYTHON) -m pytest $(PYTEST_ARGS)
 
 # The suite as another x86-64 CPU would run it: Dr.Jit's kernels compiled for a generic AVX2
 # CPU with 4 lanes, numpy without its AVX2, FMA and AVX-512 kernels (docs/development.md: Results across
 # machines).
 test-other-cpu: setup
 	STEREOVAR_JIT_TARGET=avx2-w4 NPY_DISABLE_CPU_FEATURES="AVX2 FMA3 AVX512F AVX512CD AVX512_SKX" \
-		$(PYTHON) -m pytest
+		$(PYTHON) -m pytest $(PYTEST_ARGS)
 
 lint: setup
 	$(PYTHON) -m ruff check .

@@ -188,3 +188,47 @@ def headless_chromium():
         )
 
     return load
+
+
+#: Fixtures whose one session-wide run several modules share: the tests that use them stay
+#: on one xdist worker (``make test`` runs ``-n 2 --dist loadgroup``), so the run is made
+#: once, and a test that changes it and puts it back is never seen half-way by another.
+SHARED_RUN_FIXTURES = frozenset({"tiny_run", "tiny_run_copy"})
+SHARED_RUN_GROUP = "tiny_run"
+
+#: Groups that take minutes, started first so that neither worker is left with one at the
+#: end (the rest follow in collection order; ``pytest --durations`` shows what to add).
+FIRST = (
+    SHARED_RUN_GROUP,
+    "test_audit_workflow",
+    "test_probe_workflow",
+    "test_cycles",
+    "test_mitigations",
+    "test_moments_workflow",
+    "test_docs",
+)
+
+
+def xdist_group(item) -> str:
+    """The xdist group of a test: its own mark, else the shared run's group for a test that
+    uses :data:`SHARED_RUN_FIXTURES`, else its module (whose module-scoped fixtures are then
+    made once)."""
+    mark = item.get_closest_marker("xdist_group")
+    if mark is not None:
+        return str(mark.args[0] if mark.args else mark.kwargs.get("name", "default"))
+    if SHARED_RUN_FIXTURES & set(getattr(item, "fixturenames", ())):
+        return SHARED_RUN_GROUP
+    return item.nodeid.split("::", 1)[0].rsplit("/", 1)[-1].removesuffix(".py")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Give every test its xdist group and put the longest groups first (a stable sort, so
+    a group's tests keep their order)."""
+    groups = {}
+    for item in items:
+        groups[item.nodeid] = group = xdist_group(item)
+        if item.get_closest_marker("xdist_group") is None:
+            item.add_marker(pytest.mark.xdist_group(group))
+    rank = {name: i for i, name in enumerate(FIRST)}
+    items.sort(key=lambda item: rank.get(groups[item.nodeid], len(rank)))
