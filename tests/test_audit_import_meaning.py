@@ -90,18 +90,21 @@ def test_a_depth_pass_given_as_disparity_is_refused_before_anything_is_written(
 
 def test_one_channel_named_for_another_role_is_refused_and_a_plain_one_is_read(tmp_path):
     field = np.linspace(1.0, 9.0, 35, dtype=np.float32).reshape(5, 7)
-    refused = [
+    refused = [  # channel, role, what its name says, the role in words
         ("disparity", "depth", "disparity", "depth"),  # vice versa
         ("ViewLayer.Normal.X", "disparity", "surface normals", "disparity"),
         ("ViewLayer.Mist.Z", "depth", "mist (a 0-1 distance ramp)", "depth"),
         ("ViewLayer.Object Index.X", "glass_mask", "a segmentation", "a glass mask"),
+        ("ViewLayer.Depth.Z", "segmentation", "depth", "a segmentation"),
     ]
     for k, (channel, role, holds, wanted) in enumerate(refused):
         path = write_exr(tmp_path / f"f{k}.exr", {channel: field})
         with pytest.raises(ImageError) as err:
             read_field(path, role=role)
-        assert one_line(err).startswith(
+        assert one_line(err) == (
             f"{path}: its one channel {channel!r} holds {holds} by its name, not {wanted}; "
+            f"give a file that holds {wanted}, or set audit.channels: {{{role}: {channel}}} "
+            f"if it does hold {wanted}"
         )
         # named in audit.channels, it is read as that role
         np.testing.assert_array_equal(read_field(path, role=role, channel=channel), field)

@@ -226,8 +226,8 @@ def foreign_channel(channel: str, role: str, path) -> None:
         fix = "give the renders' files in audit.renders"
     else:
         fix = (
-            f"give the {_what(role)} file, or set audit.channels: {{{role}: {channel}}} if "
-            f"it does hold {_what(role)}"
+            f"give a file that holds {_what(role)}, or set audit.channels: "
+            f"{{{role}: {channel}}} if it does hold {_what(role)}"
         )
     raise ImageError(
         f"{path}: its one channel {channel!r} holds {_what(what)} by its name, not "
