@@ -272,16 +272,28 @@ def test_segment_ids_above_two_to_the_24_stay_apart(tmp_path, monkeypatch, fmt):
     assert not flags_of(record_of(), "glass_ids")
 
 
-def test_float_segment_ids_beyond_float32_precision_are_refused(tmp_path, monkeypatch):
+@pytest.mark.parametrize(
+    "dtype, written, stored, exact",
+    [
+        ("float32", 16777218, 16777218, 2**24),  # a float32 that 16777217 can round to
+        ("float32", 16777217, 16777216, 2**24),  # 2**24 + 1 is stored as 2**24
+        ("float16", 2049, 2048, 2**11),  # half: 10 mantissa bits
+    ],
+)
+def test_float_segment_ids_past_the_float_precision_are_refused(
+    tmp_path, monkeypatch, dtype, written, stored, exact
+):
     monkeypatch.chdir(tmp_path)
-    seg = np.zeros((SMALL["height"], SMALL["width"]), np.float32)
-    seg[5:15, 10:30] = 16777218  # a float32 that 16777217 was rounded to
+    seg = np.zeros((SMALL["height"], SMALL["width"]), dtype)
+    seg[5:15, 10:30] = written
+    assert seg.max() == stored  # what the file holds
     with pytest.raises(ImageError) as err:
-        segmentation_audit(tmp_path, seg, "npy", [16777217])
+        segmentation_audit(tmp_path, seg, "npy", [written])
     assert one_line(err) == (
-        f"{tmp_path / 'seg_f00.npy'}: segment ids up to 16777218 stored as float32, "
-        "which holds whole numbers exactly only up to 16777216, so two ids there can read as "
-        "one; write the segmentation as integers (EXR UINT, 16-bit PNG or an integer .npy)"
+        f"{tmp_path / 'seg_f00.npy'}: segment ids up to {stored} stored as {dtype}, which "
+        f"tells whole numbers apart only below {exact} ({exact + 1} is stored as {exact}), so "
+        "two ids there can read as one; write the segmentation as integers (EXR UINT, 16-bit "
+        "PNG or an integer .npy)"
     )
     assert not Path("results/audit/synthetic/ground_truth").exists()
 

@@ -487,11 +487,11 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
 
     Integer files keep their ids exactly: PNG (8 or 16 bit, first channel), an EXR ``UINT``
     channel, an integer NPY or NPZ. Float files (an EXR ``HALF`` or ``FLOAT`` channel such
-    as Blender's ``IndexOB``, PFM, a float NPY) hold whole numbers only up to
+    as Blender's ``IndexOB``, PFM, a float NPY) tell whole numbers apart only below
     :math:`2^{p}` (:math:`p` the mantissa bits plus one: :math:`2^{24}` = 16777216 for
-    float32, 2048 for half): their values are rounded, and a file whose ids reach past that
-    is refused, since two ids there can be stored as one; NaN and Inf read as -1 (no
-    segment).
+    float32, 2048 for half; :math:`2^{p} + 1` is stored as :math:`2^{p}`): their values are
+    rounded, and a file holding an id of :math:`2^{p}` or more is refused, since two ids
+    there can be stored as one; NaN and Inf read as -1 (no segment).
 
     Parameters
     ----------
@@ -534,13 +534,13 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
         )
     exact = 2 ** (np.finfo(a.dtype).nmant + 1)
     with np.errstate(invalid="ignore"):
-        beyond = np.isfinite(a) & (np.abs(a) > exact)
+        beyond = np.isfinite(a) & (np.abs(a) >= exact)
     if beyond.any():
         raise ImageError(
             f"{path}: segment ids up to {np.nanmax(np.abs(a[beyond])):.0f} stored as "
-            f"{a.dtype}, which holds whole numbers exactly only up to {exact}, so two "
-            "ids there can read as one; write the segmentation as integers (EXR UINT, 16-bit "
-            "PNG or an integer .npy)"
+            f"{a.dtype}, which tells whole numbers apart only below {exact} ({exact + 1} is "
+            f"stored as {exact}), so two ids there can read as one; write the segmentation as "
+            "integers (EXR UINT, 16-bit PNG or an integer .npy)"
         )
     return np.rint(np.where(np.isfinite(a), a, -1.0)).astype(np.int64)  # NaN, Inf: no id
 
