@@ -432,6 +432,29 @@ def read_image(
     return out
 
 
+def _one_channel(path, what: str, role: str | None, channel: str | None) -> np.ndarray:
+    """The ``(H, W)`` values of a one-field file as stored (a PNG's integers, an EXR
+    channel's or a PFM's floats, an NPY's dtype): an EXR's channel holding ``role``, a
+    PNG's first channel; ``what`` (``"a field"``) names it in the error line."""
+    fmt = image_format(path)
+
+    def decode():
+        if fmt == "exr":
+            return _exr_field(_exr_channels(path), path, role, channel)
+        if fmt == "pfm":
+            return read_pfm(path)
+        if fmt == "png":
+            return _png(path)[0]
+        return _array(path, fmt)
+
+    a = _decoded(path, decode)
+    if a.ndim == 3:
+        a = a[..., 0]
+    if a.ndim != 2:
+        raise ImageError(f"{path}: {what} has shape (H, W), got {a.shape}; store one per file")
+    return a
+
+
 def read_field(
     path,
     *,
@@ -463,22 +486,9 @@ def read_field(
         The file cannot be read, or no channel, or more than one, holds ``role`` (one line
         listing the channels and naming the fix).
     """
-    fmt = image_format(path)
-
-    def decode():
-        if fmt == "exr":
-            return _exr_field(_exr_channels(path), path, role, channel)
-        if fmt == "pfm":
-            return read_pfm(path)
-        if fmt == "png":
-            return _png(path)[0].astype(np.float64) / float(png_scale or 1.0)
-        return _array(path, fmt)
-
-    a = _decoded(path, decode)
-    if a.ndim == 3:
-        a = a[..., 0]
-    if a.ndim != 2:
-        raise ImageError(f"{path}: a field has shape (H, W), got {a.shape}; store one per file")
+    a = _one_channel(path, "a field", role, channel)
+    if image_format(path) == "png":
+        a = a.astype(np.float64) / float(png_scale or 1.0)
     return np.asarray(a, dtype=np.float32)
 
 
@@ -507,24 +517,7 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
         The file cannot be read, is not one ``(H, W)`` map, holds no numbers, or holds float
         ids beyond what its float type tells apart (one line naming the fix).
     """
-    fmt = image_format(path)
-
-    def decode():
-        if fmt == "exr":
-            return _exr_field(_exr_channels(path), path, "segmentation", channel)
-        if fmt == "pfm":
-            return read_pfm(path)
-        if fmt == "png":
-            return _png(path)[0]
-        return _array(path, fmt)
-
-    a = _decoded(path, decode)
-    if a.ndim == 3:
-        a = a[..., 0]
-    if a.ndim != 2:
-        raise ImageError(
-            f"{path}: a segmentation map has shape (H, W), got {a.shape}; store one per file"
-        )
+    a = _one_channel(path, "a segmentation map", "segmentation", channel)
     if a.dtype.kind in "biu":
         return a.astype(np.int64)
     if a.dtype.kind != "f":
