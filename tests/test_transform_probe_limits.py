@@ -192,25 +192,48 @@ def test_the_config_bounds_the_camera_to_settings_whose_frames_are_finite():
                 assert np.isfinite(get_transform(name)(inputs, **sensor)).all(), (name, sensor)
 
 
+GAIN_FIX = "keep controls.sensor.gain within [0.001, 1e+07]"
+READ_NOISE_FIX = "keep controls.sensor.read_noise within [0, 1000]"
+
+
 @pytest.mark.parametrize(
-    "name, sensor, shown",
+    "name, sensor, camera, fix",
     [
-        ("sensor_only", {"gain": 1e-300}, "gain 1e-300"),
-        ("sensor_only", {"read_noise": 1e300}, "read_noise 1e+300"),
-        ("equalise", {"gain": 1e-300}, "gain 1e-300"),
-        ("equalise", {"read_noise": 1e300}, "read_noise 1e+300"),
+        ("sensor_only", {"gain": 1e-300}, "gain 1e-300 e-/unit and read_noise 2 e-", GAIN_FIX),
+        ("sensor_only", {"read_noise": 1e300}, "gain 1000 e-/unit and read_noise 1e+300 e-",
+         READ_NOISE_FIX),
+        ("equalise", {"gain": 1e-300}, "gain 1e-300 e-/unit and read_noise 2 e-", GAIN_FIX),
+        ("equalise", {"read_noise": 1e300}, "gain 1000 e-/unit and read_noise 1e+300 e-",
+         READ_NOISE_FIX),
     ],
 )
 def test_a_transform_refuses_a_non_finite_output_naming_itself_and_the_camera(
-    name, sensor, shown
+    name, sensor, camera, fix
 ):
     mean = np.full((2, 3, 3), 0.5)
     inputs = _inputs(mean, render=mean + 0.1, seed_var=np.full(mean.shape, 0.01))
     with pytest.raises(ConfigError) as err:
         get_transform(name)(inputs, **sensor)
     message = _one_line(err)
-    assert f"transform '{name}'" in message and shown in message
-    assert "controls.sensor.gain within [0.001, 1e+07]" in message
+    assert message.startswith(f"transform '{name}' with {camera} gives ")
+    # only the setting past its bounds is named
+    largest = 0.5 if name == "sensor_only" else 0.6  # its input: the seed mean, the render
+    assert message.endswith(f" from finite input (largest input {largest}); {fix}"), message
+
+
+@pytest.mark.parametrize("name", ["sensor_only", "equalise"])
+def test_an_input_past_float32_is_named_as_the_cause_and_not_the_camera(name):
+    mean = np.full((2, 3, 3), 0.5)
+    mean[1, 1, 2] = 1e300  # the camera is the default, within its bounds
+    render = np.full(mean.shape, 0.6)
+    inputs = _inputs(mean, render=render, seed_var=np.full(mean.shape, 0.01))
+    with pytest.raises(ConfigError) as err:
+        get_transform(name)(inputs)
+    assert _one_line(err) == (
+        f"transform '{name}' with gain 1000 e-/unit and read_noise 2 e- gives 1 non-finite "
+        "value from finite input (largest input 1e+300); keep the input within float32's "
+        "range (magnitude at most 3.40282e+38)"
+    )
 
 
 # --- the learned probe: a diverged network, a network path that is not a file ----------------

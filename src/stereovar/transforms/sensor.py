@@ -35,6 +35,9 @@ from ..errors import ConfigError
 from .base import TransformInputs
 from .denoise import apply_denoise
 
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+"""The largest float32: an input past it overflows the float32 output."""
+
 DEFAULT_GAIN = SensorModel.gain
 DEFAULT_READ_NOISE = SensorModel.read_noise
 
@@ -74,20 +77,40 @@ def check_finite(out, expected, *, name: str, gain: float, read_noise: float, so
     Raises
     ------
     ConfigError
-        One line: the transform, the camera, how many values and the bounds to keep.
+        One line: the transform, the camera, how many values and what to keep within its
+        bounds: the gain, the read noise or the input, whichever is past them (all three
+        when none is).
     """
     bad = expected & ~np.isfinite(out)
     n = int(bad.sum())
     if not n:
         return
     largest = float(np.abs(np.asarray(source, dtype=np.float64)[expected]).max())
+    checks = [
+        (
+            GAIN_RANGE[0] <= float(gain) <= GAIN_RANGE[1],
+            f"controls.sensor.gain within [{GAIN_RANGE[0]:g}, {GAIN_RANGE[1]:g}]",
+        ),
+        (
+            0 <= float(read_noise) <= READ_NOISE_MAX,
+            f"controls.sensor.read_noise within [0, {READ_NOISE_MAX:g}]",
+        ),
+        (
+            largest <= FLOAT32_MAX,
+            f"the input within float32's range (magnitude at most {FLOAT32_MAX:g})",
+        ),
+    ]
+    keep = [text for ok, text in checks if not ok] or [text for _, text in checks]
     raise ConfigError(
         f"{name} with gain {float(gain):g} e-/unit and read_noise {float(read_noise):g} e- "
         f"gives {n} non-finite value{'s' * (n != 1)} from finite input (largest input "
-        f"{largest:g}); keep controls.sensor.gain within [{GAIN_RANGE[0]:g}, "
-        f"{GAIN_RANGE[1]:g}] and read_noise within [0, {READ_NOISE_MAX:g}], and the input "
-        "within float32's range"
+        f"{largest:g}); keep {_joined(keep)}"
     )
+
+
+def _joined(words: list) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
 
 
 def camera_noise(
@@ -287,7 +310,12 @@ def equalise_residual(
         out += mean
         out = out.astype(np.float32)
     check_finite(
-        out, good, name="transform 'equalise'", gain=gain, read_noise=read_noise, source=render
+        out,
+        good,
+        name="transform 'equalise'",
+        gain=gain,
+        read_noise=read_noise,
+        source=np.maximum(np.abs(render), np.abs(mean)),
     )
     out[~good] = np.nan
     return out, int(zero.sum())
