@@ -13,6 +13,7 @@ import json
 import os
 import shlex
 import shutil
+import socket
 import subprocess
 import sys
 import time
@@ -196,6 +197,40 @@ def test_a_record_written_as_a_run_starts_tells_a_live_lock_from_a_stale_one(tmp
         finally:
             live.kill()
     assert clear_stale_lock(state) and not any((state / "locks").iterdir())
+
+
+def test_a_lock_with_only_this_runs_own_start_record_is_not_stale(tmp_path):
+    # the workflow is parsed in the very process stereovar recorded as it started, before
+    # that process takes its lock: a lock there is another run's, recorded nowhere (a plain
+    # snakemake that has not reached onstart)
+    state = locked_state(tmp_path)
+    preflight.record_run(state, os.getpid(), "stereovar audit a.yaml")
+    assert not stale_lock(state) and not clear_stale_lock(state)
+    assert (state / "locks" / "0.output.lock").exists()
+
+
+def test_a_killed_runs_start_record_stays_until_the_next_run_holds_the_lock(tmp_path):
+    state = locked_state(tmp_path)
+    killed = preflight.record_run(state, ended_process(), "stereovar audit a.yaml")
+    mine = preflight.record_run(state, os.getpid(), "stereovar audit a.yaml")
+    assert killed.exists()  # the next run's parse still sees the run that was killed
+    assert stale_lock(state) and clear_stale_lock(state)
+    preflight.mark_run(state)  # the next run holds the lock now
+    assert not killed.exists() and mine.exists()
+
+
+def test_a_lock_newer_than_the_marker_of_an_ended_run_is_not_stale(tmp_path):
+    state = locked_state(tmp_path)
+    lock, marker = state / "locks" / "0.output.lock", state / RUN_MARKER
+    marker.write_text(json.dumps({"host": socket.gethostname(), "pid": ended_process()}))
+    # the marker's run ended; a later run took the lock and has not reached onstart
+    os.utime(marker, (lock.stat().st_mtime - 60,) * 2)
+    assert not stale_lock(state) and not clear_stale_lock(state) and lock.exists()
+    unlock = "stereovar run -- --unlock"
+    assert "no record" in preflight.lock_message(state, unlock)
+    os.utime(lock, (marker.stat().st_mtime - 60,) * 2)  # the marker's run took this lock
+    assert stale_lock(state)
+    assert "has ended" in preflight.lock_message(state, unlock)
 
 
 def test_the_lock_message_offers_unlock_only_without_a_run_that_may_hold_it(tmp_path):

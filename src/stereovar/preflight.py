@@ -191,6 +191,17 @@ def run_records(state_dir) -> list[dict]:
     return records
 
 
+def _own(record: dict) -> bool:
+    """Whether ``record`` is this very process's, written as it started (:data:`RUNS_DIR`):
+    the workflow is parsed before Snakemake takes the lock, so it names no holder and no
+    run that took the lock."""
+    return (
+        record["kind"] == "started"
+        and record["host"] == socket.gethostname()
+        and record["pid"] == os.getpid()
+    )
+
+
 def lock_holders(state_dir) -> list[dict]:
     """The recorded runs (:func:`run_records`) that may hold the locks in ``state_dir``: each
     one whose process still runs, or that ran on another host, once per process. A record
@@ -198,9 +209,8 @@ def lock_holders(state_dir) -> list[dict]:
     process has not taken the lock yet."""
     holders: dict = {}
     for record in run_records(state_dir):
-        if record["kind"] == "started" and record["host"] == socket.gethostname():
-            if record["pid"] == os.getpid():
-                continue
+        if _own(record):
+            continue
         if _alive(record) is not False:
             key = (record["host"], record["pid"])
             holders[key] = {**holders.get(key, {}), **{k: v for k, v in record.items() if v}}
@@ -212,18 +222,47 @@ def _locked(state_dir) -> bool:
     return locks.is_dir() and any(locks.iterdir())
 
 
+def _mtime(path: Path) -> float | None:
+    try:
+        return path.stat().st_mtime
+    except OSError:
+        return None
+
+
+def _recorded(state_dir) -> list[dict]:
+    """The records (:func:`run_records`) of the runs that may have taken the locks in
+    ``state_dir``: all but this process's own (:func:`_own`), and a marker only when no
+    lock file is newer than it. The marker is written after its run took the lock
+    (:func:`mark_run`), so a newer lock was taken by a later run that has not reached
+    ``onstart``: a plain ``snakemake`` run there is recorded nowhere until then."""
+    locks = Path(state_dir) / "locks"
+    times = [_mtime(p) for p in locks.iterdir()] if locks.is_dir() else []
+    newest = max((t for t in times if t is not None), default=None)
+    recorded = []
+    for record in run_records(state_dir):
+        if _own(record):
+            continue
+        if record["kind"] == "marker" and newest is not None:
+            written = _mtime(record["path"])
+            if written is None or written < newest:
+                continue
+        recorded.append(record)
+    return recorded
+
+
 def stale_lock(state_dir) -> bool:
     """Whether the locks in ``state_dir`` (``.snakemake``) belong to a run that is gone.
 
-    True only when lock files exist, a run is recorded (:func:`run_records`: the marker of
-    the run that took the lock, the records ``stereovar`` wrote as it started runs) and
-    none of them may hold the lock (:func:`lock_holders`): every recorded process was of
-    this host and no longer exists (a run killed by a signal or a lost session). A lock of
-    a live run, of another host, or of no recorded run is not stale.
+    True only when lock files exist, a run that may have taken them is recorded
+    (:func:`_recorded`: the marker of the run that took the lock, unless a lock is newer
+    than it, and the records ``stereovar`` wrote as it started runs, this process's own
+    left out) and no recorded run may hold the lock (:func:`lock_holders`): every recorded
+    process was of this host and no longer exists (a run killed by a signal or a lost
+    session). A lock of a live run, of another host, or of no recorded run is not stale.
     """
     if not _locked(state_dir):
         return False
-    return bool(run_records(state_dir)) and not lock_holders(state_dir)
+    return bool(_recorded(state_dir)) and not lock_holders(state_dir)
 
 
 def clear_stale_lock(state_dir) -> bool:
@@ -237,22 +276,24 @@ def clear_stale_lock(state_dir) -> bool:
 
 def mark_run(state_dir) -> None:
     """Record this host and process, and when it started, as the holder of the run's lock
-    (:data:`RUN_MARKER`)."""
+    (:data:`RUN_MARKER`), once the run has taken it; the records of processes of this host
+    that are gone (:func:`record_run`) are removed then: until a run holds the lock, the
+    record of a run killed before its ``onstart`` is what shows that run's lock is stale."""
     state = Path(state_dir)
     state.mkdir(parents=True, exist_ok=True)
     _write_json(state / RUN_MARKER, _record(os.getpid()))
+    for record in run_records(state):
+        if record["kind"] == "started" and _alive(record) is False:
+            record["path"].unlink(missing_ok=True)
 
 
 def record_run(state_dir, pid: int, command: str) -> Path:
     """Record process ``pid``, a Snakemake run ``command`` started in the folder of
     ``state_dir``, before it takes its lock (:data:`RUNS_DIR`); the records of processes
-    of this host that are gone are removed. Returns the record's path, for
-    :func:`forget_run` once the process has ended."""
+    that are gone stay until a run has taken the lock (:func:`mark_run`). Returns the
+    record's path, for :func:`forget_run` once the process has ended."""
     runs = Path(state_dir) / RUNS_DIR
     runs.mkdir(parents=True, exist_ok=True)
-    for record in run_records(state_dir):
-        if record["kind"] == "started" and _alive(record) is False:
-            record["path"].unlink(missing_ok=True)
     path = runs / f"{socket.gethostname()}-{int(pid)}.json"
     _write_json(path, _record(pid, command))
     return path
@@ -291,8 +332,9 @@ def lock_message(state_dir, unlock: str) -> str:
             f"{folder} is locked by another run still going ({runs}); wait for it to "
             "finish, then run the same command again"
         )
-    if run_records(state_dir):
-        ended = "; ".join(_describe_run(r) for r in run_records(state_dir))
+    recorded = _recorded(state_dir)
+    if recorded:
+        ended = "; ".join(map(_describe_run, recorded))
         return (
             f"{folder} was locked by a run that has ended ({ended}); run the same command "
             "again (the lock of a run that is gone is removed)"
