@@ -244,6 +244,46 @@ def test_the_lock_message_offers_unlock_only_without_a_run_that_may_hold_it(tmp_
     assert "--unlock" not in ended
 
 
+def write_record(state: Path, host: str, pid: int, **fields) -> None:
+    """A record of a Snakemake run as ``stereovar`` writes it as the run starts."""
+    runs = state / preflight.RUNS_DIR
+    runs.mkdir(exist_ok=True)
+    (runs / f"{host}-{pid}.json").write_text(json.dumps({"host": host, "pid": pid, **fields}))
+
+
+def test_a_lock_held_from_another_host_says_how_to_unlock_once_that_run_is_gone(tmp_path):
+    state = locked_state(tmp_path)
+    write_record(state, "node7", 4242, started=1.7e9, command="stereovar audit a.yaml")
+    unlock = "stereovar run --configfile 'my a.yaml' -- --unlock"
+    stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(1.7e9))
+    assert preflight.lock_message(state, unlock) == (
+        f"{tmp_path} is locked by another run still going (pid 4242 on host node7, started "
+        f"{stamp} (stereovar audit a.yaml)); wait for it to finish, then run the same command "
+        "again; if no run is going on host node7 any more, remove the lock with "
+        f"`{unlock}` and run the same command again"
+    )
+
+
+def test_a_live_pid_of_unknown_start_may_be_reused_and_says_how_to_unlock(tmp_path):
+    state = locked_state(tmp_path)
+    unlock = "stereovar run -- --unlock"
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as live:
+        try:
+            write_record(state, socket.gethostname(), live.pid)  # no start time: pid reused?
+            unsure = preflight.lock_message(state, unlock)
+            # its start time recorded: the same process, which may hold the lock
+            preflight.record_run(state, live.pid, "stereovar audit a.yaml")
+            sure = preflight.lock_message(state, unlock)
+            write_record(state, "node7", 4242)  # and one elsewhere: still only wait
+            both = preflight.lock_message(state, unlock)
+        finally:
+            live.kill()
+    assert f"if pid {live.pid} is no longer a snakemake run in that folder, " in unsure
+    assert f"`{unlock}`" in unsure
+    for line in (sure, both):
+        assert "wait for it to finish" in line and "--unlock" not in line, line
+
+
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory):
     """A one-frame audit imported once (``stereovar audit t.yaml --import-only``)."""

@@ -316,21 +316,54 @@ def _describe_run(record: dict) -> str:
     return f"pid {record['pid']}{where}{when}{command}"
 
 
+def _unconfirmed(record: dict) -> str | None:
+    """When this machine cannot tell that a recorded holder still runs, the condition
+    under which it does not: no run on its host any more (another host), or its pid no
+    longer that run (this host, its start time unknown, so the pid may have been reused);
+    None for a process of this host that started when the record says."""
+    if record["host"] != socket.gethostname():
+        return f"no run is going on host {record['host']} any more"
+    if record.get("started") is None or process_start(record["pid"]) is None:
+        return f"pid {record['pid']} is no longer a snakemake run in that folder"
+    return None
+
+
 def lock_message(state_dir, unlock: str) -> str:
     """What to say when Snakemake refuses a run because ``state_dir`` (``.snakemake``) is
-    locked: who holds the lock (:func:`lock_holders`) and to wait for it; that its holder
-    has ended and the same command now goes on; or, when no run is recorded, ``unlock``
-    (the command that removes the lock) for when no Snakemake runs there any more.
+    locked.
 
-    ``--unlock`` is never offered for a lock whose recorded holder may still run.
+    Parameters
+    ----------
+    state_dir : path-like
+        Snakemake's folder (``.snakemake``) of the locked run folder.
+    unlock : str
+        The command that removes the lock, shell-quoted (``stereovar run ... -- --unlock``).
+
+    Returns
+    -------
+    str
+        One line: who holds the lock (:func:`lock_holders`) and to wait for it, with
+        ``unlock`` for when no run is going any more where this machine cannot tell (a
+        holder on another host, or a pid of unknown start time, which may have been
+        reused); that its holder has ended and the same command now goes on; or, when no
+        run is recorded, ``unlock`` for when no Snakemake runs there any more.
+        ``--unlock`` is never offered for a lock that a process of this host, started
+        when its record says, may hold.
     """
     folder = Path(state_dir).absolute().parent
     holders = lock_holders(state_dir)
     if holders:
         runs = "; ".join(map(_describe_run, holders))
-        return (
+        wait = (
             f"{folder} is locked by another run still going ({runs}); wait for it to "
             "finish, then run the same command again"
+        )
+        unsure = [_unconfirmed(h) for h in holders]
+        if not all(unsure):
+            return wait
+        return (
+            f"{wait}; if {' and '.join(dict.fromkeys(unsure))}, remove the lock with "
+            f"`{unlock}` and run the same command again"
         )
     recorded = _recorded(state_dir)
     if recorded:
