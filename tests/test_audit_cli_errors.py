@@ -284,6 +284,31 @@ def test_a_live_pid_of_unknown_start_may_be_reused_and_says_how_to_unlock(tmp_pa
         assert "wait for it to finish" in line and "--unlock" not in line, line
 
 
+#: What Snakemake 9 prints when another run's lock covers this run's files.
+LOCK_TAIL = """Building DAG of jobs...
+LockException:
+Error: Directory cannot be locked. Please make sure that no other Snakemake process is \
+trying to create the same files in the following directory:
+{root}
+If you are sure that no other instances of snakemake are running on this directory, the \
+remaining lock was likely caused by a kill signal or a power loss. It can be removed with \
+the --unlock argument.
+"""
+
+
+def test_the_unlock_command_quotes_the_config_paths(tmp_path):
+    locked_state(tmp_path)
+    config = str(tmp_path / "my audit's.yaml")
+    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
+    monitor.root, monitor.configfiles = tmp_path, [config]
+    for line in LOCK_TAIL.format(root=tmp_path).splitlines():
+        monitor.feed(line + "\n")
+    (message,) = monitor.errors(1)
+    assert "no record" in message, message
+    unlock = message.split("remove the lock with `", 1)[1].split("`", 1)[0]
+    assert shlex.split(unlock) == ["stereovar", "run", "--configfile", config, "--", "--unlock"]
+
+
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory):
     """A one-frame audit imported once (``stereovar audit t.yaml --import-only``)."""

@@ -485,10 +485,13 @@ class _AuditMonitor:
         """Who holds the lock, when Snakemake stopped because the folder is locked."""
         if self.root is None or not any(line.startswith("LockException") for line in self.tail):
             return None
+        import shlex
+
         from .preflight import lock_message
 
-        configs = "".join(f" --configfile {f}" for f in self.configfiles)
-        return lock_message(self.root / ".snakemake", f"{PROG} run{configs} -- --unlock")
+        configs = [arg for f in self.configfiles for arg in ("--configfile", f)]
+        unlock = shlex.join([PROG, "run", *configs, "--", "--unlock"])
+        return lock_message(self.root / ".snakemake", unlock)
 
     def _workflow_error(self) -> str | None:
         """The workflow's last ``stereovar: <message>`` line (it stopped with it), without
