@@ -270,7 +270,7 @@ class _AuditMonitor:
         import subprocess
         from pathlib import Path
 
-        from .preflight import forget_run, record_run
+        from .preflight import STATE_DIR, forget_run, record_run
 
         self.root = Path(root)
         self.configfiles = [cmd[k + 1] for k, arg in enumerate(cmd[:-1]) if arg == "--configfile"]
@@ -291,7 +291,7 @@ class _AuditMonitor:
             bufsize=1,
         )
         try:
-            record = record_run(self.root / ".snakemake", proc.pid, self.command)
+            record = record_run(self.root / STATE_DIR, proc.pid, self.command)
         except OSError:  # the record only names the process: the run goes on without it
             record = None
         try:
@@ -487,11 +487,11 @@ class _AuditMonitor:
             return None
         import shlex
 
-        from .preflight import lock_message
+        from .preflight import STATE_DIR, lock_message
 
         configs = [arg for f in self.configfiles for arg in ("--configfile", f)]
         unlock = shlex.join([PROG, "run", *configs, "--", "--unlock"])
-        return lock_message(self.root / ".snakemake", unlock)
+        return lock_message(self.root / STATE_DIR, unlock)
 
     def _workflow_error(self) -> str | None:
         """The workflow's last ``stereovar: <message>`` line (it stopped with it), without
@@ -590,9 +590,9 @@ def _audit_preflight(root, config: dict, discovery) -> None:
     Snakemake's lock (:mod:`stereovar.preflight`), and the run config's mitigations and
     memory (:func:`stereovar.audit.run.check_audit_run`); one line for the first problem."""
     from .audit.run import audit_run_config, check_audit_run
-    from .preflight import check_free_space, check_writable
+    from .preflight import WRITTEN_FOLDERS, check_free_space, check_writable
 
-    check_writable([root / d for d in ("results", "logs", "benchmarks", ".snakemake")])
+    check_writable([root / d for d in WRITTEN_FOLDERS])
     check_free_space(root)
     check_audit_run({**config, **audit_run_config(config, discovery)}, discovery)
 

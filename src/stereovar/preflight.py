@@ -35,6 +35,14 @@ from .processes import process_exists
 BACKEND_KEYS = ("renderer", "renderer_version", "variant")
 """Render attributes that must agree across the renders a table pools."""
 
+STATE_DIR = ".snakemake"
+"""Snakemake's folder in the folder a run works in: its locks, its records of each job, and
+the run records of :data:`RUN_MARKER` and :data:`RUNS_DIR`."""
+
+WRITTEN_FOLDERS = ("results", "logs", "benchmarks", STATE_DIR)
+"""The folders, relative to the folder a run works in, that the run writes: what
+:func:`check_writable` checks before anything is written."""
+
 RUN_MARKER = "stereovar-run.json"
 """File in ``.snakemake/`` naming the host and process of the run that holds the lock
 (:func:`mark_run`, once the run has taken it)."""

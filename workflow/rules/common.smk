@@ -13,6 +13,8 @@ from stereovar.config import validate_config_or_exit
 from stereovar.errors import exit_with_one_line
 from stereovar.io.contracts import config_digest
 from stereovar.preflight import (
+    STATE_DIR,
+    WRITTEN_FOLDERS,
     check_backends,
     check_scene_specs,
     check_writable,
@@ -72,12 +74,13 @@ config.update(
 
 validate(config, CONFIG_SCHEMA, set_default=True)
 
-# Every directory the run writes must be writable, checked before anything (an audit's
-# import included) is written; Snakemake would stop with a ProtectedOutputException, or a
+# Every directory the run writes (stereovar.preflight.WRITTEN_FOLDERS, Snakemake's own
+# .snakemake included) must be writable, checked before anything (an audit's import
+# included) is written; Snakemake would stop with a ProtectedOutputException, or a
 # job would fail, naming no fix. A report only reads the results.
 if workflow.is_main_process and not any(a.startswith("--report") for a in sys.argv):
     with exit_with_one_line():
-        check_writable(["results", "logs", "benchmarks"])
+        check_writable(WRITTEN_FOLDERS)
 
 # An `audit:` section turns the run into an audit of renders made elsewhere: its files are
 # found here (templates globbed; nothing is read, hashed or written) and imported into the
@@ -560,7 +563,6 @@ set_rerun_arguments(snakemake_arguments())
 
 # A run killed on this host leaves its lock behind; the same command then resumes instead
 # of asking for --unlock (stereovar.preflight.stale_lock: only a lock whose run is gone).
-STATE_DIR = ".snakemake"
 if workflow.is_main_process and clear_stale_lock(STATE_DIR):
     print("stereovar: removed the lock of an earlier run that was killed", file=sys.stderr)
 
