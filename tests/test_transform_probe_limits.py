@@ -20,7 +20,7 @@ import torch  # the probe extra, which the set-up installs
 from stereovar import cli
 from stereovar.config import validate_config
 from stereovar.controls.sensor import SensorFrames, SensorModel
-from stereovar.errors import ConfigError, StoreError
+from stereovar.errors import ConfigError, MatcherFileError, StoreError
 from stereovar.transforms import TransformInputs, get_transform
 
 REPO = Path(__file__).resolve().parents[1]
@@ -330,6 +330,7 @@ def test_load_matcher_refuses_a_fifo_and_a_folder_without_waiting(tmp_path):
         worker.join(5)
         pytest.fail("load_matcher waited on a FIFO")
     (err,) = outcome
+    assert isinstance(err, MatcherFileError)  # from stereovar.errors
     assert isinstance(err, ValueError) and isinstance(err, StoreError)
     assert "\n" not in str(err) and str(fifo) in str(err) and "not a regular file" in str(err)
     assert "FIFO" in str(err)

@@ -27,6 +27,12 @@ class StoreError(StereovarError):
     """A stored result (e.g. a render) is missing, damaged or incomplete and must be rerun."""
 
 
+class MatcherFileError(StoreError, ValueError):
+    """A path that is not a probe network written by
+    :func:`stereovar.probe.training.save_matcher` (missing, not a regular file, not such a
+    file, or with non-finite weights); a job reports it in one line."""
+
+
 class WriteError(StereovarError):
     """A result cannot be written (a full disk, a read-only folder); what was written before
     is kept, and the same command resumes once the cause is fixed."""

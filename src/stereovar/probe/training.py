@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..errors import ConfigError, StoreError
+from ..errors import ConfigError, MatcherFileError
 from .network import MatchingNet, border
 
 __all__ = [
@@ -46,11 +46,6 @@ __all__ = [
 ]
 
 OPTIMISERS = ("adam", "sgd")
-
-
-class MatcherFileError(StoreError, ValueError):
-    """A path that is not a network written by :func:`save_matcher` (missing, not a regular
-    file, not such a file, or with non-finite weights); a job reports it in one line."""
 
 
 @dataclass(frozen=True)
@@ -356,7 +351,7 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
 
     Raises
     ------
-    MatcherFileError
+    ~stereovar.errors.MatcherFileError
         A :class:`ValueError` and :class:`~stereovar.errors.StoreError`: ``path`` is missing,
         not a regular file (a FIFO, which reading would wait on forever, a folder, a device),
         not such a file, or holds NaN or Inf weights (one line naming it and the fix).
