@@ -9,13 +9,18 @@ replaces. The workflow therefore checks up front (``workflow/rules/common.smk``)
 * the back end a render would use on this machine, and whether the renders a run would pool
   into one table came from one back end (:func:`check_backends`), in ``onstart`` for local
   runs, where the variant ``auto`` resolves to is this machine's;
-* a lock left by a run that was killed on this machine (:func:`stale_lock`), so the same
-  command resumes; a lock of a run still going is named, with its process, when Snakemake
-  refuses the run (:func:`lock_message`);
-* that the directories the run writes (``results/``, ``logs/``, ...) can be written
+* a lock left by a run that was killed on this machine (:func:`stale_lock`), removed when
+  the workflow is parsed so the same command resumes; the run that holds the lock marks
+  itself in ``onstart`` (:func:`mark_run`);
+* that the folders the run writes (:data:`WRITTEN_FOLDERS`) can be written
   (:func:`check_writable`), when the workflow is parsed: Snakemake would otherwise stop with
-  a ``ProtectedOutputException`` naming no fix, or fail inside the first job;
-* that the disk has room for Snakemake's lock and records (:func:`check_free_space`).
+  a ``ProtectedOutputException`` naming no fix, or fail inside the first job.
+
+``stereovar audit`` makes the workflow's checks of an audit before it starts Snakemake,
+and two that only it makes: that the disk has room for Snakemake's lock and records
+(:func:`check_free_space`), and, when Snakemake refuses the run because the folder is
+locked, which run holds the lock (:func:`lock_message`), from the records it writes of each
+Snakemake it starts (:func:`record_run`).
 """
 
 from __future__ import annotations
