@@ -101,10 +101,41 @@ def _unreadable(path, err, what="file") -> ImageError:
     )
 
 
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular one is, in words, from its ``st_mode``.
+
+    Parameters
+    ----------
+    mode : int
+        The file's ``st_mode`` (:func:`os.stat`, :func:`os.fstat`).
+
+    Returns
+    -------
+    str
+        ``"a named pipe"``, ``"a character device"``, ``"a block device"``, ``"a
+        directory"``, ``"a socket"``, or ``"not a file"``.
+
+    Examples
+    --------
+    >>> file_kind(stat.S_IFIFO | 0o644), file_kind(stat.S_IFDIR | 0o755)
+    ('a named pipe', 'a directory')
+    """
+    return _KINDS.get(stat.S_IFMT(mode), "not a file")
+
+
 def not_regular_error(path, mode) -> ImageError:
     """The one-line error for ``path`` whose ``st_mode`` is ``mode``: not a regular file."""
-    kind = _KINDS.get(stat.S_IFMT(mode), "not a file")
-    return ImageError(f"{path}: not a regular file ({kind}); give the path of an image file")
+    return ImageError(
+        f"{path}: not a regular file ({file_kind(mode)}); give the path of an image file"
+    )
+
+
+def unopenable_error(path, err: OSError) -> ImageError:
+    """The one-line error for a ``path`` that cannot be opened (``err``): missing
+    (:func:`missing_error`) or not readable."""
+    if isinstance(err, FileNotFoundError):
+        return missing_error(path)
+    return ImageError(f"{path}: cannot open it ({err.strerror}); make it readable")
 
 
 def missing_error(path) -> ImageError:
@@ -132,20 +163,34 @@ def regular_file(path) -> None:
 
 
 @contextmanager
-def _open_regular(path):
+def open_regular(path, *, unopenable=unopenable_error, not_regular=not_regular_error):
     """``path`` opened for binary reading once it is known to be a regular file: the open
     does not block (a named pipe opened for reading would wait for a writer) and the kind
-    is checked on the open descriptor."""
+    is checked on the open descriptor, so what is read is the file that was checked.
+
+    Parameters
+    ----------
+    path : path-like
+    unopenable : callable (path, OSError) -> Exception, keyword-only
+        The error raised when ``path`` cannot be opened (default: an image file's,
+        :func:`unopenable_error`).
+    not_regular : callable (path, int) -> Exception, keyword-only
+        The error raised for a path whose ``st_mode`` is not a regular file's (default: an
+        image file's, :func:`not_regular_error`; :func:`file_kind` names the kind).
+
+    Yields
+    ------
+    io.BufferedReader
+        The open file, closed on leaving the block.
+    """
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-    except FileNotFoundError:
-        raise missing_error(path) from None
     except OSError as err:
-        raise ImageError(f"{path}: cannot open it ({err.strerror}); make it readable") from None
+        raise unopenable(path, err) from None
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
-        raise not_regular_error(path, mode)
+        raise not_regular(path, mode)
     os.set_blocking(fd, True)
     with os.fdopen(fd, "rb") as f:
         yield f
@@ -172,7 +217,7 @@ def image_size(path) -> tuple[int, int]:
     """
     fmt = image_format(path)
     path = Path(path)
-    with _open_regular(path) as f:
+    with open_regular(path) as f:
         try:
             with _quiet():
                 return _header_size(f, fmt, path)

@@ -22,15 +22,14 @@ Importing this module imports PyTorch (the ``probe`` extra).
 
 from __future__ import annotations
 
-import stat
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 
 from ..errors import ConfigError, MatcherFileError
+from ..io.images import file_kind, open_regular
 from .network import MatchingNet, border
 
 __all__ = [
@@ -353,31 +352,21 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
     ------
     ~stereovar.errors.MatcherFileError
         A :class:`ValueError` and :class:`~stereovar.errors.StoreError`: ``path`` is missing,
-        not a regular file (a FIFO, which reading would wait on forever, a folder, a device),
-        not such a file, or holds NaN or Inf weights (one line naming it and the fix).
+        not a regular file (a named pipe, which reading would wait on forever, a directory, a
+        device: refused on the open file, which is then the file read), not such a file, or
+        holds NaN or Inf weights (one line naming it and the fix).
     """
-    try:
-        mode = Path(path).stat().st_mode
-    except OSError as err:
-        raise MatcherFileError(
-            f"{path}: cannot read the probe network ({err.strerror or err}); rerun the probe "
-            "to train it"
-        ) from None
-    if not stat.S_ISREG(mode):
-        raise MatcherFileError(
-            f"{path}: not a regular file (a {_file_kind(mode)}), so not a probe network; "
-            "remove it and rerun the probe to train the network"
-        )
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-        net = MatchingNet(**payload["architecture"])
-        net.load_state_dict(payload["state_dict"])
-    except Exception as err:  # torch.load raises many types (EOFError, UnpicklingError, ...)
-        detail = " ".join(str(err).split())[:160]  # torch's messages span several lines
-        raise MatcherFileError(
-            f"{path}: not a stereovar probe network ({type(err).__name__}: {detail}); delete it "
-            "and rerun the probe to train it again"
-        ) from None
+    with open_regular(path, unopenable=_unreadable, not_regular=_not_regular) as f:
+        try:
+            payload = torch.load(f, map_location="cpu", weights_only=True)
+            net = MatchingNet(**payload["architecture"])
+            net.load_state_dict(payload["state_dict"])
+        except Exception as err:  # torch.load raises many types (EOFError, UnpicklingError)
+            detail = " ".join(str(err).split())[:160]  # torch's messages span several lines
+            raise MatcherFileError(
+                f"{path}: not a stereovar probe network ({type(err).__name__}: {detail}); "
+                "delete it and rerun the probe to train it again"
+            ) from None
     bad = nonfinite_weights(net)
     if bad:
         raise MatcherFileError(
@@ -390,13 +379,15 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
     return net, record
 
 
-def _file_kind(mode: int) -> str:
-    """What a non-regular file is, in words."""
-    kinds = [
-        (stat.S_ISDIR, "folder"),
-        (stat.S_ISFIFO, "FIFO"),
-        (stat.S_ISSOCK, "socket"),
-        (stat.S_ISCHR, "character device"),
-        (stat.S_ISBLK, "block device"),
-    ]
-    return next((word for test, word in kinds if test(mode)), "special file")
+def _unreadable(path, err: OSError) -> MatcherFileError:
+    return MatcherFileError(
+        f"{path}: cannot read the probe network ({err.strerror or err}); rerun the probe to "
+        "train it"
+    )
+
+
+def _not_regular(path, mode: int) -> MatcherFileError:
+    return MatcherFileError(
+        f"{path}: not a regular file ({file_kind(mode)}), so not a probe network; remove it "
+        "and rerun the probe to train the network"
+    )
