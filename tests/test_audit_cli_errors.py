@@ -26,7 +26,8 @@ from stereovar import cli, preflight
 from stereovar import resources as sizing
 from stereovar.audit import run as audit_run
 from stereovar.audit.synthetic import write_synthetic_audit
-from stereovar.errors import ImageError
+from stereovar.config import validate_config
+from stereovar.errors import AuditError, ConfigError, ImageError
 from stereovar.io.renders import RERUN_ARGS_ENV, rebuild_command
 from stereovar.preflight import RUN_MARKER, clear_stale_lock, stale_lock
 
@@ -127,6 +128,35 @@ def test_renders_too_large_for_memory_stop_before_snakemake(tmp_path, preflight_
     assert "audit.renders: the renders are 30000x30000 pixels" in line, line
     assert f"{request:,} MB" in line and "16,000 MB of this machine's memory" in line
     assert "config key 'resolution'" not in line and "downsample" in line
+
+
+#: Memory of an analysis job on 1x1 images by hand: 1024 MB and 24 float64 RGB pixels.
+SMALLEST_ANALYSIS_MB = 1024 + 1
+#: ... and of a render or moments job: 1536 MB and well under 1 MiB of pixels.
+SMALLEST_RENDER_MB = 1536 + 1
+
+
+@pytest.mark.parametrize(
+    ("source", "fix"),
+    [
+        ("--resources mem_mb", "raise --resources mem_mb to at least {:,} MB"),
+        ("cluster.max_mem_mb", "raise cluster.max_mem_mb to at least {:,} MB"),
+        (sizing.MACHINE, "run on a machine with at least {:,} MB of memory (on a cluster, set "
+         "cluster.max_mem_mb to the memory of its largest node)"),
+    ],
+)
+def test_a_bound_no_image_size_fits_names_how_to_raise_it(tmp_path, monkeypatch, source, fix):
+    monkeypatch.chdir(tmp_path)
+    config = cli._workflow_config(tmp_path, [tmp_path / write_audit(tmp_path)])
+    discovery = audit_run.discover_audit(config["audit"])
+    config.update(audit_run.audit_run_config(config, discovery))
+    with pytest.raises(AuditError) as err:
+        audit_run.check_audit_memory(config, discovery, 1000, source)
+    assert str(err.value).endswith(f"; no image size fits; {fix.format(SMALLEST_ANALYSIS_MB)}")
+    default = validate_config({}, REPO / "workflow" / "schemas" / "config.schema.yaml")
+    with pytest.raises(ConfigError) as err:
+        sizing.check_job_memory(default, 1000, source)
+    assert str(err.value).endswith(f"; no resolution fits; {fix.format(SMALLEST_RENDER_MB)}")
 
 
 def test_a_full_disk_stops_before_snakemake(tmp_path, preflight_only, monkeypatch):

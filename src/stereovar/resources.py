@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 MIB = 2**20
 
@@ -173,6 +174,72 @@ def largest_fitting_size(config, limit_mb: int) -> tuple[int, int] | None:
     return max(1, int(width * lo)), max(1, int(height * lo))
 
 
+class MemoryExcess(NamedTuple):
+    """The job of a config that requests more memory than one job may use
+    (:func:`memory_excess`)."""
+
+    job: str
+    """Its kind (:func:`job_mem_requests`)."""
+    request: int
+    """Its first-attempt request, MB."""
+    fitting: tuple[int, int] | None
+    """The largest image size (width, height) of the config's aspect ratio whose jobs all
+    fit (:func:`largest_fitting_size`); None when none does."""
+    smallest: int
+    """The most memory (MB) a job requests at 1x1: the least the bound must be."""
+
+
+def memory_excess(config, limit_mb: int) -> MemoryExcess | None:
+    """The job of ``config`` that requests the most memory, when that is more than
+    ``limit_mb``.
+
+    Parameters
+    ----------
+    config : dict
+        A validated config (``resolution``, ``render``, ...).
+    limit_mb : int
+        The most memory (MB) one job may request (:func:`memory_limit`).
+
+    Returns
+    -------
+    MemoryExcess or None
+        None when every job fits; else the largest job, its request, the largest size that
+        fits and the least bound any size needs.
+    """
+    requests = job_mem_requests(config)
+    job, request = max(requests.items(), key=lambda item: item[1])
+    if request <= limit_mb:
+        return None
+    tiny = {**config, "resolution": {"width": 1, "height": 1}}
+    smallest = max(job_mem_requests(tiny).values())
+    return MemoryExcess(job, request, largest_fitting_size(config, limit_mb), smallest)
+
+
+def raise_bound(source: str, at_least_mb: int) -> str:
+    """How to lift the bound ``source`` (:func:`memory_limit`) to ``at_least_mb`` MB: a
+    machine with that much memory, or the setting raised.
+
+    Parameters
+    ----------
+    source : str
+        Where the bound comes from: :data:`MACHINE`, ``cluster.max_mem_mb`` or
+        ``--resources mem_mb``.
+    at_least_mb : int
+        The bound needed, MB.
+
+    Returns
+    -------
+    str
+        The fix, in words.
+    """
+    if source == MACHINE:
+        return (
+            f"run on a machine with at least {at_least_mb:,} MB of memory (on a cluster, set "
+            "cluster.max_mem_mb to the memory of its largest node)"
+        )
+    return f"raise {source} to at least {at_least_mb:,} MB"
+
+
 def check_job_memory(config, limit_mb: int, source: str) -> None:
     """Refuse a config whose largest job would request more memory than ``limit_mb``.
 
@@ -180,20 +247,22 @@ def check_job_memory(config, limit_mb: int, source: str) -> None:
     ------
     ConfigError
         One line with the job, its request, the bound and where it comes from, and the
-        largest resolution of the same aspect ratio that fits.
+        largest resolution of the same aspect ratio that fits, or, when none does, how to
+        raise the bound (:func:`raise_bound`).
     """
     from .errors import ConfigError
 
-    requests = job_mem_requests(config)
-    job, request = max(requests.items(), key=lambda item: item[1])
-    if request <= limit_mb:
+    excess = memory_excess(config, limit_mb)
+    if excess is None:
         return
     width, height = config["resolution"]["width"], config["resolution"]["height"]
-    fitting = largest_fitting_size(config, limit_mb)
-    fix = f"use at most {fitting[0]}x{fitting[1]}" if fitting else "no resolution fits"
-    if source == MACHINE:
-        fix += " (on a cluster, set cluster.max_mem_mb to the memory of its largest node)"
+    if excess.fitting is None:
+        fix = f"no resolution fits; {raise_bound(source, excess.smallest)}"
+    else:
+        fix = f"use at most {excess.fitting[0]}x{excess.fitting[1]}"
+        if source == MACHINE:
+            fix += " (on a cluster, set cluster.max_mem_mb to the memory of its largest node)"
     raise ConfigError(
-        f"config key 'resolution': {width}x{height} makes each {job} job request "
-        f"{request:,} MB of memory, more than the {limit_mb:,} MB of {source}; {fix}"
+        f"config key 'resolution': {width}x{height} makes each {excess.job} job request "
+        f"{excess.request:,} MB of memory, more than the {limit_mb:,} MB of {source}; {fix}"
     )

@@ -206,27 +206,25 @@ def check_audit_memory(config: dict, discovery: Discovery, limit_mb: int, source
     ------
     AuditError
         One line: the renders' size (and one of them), the job and its request, the bound,
-        and the largest size of the same aspect ratio that fits.
+        and the largest size of the same aspect ratio that fits, or, when none does, how
+        to raise the bound (:func:`stereovar.resources.memory_excess`).
     """
-    requests = sizing.job_mem_requests(config)
-    job, request = max(requests.items(), key=lambda item: item[1])
-    if request <= limit_mb:
+    excess = sizing.memory_excess(config, limit_mb)
+    if excess is None:
         return
     width, height = config["resolution"]["width"], config["resolution"]["height"]
     example = next(iter(discovery.frames[0].renders[VIEWS[0]].values()))
-    fitting = sizing.largest_fitting_size(config, limit_mb)
-    fix = (
-        f"crop or downsample the renders to at most {fitting[0]}x{fitting[1]}"
-        if fitting
-        else "no image size fits"
-    )
-    if source == sizing.MACHINE:
-        fix += ", or audit them on a machine with more memory (on a cluster, set "
-        fix += "cluster.max_mem_mb to the memory of its largest node)"
+    if excess.fitting is None:
+        fix = f"no image size fits; {sizing.raise_bound(source, excess.smallest)}"
+    else:
+        fix = f"crop or downsample the renders to at most {excess.fitting[0]}x{excess.fitting[1]}"
+        if source == sizing.MACHINE:
+            fix += ", or audit them on a machine with more memory (on a cluster, set "
+            fix += "cluster.max_mem_mb to the memory of its largest node)"
     raise AuditError(
-        f"audit.renders: the renders are {width}x{height} pixels ({example}), so each {job} "
-        f"job would request {request:,} MB of memory, more than the {limit_mb:,} MB of "
-        f"{source}; {fix}"
+        f"audit.renders: the renders are {width}x{height} pixels ({example}), so each "
+        f"{excess.job} job would request {excess.request:,} MB of memory, more than the "
+        f"{limit_mb:,} MB of {source}; {fix}"
     )
 
 
