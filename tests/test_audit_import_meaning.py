@@ -243,6 +243,35 @@ def test_half_float_with_ample_noise_and_float_renders_are_not_flagged(tmp_path,
     assert record["found"]["half"] == {} and not flags_of(record, "quantisation")
 
 
+def test_the_half_float_share_uses_the_import_seed_mean_and_skips_non_finite_pixels():
+    from stereovar.audit.importer import _half_quantised_fraction, _seed_mean
+
+    rng = np.random.default_rng(4)
+    # 6 seeds of 5x4 px: half-float values around 1 spread by about one half-float step
+    stack = (1.0 + rng.integers(-1, 2, (6, 5, 4, 3)) / 1024).astype(np.float32)
+    stack[:, 2:] += rng.normal(0.0, 0.05, (6, 3, 4, 3)).astype(np.float32)  # rows 2-4: noisy
+    stack[3, 0, 0, 1] = np.nan  # a NaN render pixel, and an Inf one
+    stack[1, 0, 1, 2] = np.inf
+    valid = np.ones((5, 4), bool)
+    valid[1, 3] = False
+    n_bad = (~np.isfinite(stack)).any(axis=-1).sum(axis=(1, 2))
+    mean = _seed_mean(stack, n_bad)
+    # brute force: a pixel counts when all its values are finite and, in every channel, the
+    # sample sd over the 6 seeds is below 2 spacings of half floats at the seed mean
+    count = 0
+    for y, x in zip(*np.nonzero(valid), strict=True):
+        values = stack[:, y, x].astype(np.float64)
+        if not np.isfinite(values).all():
+            continue
+        sd = values.std(axis=0, ddof=1)
+        m = values.mean(axis=0)
+        step = [np.spacing(np.float16(abs(c))).astype(np.float64) for c in m]
+        count += all(sd[c] < 2 * step[c] for c in range(3))
+    expected = count / valid.sum()
+    assert 0 < expected < 1
+    assert _half_quantised_fraction(stack, valid, mean) == pytest.approx(expected, abs=1e-12)
+
+
 # -- C: segment ids above 2**24 ---------------------------------------------------------------
 
 

@@ -698,15 +698,15 @@ def _half_precision(stack: np.ndarray) -> bool:
     return True
 
 
-def _half_quantised_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
+def _half_quantised_fraction(stack: np.ndarray, valid: np.ndarray, mean: np.ndarray) -> float:
     r"""Fraction of ``valid`` pixels whose spread across the N renders is below
     :data:`HALF_STEPS` half-float steps in every channel:
     :math:`s_c(x) < k\,\Delta_{16}(\bar I_c(x))` for every channel :math:`c`, with
     :math:`s_c` the sample standard deviation over the seeds, :math:`\bar I_c` the seed
-    mean, :math:`\Delta_{16}` the spacing of half floats there and :math:`k` =
-    :data:`HALF_STEPS`."""
-    mean = stack.mean(axis=0, dtype=np.float64)
-    squares = np.zeros_like(mean)
+    mean ``mean`` (:func:`_seed_mean`, float64 ``(H, W, 3)``), :math:`\Delta_{16}` the
+    spacing of half floats there and :math:`k` = :data:`HALF_STEPS`. A pixel with a NaN or
+    Inf render has no finite spread and is not counted."""
+    squares = np.zeros_like(mean, dtype=np.float64)
     for image in stack:  # one render at a time: no temporary the size of the stack
         squares += (image - mean) ** 2
     spread = np.sqrt(squares / max(len(stack) - 1, 1))
@@ -780,7 +780,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         if any(image_format(p) == "png" for p in paths):
             fr.clipped[view] = _clipped_fraction(images, valid, scale)
         elif _half_precision(images):
-            fr.half[view] = _half_quantised_fraction(images, valid)
+            fr.half[view] = _half_quantised_fraction(images, valid, means[view])
         datasets[view] = render_dataset(
             images,
             view=view,
