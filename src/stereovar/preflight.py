@@ -144,8 +144,19 @@ def check_backends(
 
 
 def process_start(pid: int) -> float | None:
-    """When process ``pid`` of this machine started, in seconds since the epoch (from
-    ``/proc``); None where that cannot be told (no such process, no ``/proc``)."""
+    """When a process of this machine started (from ``/proc``).
+
+    Parameters
+    ----------
+    pid : int
+        The process id.
+
+    Returns
+    -------
+    float or None
+        Seconds since the epoch, to the clock tick; None where that cannot be told (no such
+        process, no ``/proc``).
+    """
     try:
         fields = Path(f"/proc/{int(pid)}/stat").read_text().rsplit(")", 1)[1].split()
         boot = next(
@@ -181,10 +192,20 @@ def _alive(record: dict) -> bool | None:
 
 
 def run_records(state_dir) -> list[dict]:
-    """The records of the runs of ``state_dir`` (``.snakemake``): :data:`RUN_MARKER`, then
-    each of :data:`RUNS_DIR`, each with ``host``, ``pid``, ``started`` (None if unknown),
-    ``command`` (None if unknown) and ``kind`` (``marker`` or ``started``); unreadable ones
-    are skipped."""
+    """The records of the runs of a folder: :data:`RUN_MARKER`, then each of
+    :data:`RUNS_DIR`; unreadable ones are skipped.
+
+    Parameters
+    ----------
+    state_dir : path-like
+        Snakemake's folder (:data:`STATE_DIR`) of the folder the runs work in.
+
+    Returns
+    -------
+    list of dict
+        Each with ``host``, ``pid``, ``started`` (None if unknown), ``command`` (None if
+        unknown), ``kind`` (``marker`` or ``started``) and ``path`` (the record's file).
+    """
     state = Path(state_dir)
     runs = state / RUNS_DIR
     paths = [(state / RUN_MARKER, "marker")]
@@ -216,10 +237,22 @@ def _own(record: dict) -> bool:
 
 
 def lock_holders(state_dir) -> list[dict]:
-    """The recorded runs (:func:`run_records`) that may hold the locks in ``state_dir``: each
-    one whose process still runs, or that ran on another host, once per process. A record
-    of this very process written as it started (:data:`RUNS_DIR`) names no holder: the
-    process has not taken the lock yet."""
+    """The recorded runs (:func:`run_records`) that may hold the locks of a folder.
+
+    A record of this very process written as it started (:data:`RUNS_DIR`) names no
+    holder: the process has not taken the lock yet.
+
+    Parameters
+    ----------
+    state_dir : path-like
+        Snakemake's folder (:data:`STATE_DIR`) of the locked folder.
+
+    Returns
+    -------
+    list of dict
+        One per process whose record says it still runs, or that ran on another host
+        (this machine cannot tell), its records' fields merged (:func:`run_records`).
+    """
     holders: dict = {}
     for record in run_records(state_dir):
         if _own(record):
@@ -301,10 +334,26 @@ def mark_run(state_dir) -> None:
 
 
 def record_run(state_dir, pid: int, command: str) -> Path:
-    """Record process ``pid``, a Snakemake run ``command`` started in the folder of
-    ``state_dir``, before it takes its lock (:data:`RUNS_DIR`); the records of processes
-    that are gone stay until a run has taken the lock (:func:`mark_run`). Returns the
-    record's path, for :func:`forget_run` once the process has ended."""
+    """Record a Snakemake process started in a folder, before it takes its lock
+    (:data:`RUNS_DIR`), so that a run it locks out can name it (:func:`lock_message`).
+
+    The records of processes that are gone stay until a run has taken the lock
+    (:func:`mark_run`).
+
+    Parameters
+    ----------
+    state_dir : path-like
+        Snakemake's folder (:data:`STATE_DIR`) of the folder the process works in.
+    pid : int
+        The Snakemake process.
+    command : str
+        The command that started it, as the user typed it (``stereovar audit a.yaml``).
+
+    Returns
+    -------
+    Path
+        The record, for :func:`forget_run` once the process has ended.
+    """
     runs = Path(state_dir) / RUNS_DIR
     runs.mkdir(parents=True, exist_ok=True)
     path = runs / f"{socket.gethostname()}-{int(pid)}.json"
@@ -313,7 +362,13 @@ def record_run(state_dir, pid: int, command: str) -> Path:
 
 
 def forget_run(path) -> None:
-    """Remove a record of :func:`record_run` (its process has ended)."""
+    """Remove a record of :func:`record_run` once its process has ended.
+
+    Parameters
+    ----------
+    path : path-like
+        The record, as :func:`record_run` returned it; a record already gone is no error.
+    """
     Path(path).unlink(missing_ok=True)
 
 
@@ -395,6 +450,14 @@ def lock_message(state_dir, unlock: str) -> str:
 def check_free_space(folder, min_mb: int = MIN_FREE_MB) -> None:
     """Stop a run whose disk has less than ``min_mb`` MB free (:data:`MIN_FREE_MB`):
     Snakemake would fail to write its lock with a traceback before any job.
+
+    Parameters
+    ----------
+    folder : path-like
+        The folder the run works in; where it does not exist yet, its nearest existing
+        parent's disk.
+    min_mb : int, optional
+        The free space a run needs, MB (10^6 bytes).
 
     Raises
     ------

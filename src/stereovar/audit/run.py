@@ -107,6 +107,11 @@ def check_files(discovery: Discovery) -> None:
     found by the import job itself would stop the run after Snakemake had deleted the
     frame's earlier stores.
 
+    Parameters
+    ----------
+    discovery : Discovery
+        The audit's files (:func:`stereovar.audit.layout.discover`).
+
     Raises
     ------
     ImageError
@@ -129,12 +134,24 @@ def frame_files(discovery: Discovery, frame: str) -> list[str]:
 
 
 def import_params(settings: dict) -> str:
-    """The ``settings`` param of every ``audit_import`` job: the digest of the settings as
-    the import applies them (:func:`~stereovar.audit.importer.settings_digest`), so that
-    reordering the ``audit:`` keys or writing a default out (``scale: 1.0``,
+    """The ``settings`` param of every ``audit_import`` job.
+
+    Reordering the ``audit:`` keys or writing a default out (``scale: 1.0``,
     ``channels: {}``) reruns nothing, and settings the import does not read
     (``mitigations``, ``probe``) do not import the frames again. The files' templates are
-    the job's inputs; the job reads the settings from the workflow's config."""
+    the job's inputs; the job reads the settings from the workflow's config.
+
+    Parameters
+    ----------
+    settings : dict
+        The ``audit:`` section of the config.
+
+    Returns
+    -------
+    str
+        The digest of the settings as the import applies them
+        (:func:`~stereovar.audit.importer.settings_digest`).
+    """
     return settings_digest(settings)
 
 
@@ -269,6 +286,13 @@ def set_aside_verdict(name: str, root=".") -> list[Path]:
     (``onstart``): until the verdict job has written the new page, no page claims a verdict
     on stores that are being replaced, whether the run then succeeds, fails or is killed.
     Each file is moved with one rename (nothing is copied or lost).
+
+    Parameters
+    ----------
+    name : str
+        The audit's ``audit.name``.
+    root : path-like, optional
+        The folder the run works in (default: the current one).
 
     Returns
     -------
