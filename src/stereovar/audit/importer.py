@@ -77,6 +77,10 @@ IMPORT_KEYS = (
 )
 """``audit:`` settings that change what a frame imports to (a change re-imports it)."""
 
+RELATIONS = {1: "x_R = x_L + d", -1: "x_R = x_L - d"}
+"""The correspondence of each disparity sign :math:`s` (:data:`CONVENTIONS`), as the import's
+lines write it."""
+
 DEFAULT_DISPARITY_SCALE = 256.0
 """PNG disparity is value / 256 (KITTI); 0 is invalid."""
 
@@ -896,10 +900,10 @@ def _frame_ground_truth(
             "outside",
             f"frame {frame.name}: {counts['outside']} of the {total} left pixels "
             f"({100 * counts['outside'] / total:.1f}%) have a disparity whose match falls "
-            f"outside the right image ({gt.sizes['x']} px wide, x_R = x_L "
-            f"{'+' if sign == 1 else '-'} d): the disparity is too large for these images, "
-            "as a depth map or a disparity in another unit or scale is; check audit.disparity "
-            "(or audit.depth), its channel and audit.disparity_scale",
+            f"outside the right image ({gt.sizes['x']} px wide, {RELATIONS[sign]}): the "
+            "disparity is too large for these images, as a depth map or a disparity in "
+            "another unit or scale is; check audit.disparity (or audit.depth), its channel and "
+            "audit.disparity_scale",
             frame.name,
         )
     return gt, gt_files
@@ -915,13 +919,12 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
     )
     if check.opposite_wins:
         other = "conventional" if sign == 1 else "paper"
-        rel = {1: "x_R = x_L + d", -1: "x_R = x_L - d"}
         raise AuditError(
             f"frame {frame.name}: the disparity follows the other convention: the right seed "
             f"mean warped into the left matches with a median error of "
-            f"{100 * check.opposite_error:.1f}% under {rel[-sign]} but "
-            f"{100 * check.error:.1f}% under the declared {rel[sign]}; set audit.convention: "
-            f"{other}"
+            f"{100 * check.opposite_error:.1f}% under {RELATIONS[-sign]} but "
+            f"{100 * check.error:.1f}% under the declared {RELATIONS[sign]}; set "
+            f"audit.convention: {other}"
         )
     convention = settings.get("convention") or "conventional"
     errors = (
@@ -1023,8 +1026,8 @@ def check_settings(settings: dict) -> None:
     convention = settings.get("convention") or "conventional"
     if convention not in CONVENTIONS:
         raise AuditError(
-            f"audit.convention {convention!r} is unknown; use paper (x_R = x_L + d) or "
-            "conventional (x_R = x_L - d)"
+            f"audit.convention {convention!r} is unknown; use "
+            + " or ".join(f"{name} ({RELATIONS[s]})" for name, s in CONVENTIONS.items())
         )
 
 
