@@ -243,6 +243,64 @@ def test_half_float_with_ample_noise_and_float_renders_are_not_flagged(tmp_path,
     assert record["found"]["half"] == {} and not flags_of(record, "quantisation")
 
 
+def test_float32_renders_whose_values_are_all_half_floats_are_not_taken_for_half(
+    tmp_path, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    root = tmp_path / "d"
+    settings, frames = write_synthetic_audit(root, n_frames=1, level=1e-7, width=64, height=40,
+                                             n_seeds=8)
+    for letter, view in (("L", "left"), ("R", "right")):
+        for s, image in enumerate(frames[0].renders[view]):
+            values = image.astype(np.float16).astype(np.float32)  # every value a half float
+            write_image(root / f"renders/f00/{letter}/seed_{s:03d}.exr", values, half=False)
+    exr = root / "renders/f00/L/seed_000.exr"
+    with OpenEXR.File(str(exr), separate_channels=True) as f:  # the file says float32
+        assert {c.pixels.dtype for c in f.channels().values()} == {np.dtype(np.float32)}
+    import_audit(settings)
+    record = record_of()
+    assert record["found"]["half"] == {} and not flags_of(record, "quantisation")
+    # the same values as PFM, whose header cannot say: every value a half float is half
+    pfm = {**settings, "name": "pfm", "renders": str(root / "pfm/{frame}/{view}/seed_{seed}.pfm")}
+    for letter, view in (("L", "left"), ("R", "right")):
+        (root / f"pfm/f00/{letter}").mkdir(parents=True)
+        for s, image in enumerate(frames[0].renders[view]):
+            write_image(root / f"pfm/f00/{letter}/seed_{s:03d}.pfm",
+                        image.astype(np.float16).astype(np.float32))
+    import_audit(pfm)
+    assert set(record_of("pfm")["found"]["half"]) == {"left", "right"}
+
+
+def test_the_header_says_whether_a_render_is_stored_as_half(tmp_path):
+    from stereovar.io.images import stored_as_half
+
+    pixels = {np.float16: np.full((4, 6), 0.5, np.float16),
+              np.float32: np.full((4, 6), 0.5, np.float32)}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    blender = tmp_path / "blender.exr"  # Blender 5: a half Combined part, a float Depth part
+    combined = {f"ViewLayer.Combined.{c}": pixels[np.float16] for c in "RGBA"}
+    noisy = {f"ViewLayer.Noisy Image.{c}": pixels[np.float32] for c in "RGB"}
+    parts = [
+        OpenEXR.Part(dict(header), {"ViewLayer.Depth.Z": pixels[np.float32]}, "ViewLayer.Depth"),
+        OpenEXR.Part(dict(header), combined, "ViewLayer.Combined"),
+        OpenEXR.Part(dict(header), noisy, "ViewLayer.Noisy Image"),
+    ]
+    with OpenEXR.File(parts) as f:
+        f.write(str(blender))
+    assert stored_as_half(blender) is True  # the render layer, Combined
+    assert stored_as_half(blender, channel="ViewLayer.Noisy Image") is False
+    assert stored_as_half(write_exr(tmp_path / "f.exr", {c: pixels[np.float32] for c in "RGB"})) \
+        is False
+    for dtype, expected in ((np.float16, True), (np.float32, False)):
+        image = np.zeros((4, 6, 3), dtype)
+        np.save(tmp_path / "r.npy", image)
+        np.savez(tmp_path / "r.npz", image)
+        assert stored_as_half(tmp_path / "r.npy") is expected
+        assert stored_as_half(tmp_path / "r.npz") is expected
+    write_image(tmp_path / "r.pfm", np.zeros((4, 6, 3), np.float32))
+    assert stored_as_half(tmp_path / "r.pfm") is None  # PFM's header cannot say
+
+
 def test_the_half_float_share_uses_the_import_seed_mean_and_skips_non_finite_pixels():
     from stereovar.audit.importer import _half_quantised_fraction, _seed_mean
 

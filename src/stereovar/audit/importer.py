@@ -47,6 +47,7 @@ from ..io.images import (
     read_field,
     read_image,
     read_labels,
+    stored_as_half,
 )
 from ..io.renders import render_dataset
 from ..io.store import (
@@ -368,7 +369,7 @@ QUANTISED_WARNING = 0.001
 import warns: quantisation floored their variance to 0."""
 
 HALF_STEPS = 2.0
-"""A pixel of half-float renders (:func:`_half_precision`) is quantised when its spread
+"""A pixel of half-float renders (:func:`_half_renders`) is quantised when its spread
 across the seeds is below this many half-float steps (at its seed mean) in every channel:
 its few distinct values distort its variance."""
 
@@ -690,10 +691,23 @@ def _clipped_fraction(stack: np.ndarray, valid: np.ndarray, scale: float) -> flo
     return float((clipped & valid).sum() / max(int(valid.sum()), 1))
 
 
+def _half_renders(stored: list, stack: np.ndarray) -> bool:
+    """Whether a view's renders hold half-float (16-bit) values: as their files' headers
+    say (``stored``: :func:`~stereovar.io.images.stored_as_half` of each file, an EXR
+    channel's pixel type or an NPY's dtype), so float32 renders whose values all happen to
+    be half floats are not taken for half; only where no header says (PFM, None) by their
+    values (:func:`_half_precision`)."""
+    if False in stored:
+        return False
+    if None not in stored:
+        return bool(stored)
+    return _half_precision(stack)
+
+
 def _half_precision(stack: np.ndarray) -> bool:
-    """Whether every value of the renders is a half-float (16-bit) number: half-float EXR
-    channels, or renders rounded to half precision before they were saved. Float32 renders
-    fail at their first render."""
+    """Whether every value of the renders is a half-float (16-bit) number: renders rounded
+    to half precision before they were saved in a format whose header cannot say so (PFM).
+    Float32 renders fail at their first render."""
     with np.errstate(over="ignore", invalid="ignore"):
         for image in stack:
             half = image.astype(np.float16).astype(np.float32)
@@ -727,23 +741,40 @@ def _floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
     return float((same & valid).sum() / max(int(valid.sum()), 1))
 
 
+def _render(path, *, channel=None, **options) -> tuple:
+    """A render (:func:`~stereovar.io.images.read_image`) and whether its file stores it as
+    half floats (:func:`~stereovar.io.images.stored_as_half`), in one verified read."""
+    return read_image(path, channel=channel, **options), stored_as_half(path, channel=channel)
+
+
 def _decode_view(
     paths: list, size: tuple, pool, transfer, scale, reads: _Reads, channel=None
 ) -> tuple:
     """Decode one view's renders into one ``(n, H, W, 3)`` float32 stack, each file straight
-    into its slice by a worker thread, which also counts its NaN/Inf pixels; ``channel``:
-    ``audit.channels.render``, the EXR layer of the render."""
+    into its slice by a worker thread, which also counts its NaN/Inf pixels and reads from
+    its header whether it is stored as half floats; ``channel``: ``audit.channels.render``,
+    the EXR layer of the render.
+
+    Returns
+    -------
+    stack : numpy.ndarray, float32, (n, H, W, 3)
+    n_nonfinite : numpy.ndarray, int64, (n,)
+        Pixels with a NaN or Inf channel, per render.
+    stored : list of bool or None
+        Per render, whether its file stores half floats (None: its header cannot say).
+    """
     stack = np.empty((len(paths), *size, 3), dtype=np.float32)
 
     def one(k):
-        image = reads(
-            read_image, paths[k], transfer=transfer, scale=scale, out=stack[k], channel=channel
+        image, half = reads(
+            _render, paths[k], transfer=transfer, scale=scale, out=stack[k], channel=channel
         )
         if np.isfinite(image.sum(dtype=np.float64)):  # one pass when every value is finite
-            return 0
-        return int((~np.isfinite(image)).any(axis=-1).sum())
+            return 0, half
+        return int((~np.isfinite(image)).any(axis=-1).sum()), half
 
-    return stack, np.asarray(list(pool.map(one, range(len(paths)))), dtype=np.int64)
+    counts, stored = zip(*pool.map(one, range(len(paths))), strict=True)
+    return stack, np.asarray(counts, dtype=np.int64), list(stored)
 
 
 def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
@@ -771,7 +802,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         labels = list(frame.renders[view])
         paths = view_files[view] = [str(p) for p in frame.renders[view].values()]
         with report.timed("decode"):
-            images, n_bad = _decode_view(
+            images, n_bad, stored = _decode_view(
                 paths, size, pool, transfer, scale, reads,
                 channel=settings["channels"].get("render"),
             )
@@ -783,7 +814,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             fr.floored[view] = _floored_fraction(images, valid)
         if any(image_format(p) == "png" for p in paths):
             fr.clipped[view] = _clipped_fraction(images, valid, scale)
-        elif _half_precision(images):
+        elif _half_renders(stored, images):
             fr.half[view] = _half_quantised_fraction(images, valid, means[view])
         datasets[view] = render_dataset(
             images,

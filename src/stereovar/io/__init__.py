@@ -16,6 +16,8 @@
     Image files other tools write and read: OpenEXR, PFM, PNG, NPY and NPZ.
 ``channels``
     Which channels of an OpenEXR file hold a render, depth, disparity or a mask.
+``exr_header``
+    The pixel type of each channel of an OpenEXR file, from its header alone.
 
 Importing this package imports none of its modules (nor xarray or zarr); import the one you
 need, e.g. ``from stereovar.io.store import open_dataset``.

@@ -37,6 +37,7 @@ import numpy as np
 from ..errors import ImageError
 from ..renderers.quiet import silenced
 from .channels import field_channel, render_channels, unique_channels
+from .exr_header import channel_types
 
 FORMATS = ("exr", "pfm", "png", "npy", "npz")
 """File formats by extension (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``)."""
@@ -249,12 +250,62 @@ def _header_size(f, fmt, path) -> tuple[int, int]:
         width, height = struct.unpack(">II", head[16:24])
         return int(height), int(width)
     if fmt == "npy":
-        npy = np.lib.format
-        version = npy.read_magic(f)  # versions 2 and 3 share a header layout
-        read = npy.read_array_header_1_0 if version == (1, 0) else npy.read_array_header_2_0
-        return tuple(read(f)[0][:2])
+        return tuple(_npy_header(f)[0][:2])
     with np.load(f) as z:
         return tuple(z[_npz_key(z, path)].shape[:2])
+
+
+def _npy_header(f) -> tuple:
+    """``(shape, fortran_order, dtype)`` from the header of an NPY file or stream."""
+    npy = np.lib.format
+    version = npy.read_magic(f)  # versions 2 and 3 share a header layout
+    read = npy.read_array_header_1_0 if version == (1, 0) else npy.read_array_header_2_0
+    return read(f)
+
+
+def stored_as_half(path, *, channel: str | None = None) -> bool | None:
+    """Whether the render :func:`read_image` reads from ``path`` is stored as half floats,
+    as the file's header says (no pixel is decoded).
+
+    Parameters
+    ----------
+    path : path-like
+    channel : str, optional, keyword-only
+        EXR only: ``audit.channels.render``, as for :func:`read_image`.
+
+    Returns
+    -------
+    bool or None
+        EXR: whether a channel of the render (its ``R, G, B`` or its one grey channel,
+        picked as :func:`read_image` picks them) has pixel type ``HALF``
+        (:func:`stereovar.io.exr_header.channel_types`); NPY and NPZ: whether the array's
+        dtype is float16. None for PFM and PNG, whose headers cannot say it (PFM holds
+        float32 only, PNG integers).
+
+    Raises
+    ------
+    ImageError
+        The file cannot be opened, is not a regular file, or its header is unreadable.
+    """
+    fmt = image_format(path)
+    if fmt not in ("exr", "npy", "npz"):
+        return None
+    with open_regular(path) as f:
+        try:
+            if fmt == "exr":
+                types = channel_types(f)
+                return any(types[c] == "half" for c in render_channels(types, path, channel))
+            if fmt == "npy":
+                return _npy_header(f)[2] == np.float16
+            with np.load(f) as z:
+                key = _npz_key(z, path)
+                member = key if key in z.zip.namelist() else f"{key}.npy"
+                with z.zip.open(member) as array:
+                    return _npy_header(array)[2] == np.float16
+        except ImageError:
+            raise
+        except Exception as err:  # each library raises its own exception types
+            raise _unreadable(path, err, "header") from None
 
 
 # --------------------------------------------------------------------------------------------
