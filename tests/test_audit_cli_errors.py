@@ -11,6 +11,7 @@ the tests that need Snakemake's own records: a dry run, a lock, an import that f
 import io
 import json
 import os
+import re
 import shlex
 import shutil
 import socket
@@ -30,6 +31,9 @@ from stereovar.config import validate_config
 from stereovar.errors import AuditError, ConfigError, ImageError
 from stereovar.io.renders import RERUN_ARGS_ENV, rebuild_command
 from stereovar.preflight import RUN_MARKER, clear_stale_lock, stale_lock
+from stereovar.transforms import TRANSFORMS
+
+from .test_config_limits import read_only
 
 PREVIOUS = "previous"
 
@@ -78,29 +82,50 @@ def one_error(rc, err) -> str:
 # -- 1. the workflow's checks, before Snakemake starts ----------------------------------------
 
 
-def make_unwritable(folder: Path):
-    """Make ``folder`` unwritable (root: the immutable attribute; others: the mode) and
-    return the fix the error must name, and a function that undoes it."""
+#: ``stereovar audit ARGS`` with Snakemake replaced by an exit that names it.
+PREFLIGHT_ONLY = """import sys
+from stereovar import cli
+def never(args, root):
+    sys.exit(f"snakemake started: {args}")
+cli._snakemake = never
+sys.exit(cli.main(["audit", *sys.argv[1:]]))
+"""
+
+
+def test_an_unwritable_audit_folder_stops_before_snakemake(tmp_path):
+    config = write_audit(tmp_path)
+    folder = tmp_path / "results" / "audit" / "t"
     folder.mkdir(parents=True)
-    if os.geteuid() != 0:
-        folder.chmod(0o555)
-        return "chmod -R u+w", lambda: folder.chmod(0o755)
-    if shutil.which("chattr") is None or subprocess.run(
+    # not writable by this user: its permissions, or, for root, a read-only mount that only
+    # the command's process sees
+    prefix = read_only(folder)
+    try:
+        proc = subprocess.run(
+            [*prefix, sys.executable, "-c", PREFLIGHT_ONLY, config],
+            cwd=tmp_path, capture_output=True, text=True,
+        )
+    finally:
+        folder.chmod(0o755)
+    line = one_error(proc.returncode, proc.stderr.splitlines())
+    fix = "chmod -R u+w" if prefix == () else "remount it read-write"
+    assert line.startswith(f"stereovar: error: {folder} is ") and fix in line, line
+    assert not (tmp_path / "logs").exists()  # nothing written, not even the log
+
+
+def test_an_immutable_folder_is_named_with_the_attribute_to_clear(tmp_path):
+    folder = tmp_path / "results"
+    folder.mkdir()
+    if os.geteuid() != 0 or shutil.which("chattr") is None or subprocess.run(
         ["chattr", "+i", str(folder)], capture_output=True
     ).returncode:
-        pytest.skip("running as root where chattr +i is unavailable")
-    return f"chattr -i {folder}", lambda: subprocess.run(["chattr", "-i", str(folder)])
-
-
-def test_an_unwritable_audit_folder_stops_before_snakemake(tmp_path, preflight_only):
-    config = write_audit(tmp_path)
-    fix, undo = make_unwritable(tmp_path / "results" / "audit" / "t")
+        pytest.skip("only root can set the immutable attribute, on a file system that has it")
     try:
-        line = one_error(*preflight_only(config))
+        with pytest.raises(preflight.StereovarError) as err:
+            preflight.check_writable([folder])
     finally:
-        undo()
-    assert str(tmp_path / "results" / "audit" / "t") in line and fix in line
-    assert not (tmp_path / "logs").exists()  # nothing written, not even the log
+        subprocess.run(["chattr", "-i", str(folder)], check=True)
+    assert str(err.value).startswith(f"{folder} is immutable (chattr +i) and this run writes")
+    assert f"chattr -i {folder}" in str(err.value)
 
 
 @pytest.mark.parametrize(
@@ -115,7 +140,8 @@ def test_audit_mitigations_are_checked_before_snakemake(tmp_path, preflight_only
     line = one_error(*preflight_only(write_audit(tmp_path, mitigations=names)))
     assert "config key 'audit.mitigations'" in line and needle in line, line
     assert "mitigations.names" not in line
-    assert "denoise, denoise_sensor, equalise, sensor_only" in line  # what to use instead
+    offered = re.search(r"use store transforms (?:only )?\(([^)]*)\)", line)  # instead
+    assert offered and sorted(offered.group(1).split(", ")) == sorted(TRANSFORMS), line
 
 
 def test_renders_too_large_for_memory_stop_before_snakemake(tmp_path, preflight_only, monkeypatch):
@@ -365,16 +391,30 @@ def planned(root, config) -> str:
     return proc.stdout + proc.stderr
 
 
+def ps_start(pid: int) -> float | None:
+    """When process ``pid`` started, as ``ps`` tells it (seconds since the epoch)."""
+    proc = subprocess.run(
+        ["ps", "-o", "lstart=", "-p", str(pid)], capture_output=True, text=True,
+        env={**os.environ, "LC_ALL": "C"},
+    )
+    try:
+        return time.mktime(time.strptime(proc.stdout.strip(), "%a %b %d %H:%M:%S %Y"))
+    except ValueError:
+        return None
+
+
 @pytest.mark.workflow
 def test_a_second_audit_while_one_runs_names_it_and_waits(imported):
     state = imported / ".snakemake"
     (state / "locks").mkdir(exist_ok=True)
     (state / "locks" / "0.output.lock").write_text("results/audit/t/import/f00.json\n")
-    started = time.time()
+    before = time.time()
     with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"]) as holder:
+        after = time.time()
         try:
             record = preflight.record_run(state, holder.pid, "stereovar audit t.yaml")
             proc = audit(imported, "t.yaml", "--import-only")
+            started = ps_start(holder.pid)
         finally:
             holder.kill()
     assert proc.returncode != 0
@@ -382,7 +422,10 @@ def test_a_second_audit_while_one_runs_names_it_and_waits(imported):
     assert f"{imported} is locked by another run still going (pid {holder.pid}, " in line
     stamp = line.split(", started ")[1][:19]
     shown = time.mktime(time.strptime(stamp, "%Y-%m-%d %H:%M:%S"))
-    assert started - 2 <= shown <= started + 2, (stamp, started)
+    if started is not None:  # the same clock as ps, to the second
+        assert abs(shown - started) <= 1, (stamp, started)
+    else:
+        assert before - 2 <= shown <= after + 1, (stamp, before, after)
     assert "(stereovar audit t.yaml)" in line and "wait for it to finish" in line
     assert "--unlock" not in proc.stderr and "LockException" not in proc.stderr
     # its holder gone, the same command goes on: the workflow removes the stale lock
