@@ -1,12 +1,15 @@
 """`stereovar audit` when the workflow would stop: the workflow's checks run before Snakemake
 starts and give one line; the workflow's own line and a full disk reach the command's
-stderr; a lock names the run that holds it; cosmetic config edits import nothing again; a
-run that imports again sets the old verdict aside; the rebuild advice is a `stereovar run`
-command.
+stderr; a lock names the run that holds it, and only the lock of a run that is gone is
+removed; cosmetic config edits import nothing again; a failed import says where the old
+verdict went; the rebuild advice is a `stereovar run` command.
 
-Most tests call the command's pre-flight with Snakemake replaced by a stub that fails the
-test if it is started. One import-only audit (module fixture ``imported``, a few seconds) backs
-the tests that need Snakemake's own records: a dry run, a lock, an import that fails."""
+Most tests call the library, or the command with Snakemake replaced: by a stub that fails the
+test if it is started (the pre-flight), or by a stand-in process that prints what Snakemake
+prints when it stops (a lock, a failed job) and runs through the command's monitor as
+Snakemake would. Snakemake itself runs twice: one import-only audit (module fixture
+``imported``, a few seconds), after a run killed before its ``onstart`` left its lock, and
+one dry run on it."""
 
 import io
 import json
@@ -19,6 +22,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 import yaml
@@ -30,7 +34,7 @@ from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import validate_config
 from stereovar.errors import AuditError, ConfigError, ImageError
 from stereovar.io.renders import RERUN_ARGS_ENV, rebuild_command
-from stereovar.preflight import RUN_MARKER, clear_stale_lock, stale_lock
+from stereovar.preflight import RUN_MARKER, RUNS_DIR, clear_stale_lock, stale_lock
 from stereovar.transforms import TRANSFORMS
 
 from .test_config_limits import read_only
@@ -365,30 +369,18 @@ def test_the_unlock_command_quotes_the_config_paths(tmp_path):
     assert shlex.split(unlock) == ["stereovar", "run", "--configfile", config, "--", "--unlock"]
 
 
-@pytest.fixture(scope="module")
-def imported(tmp_path_factory):
-    """A one-frame audit imported once (``stereovar audit t.yaml --import-only``)."""
-    root = tmp_path_factory.mktemp("audit_errors")
-    config = write_audit(root)
-    proc = audit(root, config, "--import-only")
-    assert proc.returncode == 0, proc.stderr
-    return root
+def stand_in(monkeypatch, output: str, rc: int, before=None) -> None:
+    """Replace Snakemake with a process that prints ``output`` and exits with ``rc``, run
+    through the audit's monitor as Snakemake is (recorded while it runs);
+    ``before(root)`` first: what the workflow does before it stops."""
+    script = f"import sys; sys.stdout.write({output!r}); sys.exit({rc})"
 
+    def run(args, root):
+        if before is not None:
+            before(root)
+        return cli._MONITOR.get().run([sys.executable, "-c", script, *args], root)
 
-def audit(root, *args):
-    return subprocess.run([sys.executable, "-m", "stereovar.cli", "audit", *args],
-                          cwd=root, capture_output=True, text=True)
-
-
-def planned(root, config) -> str:
-    """A dry run of the audit's import (``snakemake -n --until audit_import``)."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"), "-n",
-         "-j1", "--until", "audit_import", "--configfile", config],
-        cwd=root, capture_output=True, text=True,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    return proc.stdout + proc.stderr
+    monkeypatch.setattr(cli, "_snakemake", run)
 
 
 def ps_start(pid: int) -> float | None:
@@ -403,23 +395,24 @@ def ps_start(pid: int) -> float | None:
         return None
 
 
-@pytest.mark.workflow
-def test_a_second_audit_while_one_runs_names_it_and_waits(imported):
-    state = imported / ".snakemake"
-    (state / "locks").mkdir(exist_ok=True)
-    (state / "locks" / "0.output.lock").write_text("results/audit/t/import/f00.json\n")
+def test_a_second_audit_while_one_runs_names_it_and_waits(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    config = write_audit(tmp_path)
+    state = locked_state(tmp_path)
+    stand_in(monkeypatch, LOCK_TAIL.format(root=tmp_path), 1)
     before = time.time()
-    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"]) as holder:
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as holder:
         after = time.time()
         try:
-            record = preflight.record_run(state, holder.pid, "stereovar audit t.yaml")
-            proc = audit(imported, "t.yaml", "--import-only")
+            preflight.record_run(state, holder.pid, "stereovar audit t.yaml")
+            rc = cli.main(["audit", config, "--import-only"])
             started = ps_start(holder.pid)
         finally:
             holder.kill()
-    assert proc.returncode != 0
-    (line,) = [ln for ln in proc.stderr.splitlines() if ln.startswith("stereovar: error:")]
-    assert f"{imported} is locked by another run still going (pid {holder.pid}, " in line
+    err = capsys.readouterr().err
+    assert rc != 0
+    (line,) = [ln for ln in err.splitlines() if ln.startswith("stereovar: error:")]
+    assert f"{tmp_path} is locked by another run still going (pid {holder.pid}, " in line
     stamp = line.split(", started ")[1][:19]
     shown = time.mktime(time.strptime(stamp, "%Y-%m-%d %H:%M:%S"))
     if started is not None:  # the same clock as ps, to the second
@@ -427,27 +420,89 @@ def test_a_second_audit_while_one_runs_names_it_and_waits(imported):
     else:
         assert before - 2 <= shown <= after + 1, (stamp, before, after)
     assert "(stereovar audit t.yaml)" in line and "wait for it to finish" in line
-    assert "--unlock" not in proc.stderr and "LockException" not in proc.stderr
-    # its holder gone, the same command goes on: the workflow removes the stale lock
-    again = audit(imported, "t.yaml", "--import-only")
-    assert again.returncode == 0, again.stderr
-    assert not (state / "locks").exists() and not record.exists()
+    assert "--unlock" not in err and "LockException" not in err
+    # the record of the stand-in went with it; the holder's stays
+    records = [p.name for p in (state / RUNS_DIR).iterdir()]
+    assert records == [f"{socket.gethostname()}-{holder.pid}.json"]
+
+
+@pytest.fixture(scope="module")
+def imported(tmp_path_factory):
+    """A one-frame audit imported once (``stereovar audit t.yaml --import-only``), the
+    module's one real run, after an audit that was killed after it took its lock (on the
+    import's record) and before its ``onstart``: only the record ``stereovar`` wrote as it
+    started names that run. What the run left is read as it ends."""
+    root = tmp_path_factory.mktemp("audit_errors")
+    config = write_audit(root)
+    state = root / ".snakemake"
+    (state / "locks").mkdir(parents=True)
+    (state / "locks" / "0.output.lock").write_text("results/audit/t/import/f00.json\n")
+    preflight.record_run(state, ended_process(), "stereovar audit t.yaml")
+    proc = audit(root, config, "--import-only")
+    logs = sorted((root / "logs" / "audit" / "t").glob("stereovar-audit-*.log"))
+    return SimpleNamespace(
+        root=root,
+        proc=proc,
+        log=logs[-1].read_text() if logs else "",
+        locks=sorted(p.name for p in (state / "locks").glob("*")),
+        records=sorted(p.name for p in (state / RUNS_DIR).glob("*.json")),
+    )
+
+
+def audit(root, *args):
+    return subprocess.run([sys.executable, "-m", "stereovar.cli", "audit", *args],
+                          cwd=root, capture_output=True, text=True)
+
+
+@pytest.mark.workflow
+def test_the_next_audit_removes_the_lock_of_a_run_killed_before_onstart(imported):
+    assert imported.proc.returncode == 0, imported.proc.stderr
+    assert "stereovar: removed the lock of an earlier run that was killed" in imported.log
+    # the killed run's record went once the new run held the lock, the new run's as it ended
+    assert imported.locks == [] and imported.records == [], imported
 
 
 # -- 2. cosmetic edits of the config rerun nothing ----------------------------------------------
 
 
-@pytest.mark.workflow
-def test_reordered_keys_and_written_defaults_import_nothing_again(imported):
-    settings = yaml.safe_load((imported / "t.yaml").read_text())["audit"]
+def cosmetic(settings: dict) -> dict:
+    """``settings`` with the keys (and views) reordered and defaults written out."""
     same = {key: settings[key] for key in reversed(list(settings))}
     same["views"] = dict(reversed(list(settings["views"].items())))
     same.update(scale=1.0, channels={}, disparity_scale=256, sign_check="stop")
-    (imported / "same.yaml").write_text(yaml.safe_dump({"audit": same}, sort_keys=False))
-    assert "rule audit_import:" not in planned(imported, "same.yaml")
-    # a setting the import applies does import again (the dry run sees it)
-    (imported / "other.yaml").write_text(yaml.safe_dump({"audit": {**same, "scale": 2.0}}))
-    assert "rule audit_import:" in planned(imported, "other.yaml")
+    return same
+
+
+def test_only_settings_the_import_applies_change_its_params(tmp_path):
+    config = tmp_path / write_audit(tmp_path)
+    settings = yaml.safe_load(config.read_text())["audit"]
+    digest = audit_run.import_params(settings)
+    # as the workflow sees them (the schema's defaults filled in), cosmetic edits, and
+    # settings the import does not read: one digest
+    assert audit_run.import_params(cli._workflow_config(tmp_path, [config])["audit"]) == digest
+    assert audit_run.import_params(cosmetic(settings)) == digest
+    assert audit_run.import_params({**settings, "mitigations": ["denoise"], "probe": True}) == (
+        digest
+    )
+    swapped = {"left": settings["views"]["right"], "right": settings["views"]["left"]}
+    for change in ({"scale": 2.0}, {"disparity_scale": 128}, {"views": swapped}):
+        assert audit_run.import_params({**settings, **change}) != digest, change
+
+
+@pytest.mark.workflow
+def test_reordered_keys_and_written_defaults_import_nothing_again(imported, tmp_path):
+    assert imported.proc.returncode == 0, imported.proc.stderr
+    settings = yaml.safe_load((imported.root / "t.yaml").read_text())["audit"]
+    same = tmp_path / "same.yaml"
+    same.write_text(yaml.safe_dump({"audit": cosmetic(settings)}, sort_keys=False))
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"), "-n",
+         "-j1", "--until", "audit_import", "--configfile", str(same)],
+        cwd=imported.root, capture_output=True, text=True,
+    )
+    output = proc.stdout + proc.stderr
+    assert proc.returncode == 0, output
+    assert re.search(r"^total +0$", output, re.M) and "rule audit_import:" not in output, output
 
 
 # -- 4. an import that cannot finish leaves no verdict on stores it replaced --------------------
@@ -478,25 +533,44 @@ def test_setting_a_verdict_aside_moves_each_file_once(tmp_path):
     assert audit_run.set_aside_verdict("t", tmp_path) == []
 
 
-@pytest.mark.workflow
-def test_a_failed_import_sets_the_old_verdict_aside(imported):
-    folder = imported / "results" / "audit" / "t"
+#: What Snakemake 9 prints when the import job of frame f00 fails.
+FAILED_IMPORT = """Error in rule audit_import:
+    message: None
+    jobid: 1
+    output: results/audit/t/import/f00.json
+    log: logs/audit/t/import/f00.log (check log file(s) for error details)
+Shutting down, this might take some time.
+Exiting because a job execution failed. Look below for error messages
+"""
+
+
+def test_a_failed_import_says_where_the_old_verdict_went(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    config = write_audit(tmp_path)
+    folder = tmp_path / "results" / "audit" / "t"
+    folder.mkdir(parents=True)
     verdict = {"verdict.html": "<p>RED</p>", "summary.json": json.dumps({"summary": ["RED"]})}
     for name, text in verdict.items():
         (folder / name).write_text(text)
-    render = imported / "data" / "renders" / "f00" / "L" / "seed_001.exr"
-    good = render.read_bytes()
-    render.write_bytes(good[: len(good) // 2])
-    try:
-        proc = audit(imported, "t.yaml", "--import-only")
-    finally:
-        render.write_bytes(good)
-    assert proc.returncode != 0
-    assert "truncated" in proc.stderr or "cannot read" in proc.stderr, proc.stderr
-    assert not (folder / "verdict.html").exists() and not (folder / "summary.json").exists()
+    log = Path("logs/audit/t/import/f00.log")
+    error = "data/renders/f00/L/seed_001.exr: the file is truncated"
+
+    def onstart(root):  # the workflow sets the verdict aside, then the import job fails
+        audit_run.set_aside_verdict("t", root)
+        log.parent.mkdir(parents=True, exist_ok=True)
+        log.write_text(f"2026-01-01 00:00:00 ERROR error: {error}\n")
+
+    stand_in(monkeypatch, FAILED_IMPORT, 1, before=onstart)
+    rc = cli.main(["audit", config, "--import-only"])
+    err = capsys.readouterr().err.splitlines()
+    assert rc != 0
+    assert [ln for ln in err if ln.startswith("stereovar: error:")] == [
+        f"stereovar: error: {error}"
+    ]
+    assert f"the verdict before this run, set aside as out of date: {folder / PREVIOUS}/" in err
+    assert err[-1].startswith("log: ") and err[-1].endswith(f"(the failed job's: {log})")
     for name, text in verdict.items():
-        assert (folder / PREVIOUS / name).read_text() == text
-    assert f"set aside as out of date: {folder / PREVIOUS}/" in proc.stderr
+        assert not (folder / name).exists() and (folder / PREVIOUS / name).read_text() == text
 
 
 # -- 5. the rebuild advice works for an installed stereovar --------------------------------------
