@@ -414,6 +414,40 @@ def test_user_text_is_escaped_on_the_markdown_verdict_page(tmp_path, monkeypatch
     assert "<img" not in outputs["html"].read_text()  # the HTML page escapes it too
 
 
+def test_user_text_opening_a_line_or_in_alt_text_opens_no_markdown_block_or_link():
+    markdown_it = pytest.importorskip("markdown_it")  # the docs extra
+    from stereovar.audit.page import to_markdown_page
+
+    sections = {
+        "title": "Audit a: verdict",
+        "banners": [],
+        "decision": {"light": "green", "headline": "h", "sentences": ["s."]},
+        "found": "[shot]: https://evil.example/a",  # a link reference definition
+        "facts": [],
+        "flags": [],
+        "thumbnails": ["thumbs/shot]x.png"],  # a ] in the alt text
+        "verdict": "v",
+        "seeding": "s",
+        "table": [],
+        "caption": "    # not a heading",
+        "mitigations": ["1. not a list", "[fig]: https://evil.example/b"],
+        "probe": "- not a list",
+        "figures": ["fig[1].png"],
+    }
+    md = to_markdown_page(sections)
+    rendered = markdown_it.MarkdownIt("commonmark").enable("table").render(md)
+    assert '"https://evil' not in rendered and "<a " not in rendered  # no link defined
+    assert rendered.count("<h1>") == 1 and rendered.count("<pre>") == 0
+    for text in ("<p>[shot]: https://evil.example/a.</p>", "<p># not a heading</p>",
+                 "<li>1. not a list</li>", "<li>[fig]: https://evil.example/b</li>",
+                 "<p>- not a list</p>"):
+        assert text in rendered
+    # each image is one image of its own path (markdown-it drops escapes from alt text)
+    images = re.findall(r'<img src="([^"]*)" alt="([^"]*)"', rendered)
+    assert [src for src, _ in images] == ["thumbs/shot%5Dx.png", "fig%5B1%5D.png"]
+    assert [alt[:3] for _, alt in images] == ["sho", "fig"]
+
+
 # -- E: Snakemake path variables in audit paths ------------------------------------------------
 
 

@@ -98,6 +98,55 @@ def markdown_text(text) -> str:
     return _MARKDOWN_ACTIVE.sub(lambda m: _MARKDOWN_INERT.get(m.group(), " "), str(text))
 
 
+_BLOCK_MARKER = re.compile(r"[#+*=_`~\[|-]|\d{1,9}(?=[.)])")
+"""What opens a Markdown block at the start of a line: a heading (``#``), a list item or a
+thematic break (``-``, ``+``, ``*``, ``_``, ``1.``, ``1)``), a setext underline (``=``), a
+code fence (a backtick, ``~``), a link reference definition (``[x]: url``) or a table
+row (``|``); ``>`` and ``<`` are entities already (:func:`markdown_text`)."""
+
+
+def markdown_line(text) -> str:
+    r"""``text`` made inert (:func:`markdown_text`) where it starts a line of its own: leading
+    blanks dropped (four would open a code block) and a leading block marker escaped, so the
+    line is a plain paragraph (or list item's text) reading as ``text`` once rendered.
+
+    Parameters
+    ----------
+    text : object
+        The text (``str()`` of it).
+
+    Returns
+    -------
+    str
+        One line of Markdown.
+
+    Examples
+    --------
+    >>> print(markdown_line("[x]: https://example.com"))
+    \[x]: https://example.com
+    >>> print(markdown_line("# 1 frame"))
+    \# 1 frame
+    >>> print(markdown_line("1. frame"))
+    1\. frame
+    """
+    line = markdown_text(text).lstrip()
+    marker = _BLOCK_MARKER.match(line)
+    if marker is None:
+        return line
+    at = marker.end() if marker.group()[0].isdigit() else 0  # 1. -> 1\. ; # -> \#
+    return line[:at] + "\\" + line[at:]
+
+
+_ALT_ACTIVE = re.compile(r"[&<>\[\]\\]|[\r\n]+")
+_ALT_INERT = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "[": "\\[", "]": "\\]", "\\": "\\\\"}
+
+
+def _markdown_alt(text) -> str:
+    """``text`` as the alt text of a Markdown image: :func:`markdown_text`'s entities, and
+    every ``[``, ``]`` and backslash escaped, so no bracket ends the alt text early."""
+    return _ALT_ACTIVE.sub(lambda m: _ALT_INERT.get(m.group(), " "), str(text))
+
+
 def _markdown_rows(rows: list[dict]) -> list[dict]:
     """Table rows with every text cell through :func:`markdown_text`."""
     return [{k: markdown_text(v) if isinstance(v, str) else v for k, v in r.items()} for r in rows]
@@ -105,7 +154,7 @@ def _markdown_rows(rows: list[dict]) -> list[dict]:
 
 def _markdown_image(path: str) -> str:
     """A Markdown image of a relative path: its alt text inert, its address URL-quoted."""
-    return f"![{markdown_text(Path(path).stem)}]({quote(path, safe='/')})"
+    return f"![{_markdown_alt(Path(path).stem)}]({quote(path, safe='/')})"
 
 
 def _sign_fact(sign: dict) -> str:
@@ -211,7 +260,8 @@ def page_sections(
 
 
 def to_markdown_page(s: dict) -> str:
-    """The page as Markdown; every text of the sections through :func:`markdown_text`."""
+    """The page as Markdown; every text of the sections through :func:`markdown_text`, and
+    through :func:`markdown_line` where it starts a line."""
     d = s["decision"]
     m = markdown_text
     lines = [f"# {m(s['title'])}", ""]
@@ -222,7 +272,7 @@ def to_markdown_page(s: dict) -> str:
         "",
         "## What was imported",
         "",
-        f"{m(s['found'])}.",
+        f"{markdown_line(s['found'])}.",
         "",
         to_markdown(_markdown_rows(s["facts"]), FACT_COLUMNS),
         "",
@@ -244,13 +294,15 @@ def to_markdown_page(s: dict) -> str:
         "",
         f"**Seeding.** {m(s['seeding'])}",
         "",
-        to_markdown(_markdown_rows(s["table"]), VERDICT_COLUMNS, caption=m(s["caption"])),
+        to_markdown(
+            _markdown_rows(s["table"]), VERDICT_COLUMNS, caption=markdown_line(s["caption"])
+        ),
         "",
     ]
     if s["mitigations"]:
-        lines += ["## Mitigations", "", *[f"- {m(f)}" for f in s["mitigations"]], ""]
+        lines += ["## Mitigations", "", *[f"- {markdown_line(f)}" for f in s["mitigations"]], ""]
     if s.get("probe"):
-        lines += ["## Learned probe", "", m(s["probe"]), ""]
+        lines += ["## Learned probe", "", markdown_line(s["probe"]), ""]
     lines += [_markdown_image(f) for f in s["figures"]] + [""]
     return "\n".join(lines)
 
