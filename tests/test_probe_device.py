@@ -1,12 +1,22 @@
 """The probe's device option: training on a named device and inference that follows the
-network's device (a GPU in use; here the CPU and PyTorch's shape-only ``meta`` device)."""
+network's device (the CPU and PyTorch's shape-only ``meta`` device everywhere; a CUDA GPU
+where one is present)."""
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
+import pytest
 import torch
 
-from stereovar.probe.network import MatchingNet, border, dense_features, score_volume
+from stereovar.probe.network import (
+    MatchingNet,
+    border,
+    dense_features,
+    score_volume,
+    wta_disparity,
+)
 from stereovar.probe.training import TrainingFrame, TrainSettings, train_matcher
 
 SETTINGS = TrainSettings(steps=3, crops=2, crop_rows=8, crop_cols=16)
@@ -45,3 +55,38 @@ def test_inference_follows_the_network_device():
     volume = score_volume(features, features, sign=1, max_disparity=5)
     assert volume.device.type == "meta"
     assert tuple(volume.shape) == (6, 20 - 2 * b, 30 - 2 * b)
+
+
+@pytest.mark.skipif(
+    not torch.cuda.is_available(),
+    reason="no CUDA device (a CPU-only PyTorch build, or no GPU on this machine)",
+)
+def test_training_and_inference_on_cuda_agree_with_the_cpu():
+    data = frames()
+    cpu, cpu_history = train_matcher(data, SETTINGS, seed=3)
+    gpu, gpu_history = train_matcher(data, SETTINGS, seed=3, device="cuda")
+    # the same seeded weights and the same crops (drawn on the CPU): the first step's loss
+    # agrees up to the GPU's float arithmetic (TF32 convolutions), every step is scored
+    assert gpu_history["triplets"] == cpu_history["triplets"]
+    assert gpu_history["loss"][0] == pytest.approx(cpu_history["loss"][0], rel=1e-2)
+    assert np.isfinite(gpu_history["loss"]).all()
+    for name, value in gpu.state_dict().items():  # the network comes back on the CPU
+        assert value.device.type == "cpu", name
+        assert bool(torch.isfinite(value).all()), name
+    # inference on the GPU: features, the score volume and the disparities stay there until
+    # the winner is read back, and agree with the CPU's for the same network
+    on_gpu = copy.deepcopy(cpu).to("cuda")
+    left, right = data[0].left, data[0].right
+    features = dense_features(on_gpu, left)
+    assert features.device.type == "cuda"
+    np.testing.assert_allclose(
+        features.cpu().numpy(), dense_features(cpu, left).detach().numpy(), rtol=1e-2, atol=1e-2
+    )
+    volume = score_volume(features, dense_features(on_gpu, right), sign=-1, max_disparity=5)
+    b = border()
+    assert volume.device.type == "cuda" and tuple(volume.shape) == (6, 32 - 2 * b, 64 - 2 * b)
+    on_cpu = wta_disparity(cpu, left, right, sign=-1, max_disparity=5)
+    on_cuda = wta_disparity(on_gpu, left, right, sign=-1, max_disparity=5)
+    inside = np.isfinite(on_cpu)
+    np.testing.assert_array_equal(np.isfinite(on_cuda), inside)
+    assert (on_cuda[inside] == on_cpu[inside]).mean() > 0.99
