@@ -3,13 +3,16 @@
 disparity whose matches mostly fall outside the other view are flagged, half-float renders
 whose noise is near the half-float step are flagged, segment ids stay integers, user text is
 escaped on the Markdown verdict page, and Snakemake path variables in audit paths are
-refused before any file is read.
+refused before any file is read; the functions these rest on document their parameters and
+what they return.
 
 Each frame is a tiny synthetic one (:func:`stereovar.audit.synthetic.write_synthetic_audit`,
 64 x 40 px, 4 or 8 seeds) in a fresh working directory.
 """
 
 import html
+import importlib
+import inspect
 import json
 import math
 import re
@@ -530,3 +533,46 @@ def test_an_audit_in_a_folder_named_like_a_path_variable_is_refused(tmp_path):
         assert not snakemake_changes(name)
         settings, _ = write_synthetic_audit(tmp_path / name, n_frames=1, **SMALL)
         assert discover_audit(settings).summary() == "1 frame × 2 views × 4 seeds"
+
+
+# -- F: numpydoc sections of the functions these rest on -------------------------------------
+
+
+def numpydoc_sections(func) -> dict:
+    """Section title to its lines in a numpydoc docstring (a title underlined by dashes)."""
+    lines = inspect.getdoc(func).splitlines()
+    sections, current = {}, None
+    for k, line in enumerate(lines):
+        if line.strip() and k + 1 < len(lines) and set(lines[k + 1].strip()) == {"-"}:
+            current = sections.setdefault(line.strip(), [])
+        elif current is not None and set(line.strip()) != {"-"}:
+            current.append(line)
+    return sections
+
+
+@pytest.mark.parametrize(
+    "dotted",
+    [
+        "stereovar.io.channels.named_as",
+        "stereovar.io.images.read_labels",
+        "stereovar.io.images.stored_as_half",
+        "stereovar.audit.page.markdown_text",
+        "stereovar.audit.page.markdown_line",
+        "stereovar.controls.sensor.normal_counts",
+        "stereovar.probe.training.nonfinite_weights",
+    ],
+)
+def test_the_functions_document_each_parameter_and_what_they_return(dotted):
+    module, _, name = dotted.rpartition(".")
+    if module.startswith("stereovar.probe"):
+        pytest.importorskip("torch", reason="the probe extra (PyTorch) is not installed")
+    func = getattr(importlib.import_module(module), name)
+    sections = numpydoc_sections(func)
+    listed = {
+        word.strip()
+        for line in sections.get("Parameters", [])
+        if line and not line[0].isspace()  # "name : type" lines, not their descriptions
+        for word in line.split(" : ")[0].split(",")
+    }
+    assert set(inspect.signature(func).parameters) <= listed, sorted(listed)
+    assert any(line.strip() for line in sections.get("Returns", [])), "no Returns section"

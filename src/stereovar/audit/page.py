@@ -86,7 +86,17 @@ def markdown_text(text) -> str:
     ``&``, ``<`` and ``>`` become HTML entities (no raw HTML, no autolink), a ``]`` before
     ``(`` is escaped (no inline link or image) and line breaks become spaces (no new
     block); anything else is left as it is, so a path, ``x_R = x_L - d`` or an interval
-    reads the same in the file.
+    reads the same in the file. Text that starts a line goes through :func:`markdown_line`.
+
+    Parameters
+    ----------
+    text : object
+        The text (``str()`` of it).
+
+    Returns
+    -------
+    str
+        The text for a Markdown page, on one line.
 
     Examples
     --------

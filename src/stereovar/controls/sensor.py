@@ -110,7 +110,23 @@ def photon_counts(electrons, rng: np.random.Generator):
 
 def normal_counts(electrons, large, rng: np.random.Generator) -> np.ndarray:
     """The :math:`\\mathcal N(\\lambda, \\lambda)` counts of the ``large`` entries of
-    ``electrons`` (:func:`photon_counts`), float64, in C order; NaN or Inf where the mean is."""
+    ``electrons`` (:func:`photon_counts`).
+
+    Parameters
+    ----------
+    electrons : numpy.ndarray
+        :math:`\\lambda \\ge 0`, the mean counts of the whole image.
+    large : numpy.ndarray of bool, the shape of ``electrons``
+        The entries drawn here (:func:`photon_counts`' second value).
+    rng : numpy.random.Generator
+        One standard normal draw per large entry, in C order.
+
+    Returns
+    -------
+    numpy.ndarray, float64, shape (n,)
+        :math:`\\lambda + \\sqrt{\\lambda}\\,z` for the ``n`` large entries in C order; NaN or
+        Inf where the mean is.
+    """
     lam = np.asarray(electrons, dtype=np.float64)[large]
     with np.errstate(invalid="ignore", over="ignore"):
         return lam + np.sqrt(lam) * rng.standard_normal(lam.shape)

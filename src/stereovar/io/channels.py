@@ -164,6 +164,16 @@ def named_as(channel: str) -> str | None:
     :data:`OTHER_PASSES`; None when the name says nothing (a plain ``Z``, ``V`` or ``Y``,
     the one channel of a field file, or an unknown pass).
 
+    Parameters
+    ----------
+    channel : str
+        A channel's full name (``ViewLayer.Depth.Z``).
+
+    Returns
+    -------
+    str or None
+        What the name says the channel holds, or None.
+
     Examples
     --------
     >>> [named_as(c) for c in ("ViewLayer.Depth.Z", "Z", "V", "ViewLayer.Normal.X")]

@@ -607,6 +607,11 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
     channel : str, optional, keyword-only
         EXR only (``audit.channels.segmentation``): the channel's name.
 
+    Returns
+    -------
+    numpy.ndarray, int64, shape (H, W)
+        The segment id of every pixel; -1 where a float file holds NaN or Inf.
+
     Raises
     ------
     ImageError

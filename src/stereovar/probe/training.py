@@ -303,6 +303,17 @@ def _diverged(what: str, settings: TrainSettings) -> str:
 def nonfinite_weights(net: torch.nn.Module) -> str | None:
     """The first parameter or buffer of ``net`` with a NaN or Inf entry, by name, else None.
 
+    Parameters
+    ----------
+    net : torch.nn.Module
+        A network (its ``state_dict``'s floating-point tensors are checked).
+
+    Returns
+    -------
+    str or None
+        The name in ``state_dict`` order (``"body.0.bias"``), or None when every entry is
+        finite.
+
     Examples
     --------
     >>> net = MatchingNet(features=2, layers=1)
