@@ -196,16 +196,23 @@ def headless_chromium():
 SHARED_RUN_FIXTURES = frozenset({"tiny_run", "tiny_run_copy"})
 SHARED_RUN_GROUP = "tiny_run"
 
-#: Groups that take minutes, started first so that neither worker is left with one at the
-#: end (the rest follow in collection order; ``pytest --durations`` shows what to add).
+#: Groups that take minutes, longest first, so that neither worker is left with one at the
+#: end (the rest follow in collection order; ``make test``'s ``--durations`` shows what to
+#: add). xdist gives each worker two groups at the start: the third waits behind the first.
 FIRST = (
     SHARED_RUN_GROUP,
     "test_audit_workflow",
-    "test_probe_workflow",
-    "test_cycles",
+    "test_docs",  # short: it waits behind the shared run on the first worker
     "test_mitigations",
+    "test_cycles",
     "test_moments_workflow",
-    "test_docs",
+    "test_audit_jobs",
+    "test_faults",
+    "test_ground_truth",
+    "test_probe_workflow",
+    "test_install",
+    "test_photometric",
+    "test_audit_cli_errors",
 )
 
 
