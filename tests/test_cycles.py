@@ -215,7 +215,15 @@ def test_two_renderers_run_end_to_end_and_are_compared(tmp_path):
 
     from .test_workflow import TINY, copy_workflow, planned_jobs, snakemake
 
-    root = copy_workflow(tmp_path / "wf", {**TINY, "renderers": ["mitsuba", "cycles"]})
+    # one scene, the sweep at the main SPP: each renderer's experiment once, every stage kept
+    scenes = TINY["scenes"][:1]
+    config = {
+        **TINY,
+        "scenes": scenes,
+        "renderers": ["mitsuba", "cycles"],
+        "render": {**TINY["render"], "spp_sweep": {"scene": scenes[0], "spp": [2]}},
+    }
+    root = copy_workflow(tmp_path / "wf", config)
     snakemake(root, "-j2", "all")
     table = read_rows(root / "results/tables/cross_renderer.csv")
     assert (root / "results/figures/cross_renderer.png").stat().st_size > 0
@@ -223,14 +231,16 @@ def test_two_renderers_run_end_to_end_and_are_compared(tmp_path):
     for renderer in ("mitsuba", "cycles"):
         stores = list((root / f"results/{renderer}/renders").rglob("seeds*.zarr"))
         assert stores
-        for scene in TINY["scenes"]:
+        for scene in scenes:
             own = {
                 (r["region"], r["method"]): r
                 for r in read_rows(
                     root / f"results/{renderer}/seeds/correlation/{scene}/spp{spp}.csv"
                 )
             }
-            for row in (t for t in table if t["scene"] == scene):
+            rows = [t for t in table if t["scene"] == scene]
+            assert len(rows) == len(own)  # one row per region and method
+            for row in rows:
                 expected = own[(row["region"], row["method"])]["rho"]
                 assert row[f"rho_{renderer}"] == pytest.approx(expected, nan_ok=True)
     from stereovar.io.store import open_dataset
