@@ -13,12 +13,13 @@ setup:
 run: setup
 	$(SNAKEMAKE) -j2 all
 
-# Two pytest-xdist workers, one per core of the reference 2-core machine; tests sharing a
+# Three pytest-xdist workers on the reference 2-core machine (the SLURM tests mostly wait on
+# their scheduler, and a third worker fills that time); tests sharing a
 # session run or a module's run stay on one worker, the longest groups first, in the order
 # tests/conftest.py gives (not xdist's order by test count). The 25 slowest tests
 # are listed at the end, so a slow test shows the day it lands. PYTEST_WORKERS=0 runs the
 # suite in this process.
-PYTEST_WORKERS ?= 2
+PYTEST_WORKERS ?= 3
 PYTEST_ARGS := -n $(PYTEST_WORKERS) --dist loadgroup --no-loadscope-reorder --durations=25
 
 test: setup
