@@ -198,18 +198,19 @@ SHARED_RUN_GROUP = "tiny_run"
 
 #: Groups that take minutes, longest first, so that neither worker is left with one at the
 #: end (the rest follow in collection order; ``make test``'s ``--durations`` shows what to
-#: add). xdist gives each worker two groups at the start: the third waits behind the first.
+#: add). xdist gives each of the three workers two groups at the start: the fourth waits
+#: behind the first.
 FIRST = (
     SHARED_RUN_GROUP,
     "test_audit_workflow",
-    "test_docs",  # short: it waits behind the shared run on the first worker
     "test_mitigations",
+    "test_docs",  # short: it waits behind the shared run on the first worker
     "test_cycles",
     "test_moments_workflow",
     "test_audit_jobs",
     "test_faults",
-    "test_ground_truth",
     "test_probe_workflow",
+    "test_ground_truth",
     "test_install",
     "test_photometric",
     "test_audit_cli_errors",
