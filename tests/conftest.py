@@ -196,7 +196,7 @@ def headless_chromium():
 SHARED_RUN_FIXTURES = frozenset({"tiny_run", "tiny_run_copy"})
 SHARED_RUN_GROUP = "tiny_run"
 
-#: Groups that take minutes, longest first, so that neither worker is left with one at the
+#: Groups that take minutes, longest first, so that no worker is left with one at the
 #: end (the rest follow in collection order; ``make test``'s ``--durations`` shows what to
 #: add). xdist gives each of the three workers two groups at the start: the fourth waits
 #: behind the first.
