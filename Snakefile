@@ -50,6 +50,7 @@ include: "workflow/rules/claims.smk"
 include: "workflow/rules/estimators.smk"
 include: "workflow/rules/audit.smk"
 include: "workflow/rules/mitigations.smk"
+include: "workflow/rules/calibration.smk"
 include: "workflow/rules/probe.smk"
 
 

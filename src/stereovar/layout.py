@@ -318,6 +318,34 @@ def mitigation_rows(source: str, estimator: str, scene: str, spp, transform: str
     return f"{run_prefix(source, estimator, transform)}/mitigation/{scene}/spp{spp}.csv"
 
 
+def calibration_rows(source: str, scene: str, spp) -> str:
+    """One scene's calibration replicates (synthetic nulls and planted cues through every
+    transform and statistic): ``results/{source}/seeds/calibration/{scene}/spp{spp}.csv``."""
+    return f"{run_prefix(source, 'seeds')}/calibration/{scene}/spp{spp}.csv"
+
+
+def calibration_tables(source: str | None = None) -> list[str]:
+    """The calibration table (``csv``, ``md``): ``results/tables/calibration.*``, or
+    ``results/audit/{name}/tables/calibration.*`` for an audit."""
+    prefix = f"{RESULTS}/{source}/tables" if source and is_audit(source) else f"{RESULTS}/tables"
+    return [f"{prefix}/calibration.{ext}" for ext in ("csv", "md")]
+
+
+def calibration_nulls(source: str | None = None) -> str:
+    """Each scene's matched null per transform and statistic, and the equivalence margins:
+    ``results/tables/calibration_nulls.csv`` (an audit's under ``results/audit/{name}``)."""
+    prefix = f"{RESULTS}/{source}/tables" if source and is_audit(source) else f"{RESULTS}/tables"
+    return f"{prefix}/calibration_nulls.csv"
+
+
+def calibration_figure(source: str | None = None) -> str:
+    """The calibration figure: ``results/figures/calibration.png`` (an audit's under
+    ``results/audit/{name}``)."""
+    if source is not None and is_audit(source):
+        return f"{RESULTS}/{source}/figures/calibration.png"
+    return f"{RESULTS}/figures/calibration.png"
+
+
 def table_paths(name: str, prefix: str = f"{RESULTS}/tables") -> list[str]:
     """A table in every :data:`TABLE_FORMATS`: ``{prefix}/{name}.{ext}``."""
     return [f"{prefix}/{name}.{ext}" for ext in TABLE_FORMATS]

@@ -121,6 +121,9 @@ rule audit_verdict:
         # audit.probe: the learned probe's verdict and figure
         probe=probe_targets()[-1:],
         probe_figure=probe_targets()[-2:-1],
+        # the calibration: its table's sentence and the matched nulls the verdict rests on
+        calibration=CALIBRATION_TABLES[0],
+        nulls=CALIBRATION_NULLS,
     output:
         md=layout.audit_verdict("{name}", "md"),
         html=report(

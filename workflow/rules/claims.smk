@@ -146,6 +146,8 @@ rule results_page:
         # the probe's verdict and figure, once `snakemake probe` has made them
         probe=probe_if_run()[-1:],
         probe_figure=probe_if_run()[-2:-1],
+        # the calibration's table: its sentence goes under the headline
+        calibration=CALIBRATION_TABLES[0],
     output:
         layout.results_page(),
     params:

@@ -5,6 +5,7 @@ import re
 import shlex
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import yaml
 from snakemake.utils import validate
@@ -425,6 +426,7 @@ def all_targets():
             *render_stores(),
             *audit_targets(config),
             *mitigation_targets(),
+            *calibration_targets(),
             *probe_targets(),
         ]
     shared = [
@@ -433,6 +435,7 @@ def all_targets():
         *layout.claims_tables(),
         layout.summary_json(),
         *mitigation_targets(),
+        *calibration_targets(),
         *probe_if_run(),
         layout.results_page(),
     ]
@@ -753,8 +756,13 @@ def mitigation_files(run):
 
 
 def mitigation_table_inputs(wildcards):
-    """Every mitigation row's per-scene files, as one flat list."""
-    return [p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths]
+    """Every mitigation row's per-scene files, and the calibration's matched nulls."""
+    return {
+        "files": [
+            p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths
+        ],
+        "nulls": layout.calibration_nulls(MITIGATION_SOURCE),
+    }
 
 
 def image_cost(run):
@@ -780,6 +788,7 @@ def mitigation_table_params():
             "kind": run.mitigation.kind,
             "description": run.mitigation.description,
             "spp": run.spp,
+            "calibration_transform": run.transform if run.mitigation.kind == "transform" else "none",
             **image_cost(run),
             **mitigation_files(run),
         }
@@ -793,6 +802,54 @@ def mitigation_targets():
     if not MITIGATION_RUNS:
         return []
     return [*MITIGATION_TABLES, MITIGATION_FIGURE]
+
+
+# The calibration (stereovar.calibration): each scene of the run's source, at the main SPP,
+# through "none" and every store transform of the mitigation rows.
+CALIBRATION_TRANSFORMS = [
+    "none",
+    *dict.fromkeys(r.transform for r in MITIGATION_RUNS if r.mitigation.kind == "transform"),
+]
+CALIBRATION_TABLES = layout.calibration_tables(MITIGATION_SOURCE)
+CALIBRATION_NULLS = layout.calibration_nulls(MITIGATION_SOURCE)
+CALIBRATION_FIGURE = layout.calibration_figure(MITIGATION_SOURCE)
+
+
+def calibration_options():
+    """Each calibrated transform's options, as the transform rule passes them."""
+    return {
+        t: transform_options(SimpleNamespace(transform=t))
+        for t in CALIBRATION_TRANSFORMS
+        if t != "none"
+    }
+
+
+def calibration_scene_inputs(wildcards):
+    """One scene's seeds variance store and ground truth, and each view's auxiliary passes
+    when a calibrated transform reads them and the source renders them."""
+    source = wildcards.renderer
+    inputs = {
+        "variance": layout.variance_store(source, "seeds", wildcards.scene, wildcards.spp),
+        "ground_truth": ground_truth_input(wildcards),
+    }
+    wants = set()
+    for t in CALIBRATION_TRANSFORMS[1:]:
+        transform = get_transform(t)
+        wants |= {"albedo", "normal"} & {*transform.reads, *transform.optional_reads}
+    if wants and wants <= set(source_aux_passes(source)):
+        for view in VIEWS:
+            inputs[f"aux_{view}"] = layout.aux_store(source, wildcards.scene, view)
+    return inputs
+
+
+def calibration_table_inputs():
+    """Every scene's calibration replicates."""
+    return [layout.calibration_rows(MITIGATION_SOURCE, s, MAIN_SPP) for s in SCENES]
+
+
+def calibration_targets():
+    """`snakemake calibration`: the calibration table, its matched nulls and figure."""
+    return [*CALIBRATION_TABLES, CALIBRATION_NULLS, CALIBRATION_FIGURE]
 
 
 # The learned probe (stereovar.probe): one network per training condition, fold and training
@@ -899,6 +956,7 @@ PAGE_CAPTIONS = {
     "cross_renderer": "fig_cross_renderer.rst",
     "mitigations": "mitigations_figure.rst",
     "probe": "probe_figure.rst",
+    "calibration": "calibration.rst",
     "claims": "claims.rst",
     "workflow": "workflow.rst",
 }

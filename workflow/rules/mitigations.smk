@@ -120,7 +120,7 @@ rule mitigation_scene:
 
 rule mitigations_table:
     input:
-        mitigation_table_inputs,
+        unpack(mitigation_table_inputs),
     output:
         csv=MITIGATION_TABLES[0],
         md=MITIGATION_TABLES[1],

@@ -16,6 +16,8 @@ run_job(
     mitigation_figure=(list(snakemake.input.mitigation_figure) or [None])[0],
     probe=(list(snakemake.input.probe) or [None])[0],
     probe_figure=(list(snakemake.input.probe_figure) or [None])[0],
+    calibration=snakemake.input.calibration,
+    nulls=snakemake.input.nulls,
     outputs=dict(snakemake.output.items()),
     **snakemake.params,
 )

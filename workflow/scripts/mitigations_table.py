@@ -9,4 +9,5 @@ run_job(
     runs=snakemake.params.runs,
     outputs={k: snakemake.output[k] for k in ("csv", "md", "tex", "html")},
     figure=snakemake.output.figure,
+    nulls=snakemake.input.nulls,
 )

@@ -30,13 +30,16 @@ STRENGTHS = ((0.5, "strong"), (0.3, "moderate"), (0.1, "weak"), (-math.inf, "neg
 
 RULES = (
     "The cue is Monte Carlo-specific when the intensity-controlled rho (partial: Pearson of "
-    "ln sigma^2 after removing a cubic in ln mu per view, which a camera's a*mu + b noise "
-    "leaves at 0) has a 95% interval above 0; its strength is the word for that rho "
-    "(>= 0.5 strong, >= 0.3 moderate, >= 0.1 weak, else negligible). It works as a matching "
-    "cue beyond a camera when the C_sigma winner-take-all accuracy's lift over chance has an "
-    "interval above 0 and above the same lift on simulated camera frames. Intervals: rho, "
-    "frames' spatial block-bootstrap intervals combined; intervention, Student t over frames "
-    "(one frame: Wilson interval treating pixels as independent, too narrow)."
+    "ln sigma^2 after removing each view's conditional mean of ln sigma^2 given ln mu) minus "
+    "the same statistic on its matched null (camera-law noise drawn from the frames' own "
+    "seed means, N and disparity, stereovar.calibration) has a 95% interval above 0; its "
+    "strength is the word for that difference (>= 0.5 strong, >= 0.3 moderate, >= 0.1 weak, "
+    "else negligible). The calibration measures how often this rule fires on matched nulls "
+    "and from which planted strength it detects a cue. It works as a matching cue beyond a "
+    "camera when the C_sigma winner-take-all accuracy's lift over chance has an interval "
+    "above 0 and above the same lift on simulated camera frames. Intervals: rho, frames' "
+    "spatial block-bootstrap intervals combined; intervention, Student t over frames (one "
+    "frame: Wilson interval treating pixels as independent, too narrow)."
 )
 
 VERDICT_COLUMNS = ["quantity", "region", "value", "low", "high", "note"]
@@ -138,9 +141,20 @@ def wta_lift(intervention: list[dict], source: str, region: str = "all") -> tupl
     return lifts[0], ci.low - chance, ci.high - chance
 
 
-def verdict_rows(correlations: list[dict], intervention: list[dict]) -> list[dict]:
+SPECIFIC = "Monte Carlo-specific rho"
+"""The label of the verdict's row: the intensity-controlled rho minus its matched null."""
+
+
+def verdict_rows(
+    correlations: list[dict], intervention: list[dict], nulls: list[dict] | None = None
+) -> list[dict]:
     """:data:`VERDICT_COLUMNS` rows: every statistic of :data:`ROWS` per region with a
-    finite value (``all`` always), then the intervention's lifts."""
+    finite value (``all`` always), with ``nulls`` (the calibration's matched nulls) the
+    Monte Carlo-specific difference after the intensity-controlled row
+    (:func:`stereovar.statistics.mitigations.matched_difference`), then the intervention's
+    lifts."""
+    from ..statistics.mitigations import matched_difference
+
     out = []
     for region in ("all", "non_glass", "glass"):
         for method, label, note in ROWS:
@@ -149,6 +163,20 @@ def verdict_rows(correlations: list[dict], intervention: list[dict]) -> list[dic
                 continue
             why = "" if _ok(value) else _reason(correlations, region)
             out.append(_row(label, region, value, low, high, why or note))
+            if method == "partial" and nulls is not None:
+                null, *diff = matched_difference(
+                    correlations, nulls, transform="none", region=region
+                )
+                out.append(
+                    _row(
+                        SPECIFIC,
+                        region,
+                        *diff,
+                        f"intensity-controlled rho minus its matched null ({null:.3f})"
+                        if _ok(null)
+                        else "no matched null for these frames",
+                    )
+                )
     for source, label in (("render", "renders"), ("sensor", "simulated camera frames")):
         value, low, high = wta_lift(intervention, source)
         quantity = f"C_sigma WTA accuracy minus chance, {label}"
@@ -178,6 +206,10 @@ def verdict(rows: list[dict]) -> dict:
         ``matching_cue`` (True, False or None) and ``text``, one plain-language paragraph.
     """
     partial = _find(rows, "intensity-controlled")
+    specific = _find(rows, SPECIFIC)
+    against = ""
+    if _ok(specific["value"], specific["low"], specific["high"]):
+        partial, against = specific, " beyond its matched null (camera-law noise on these frames)"
     lift = _find(rows, "C_sigma WTA accuracy minus chance, renders")
     camera = _find(rows, "C_sigma WTA accuracy minus chance, simulated")
     pearson = _find(rows, "Pearson rho after")
@@ -205,15 +237,15 @@ def verdict(rows: list[dict]) -> dict:
         mc, word = True, strength(partial["value"])
         first = (
             f"The data carries a {word} Monte Carlo-specific cross-view variance cue: after "
-            f"removing what intensity explains, the two views' variance fields still correlate "
-            f"(rho {iv(partial)}). A real camera's noise would leave about 0 here."
+            f"removing what intensity explains, the two views' variance fields still correlate"
+            f"{against} (rho {iv(partial)}). A real camera's noise would leave about 0 here."
         )
     else:
         mc, word = False, "none detected"
         first = (
             "No Monte Carlo-specific cross-view variance cue was detected: once intensity is "
-            f"controlled the correlation is {iv(partial)}, an interval that reaches 0, as a "
-            "real camera's would."
+            f"controlled the correlation{against} is {iv(partial)}, an interval that reaches "
+            "0, as a real camera's would."
         )
     second = (
         f" The raw Pearson rho after the warp is {iv(pearson)}; a simulated camera with the "

@@ -118,6 +118,8 @@ def verdict_job(
     mitigation_figure=None,
     probe=None,
     probe_figure=None,
+    calibration=None,
+    nulls=None,
 ) -> dict:
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``.
 
@@ -130,7 +132,10 @@ def verdict_job(
     (``seeding``: :func:`seeding_job`), the teasers and, with ``mitigations`` (the audit's
     mitigation table), which mitigation removes the Monte Carlo-specific part and at what
     cost (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure; with
-    ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure."""
+    ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure; with
+    ``calibration`` and ``nulls`` (the audit's calibration table and matched nulls,
+    :mod:`stereovar.calibration`), the Monte Carlo-specific row the verdict rests on and the
+    calibration's sentence."""
     from ..audit.page import import_flags, page_sections, to_html_page, to_markdown_page
     from ..audit.verdict import (
         RULES,
@@ -151,8 +156,16 @@ def verdict_job(
     iv = [r for p in interventions for r in read_rows(p)]
     residual = [r for p in seeding for r in read_rows(p)]
     records = [json.loads(Path(p).read_text()) for p in imports]
-    rows = verdict_rows(corr, iv) + seeding_rows(residual)
+    null_rows = read_rows(nulls) if nulls else None
+    rows = verdict_rows(corr, iv, null_rows) + seeding_rows(residual)
+    calibrated = ""
+    if calibration:
+        from ..calibration.summary import headline
+
+        calibrated = headline(read_rows(calibration))
     result = verdict(rows)
+    if calibrated:
+        result = {**result, "text": f"{result['text']} {calibrated}"}
     shared = seeding_finding(residual)
     flags = import_flags(records) + control_flags(rows, corr)
     findings = []
@@ -164,6 +177,8 @@ def verdict_job(
     lines = summary_lines(name, found, rows, result)
     lines.insert(0, f"{opening['light'].upper()}: {opening['headline']}")
     lines.append(f"  seeding: {shared['text']}")
+    if calibrated:
+        lines.append(f"  calibration: {calibrated}")
     lines += [f"  flag: {f['text']}" for f in flags]
     if findings:
         lines.append(f"mitigations: {findings[-1]}")
@@ -208,6 +223,7 @@ def verdict_job(
         "summary": lines,
         "mitigations": findings,
         "probe": probe_result,
+        "calibration": calibrated,
         "rules": RULES,
         "rows": json.loads(json.dumps(table, default=str).replace("NaN", "null")),
         "csv": to_csv(table, VERDICT_COLUMNS),

@@ -246,6 +246,7 @@ def results_page_job(
     mitigation_figure=None,
     probe=None,
     probe_figure=None,
+    calibration=None,
 ) -> dict:
     """Write ``results/index.html`` (:mod:`stereovar.pages.results`): the headline
     :math:`\\rho` with its interval and controls from ``summary`` (``results/summary.json``),
@@ -253,12 +254,14 @@ def results_page_job(
     caption (``captions``: figure name, ``claims`` and ``workflow`` to the report's caption,
     its Jinja already filled), with ``mitigations`` (the mitigation table's CSV) and
     ``probe`` (the probe's verdict JSON) their sections and figures, links to every table of
-    ``tables`` relative to the page, and to ``report`` (Snakemake's report) when it exists.
+    ``tables`` relative to the page, and to ``report`` (Snakemake's report) when it exists;
+    with ``calibration`` (the calibration table's CSV) its sentence under the headline.
 
     Returns the page's sections."""
     import json
     from pathlib import Path
 
+    from ..calibration.summary import headline
     from ..io.store import write_file
     from ..io.tables import read_rows
     from ..layout import snakemake_report
@@ -304,6 +307,7 @@ def results_page_job(
         probe=probe_section,
         report=relative_link(report, out) if Path(report).is_file() else None,
         report_command=f"snakemake --report {report}",
+        calibration=headline(read_rows(calibration)) if calibration else "",
     )
     page = to_html_page(sections)
     write_file(Path(out), lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))

@@ -94,6 +94,8 @@ TABLE_LABELS = {
     "cross_renderer": "The renderers side by side",
     "mitigations": "Mitigations",
     "probe": "Learned probe",
+    "calibration": "Calibration: false positives, power and coverage of every rule",
+    "calibration_nulls": "Calibration: each scene's matched null per transform",
 }
 """Labels of the tables the page links, by file name."""
 
@@ -312,6 +314,7 @@ def page_sections(
     probe: dict | None = None,
     report: str | None = None,
     report_command: str = "snakemake --report results/report.html",
+    calibration: str = "",
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
@@ -337,6 +340,9 @@ def page_sections(
         Snakemake's report relative to the page, when it exists.
     report_command : str, optional
         The command that makes the report.
+    calibration : str, optional
+        The calibration's sentence (:func:`stereovar.calibration.summary.headline`), shown
+        under the headline.
     """
     statistics = list(summary.get("statistics") or [])
     tally: dict[str, int] = {}
@@ -367,6 +373,7 @@ def page_sections(
         "tables": list(tables),
         "report": report,
         "report_command": report_command,
+        "calibration": calibration,
     }
 
 
@@ -410,6 +417,7 @@ def _headline_html(s: dict) -> str:
         + (f"; mean over {_e(n)} scenes" if n not in (None, "") else "")
         + ". Read it against the controls beside it.</p>"
         + (f'<p class="tally"><a href="#claims">Claims</a>: {_e(tally)}.</p>' if tally else "")
+        + (f'<p class="calibration">{_e(s["calibration"])}</p>' if s.get("calibration") else "")
         + "</div>"
     )
     head = "".join(f"<th>{_e(label)}</th>" for label in REGIONS.values())

@@ -11,10 +11,17 @@ column family:
   (:func:`stereovar.audit.verdict.wta_lift`; :func:`stereovar.statistics.claims.t_interval`);
 - image quality: the mean over scenes with a Student t interval.
 
-The Monte Carlo-specific part of the cue is the intensity-controlled :math:`\\rho`
-(``partial``: the variance correlation with the part explained by intensity removed, paper
-Sec. 2.4's shot-noise control). ``mc_cue`` says whether its interval lies above 0
-(``remains``), covers 0 (``removed``) or lies below 0 (``reversed``).
+The Monte Carlo-specific part of the cue (``mc_specific``) is the intensity-controlled
+:math:`\\rho` (``partial``: the variance correlation with the part explained by intensity
+removed, paper Sec. 2.4's shot-noise control) minus the same statistic on the matched null
+passed through the same transform (``null_partial``: camera-law noise drawn from the scene's
+own seed means, :mod:`stereovar.calibration`), per scene, then combined over scenes. A
+transform can make pure camera noise look like a cue (a denoiser's variance follows local
+contrast, which both views share), and only the difference is Monte Carlo's. ``mc_cue``:
+``remains`` when the difference's interval lies above 0, ``reversed`` below 0, ``removed``
+when it lies inside the equivalence margin (``margin``: the Monte Carlo-specific
+:math:`\\rho` that the calibration detects with 80% power on untransformed frames), else
+``inconclusive`` (an interval that merely covers 0 is no evidence of removal).
 """
 
 from __future__ import annotations
@@ -41,6 +48,11 @@ MITIGATION_COLUMNS = [
     "partial",
     "partial_low",
     "partial_high",
+    "null_partial",
+    "mc_specific",
+    "mc_specific_low",
+    "mc_specific_high",
+    "margin",
     "mc_cue",
     "null_shift",
     "null_shift_low",
@@ -96,14 +108,18 @@ def _f(value) -> float:
         return math.nan
 
 
-def mc_cue_state(low: float, high: float) -> str:
-    """``remains`` (interval above 0), ``removed`` (covers 0), ``reversed`` (below 0), or
-    ``n/a`` (no interval).
+def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
+    """The verdict on a Monte Carlo-specific difference's 95% interval: ``remains`` (above
+    0), ``reversed`` (below 0), ``removed`` (inside :math:`(-\\delta, \\delta)`, the
+    equivalence margin: two one-sided tests), ``inconclusive`` (covers 0 but reaches past the
+    margin, or no margin), or ``n/a`` (no interval).
 
     Examples
     --------
-    >>> mc_cue_state(0.1, 0.3), mc_cue_state(-0.1, 0.2), mc_cue_state(float("nan"), 1.0)
-    ('remains', 'removed', 'n/a')
+    >>> mc_cue_state(0.1, 0.3, 0.02), mc_cue_state(-0.01, 0.01, 0.02)
+    ('remains', 'removed')
+    >>> mc_cue_state(-0.1, 0.2, 0.02), mc_cue_state(float("nan"), 1.0)
+    ('inconclusive', 'n/a')
     """
     if not (math.isfinite(low) and math.isfinite(high)):
         return "n/a"
@@ -111,7 +127,73 @@ def mc_cue_state(low: float, high: float) -> str:
         return "remains"
     if high < 0:
         return "reversed"
-    return "removed"
+    if math.isfinite(margin) and margin > 0 and -margin < low and high < margin:
+        return "removed"
+    return "inconclusive"
+
+
+def matched_difference(corr, nulls, *, transform, region, method="partial"):
+    """The statistic minus its matched null through the same transform, per scene, combined
+    over scenes.
+
+    .. math::
+
+        \\Delta_s = \\rho_s - \\bar\\rho_{0,s}, \\qquad
+        \\bar\\Delta = \\frac1S \\sum_s \\Delta_s
+
+    with each scene's interval from its bootstrap interval and the null mean's standard
+    error (:func:`stereovar.calibration.summary.difference_interval`), combined over scenes
+    (:func:`stereovar.statistics.across.combined_interval`).
+
+    Parameters
+    ----------
+    corr : list of dict
+        The row's correlation rows (``scene``, ``region``, ``method``, ``rho``,
+        ``boot_low``, ``boot_high``).
+    nulls : list of dict
+        :data:`stereovar.calibration.summary.NULL_COLUMNS` rows.
+    transform : str
+        The calibration transform matched to the row (``none`` for renders as rendered).
+
+    Returns
+    -------
+    null, diff, low, high : float
+        The scenes' mean null and the combined difference; NaN when no scene has both.
+    """
+    from ..calibration.summary import difference_interval
+    from .across import combined_interval
+
+    table = {
+        r["scene"]: r
+        for r in nulls
+        if (r["transform"], r["region"], r["method"]) == (transform, region, method)
+    }
+    null_values, diffs, lows, highs = [], [], [], []
+    for r in corr:
+        if (r["region"], r["method"]) != (region, method) or r["scene"] not in table:
+            continue
+        null = table[r["scene"]]
+        d = difference_interval(
+            r["rho"], r["boot_low"], r["boot_high"], null["null_rho"], null["null_se"]
+        )
+        if not all(math.isfinite(x) for x in d):
+            continue
+        null_values.append(_f(null["null_rho"]))
+        diffs.append(d[0])
+        lows.append(d[1])
+        highs.append(d[2])
+    if not diffs:
+        return (math.nan,) * 4
+    return (float(np.mean(null_values)), *combined_interval(diffs, lows, highs))
+
+
+def equivalence_margin(nulls, method="partial") -> float:
+    """The margin of ``removed``: the calibration's detectable Monte Carlo-specific
+    :math:`\\rho` on untransformed frames (the nulls' ``margin`` of transform ``none``)."""
+    for r in nulls:
+        if (r["transform"], r["method"]) == ("none", method) and math.isfinite(_f(r["margin"])):
+            return _f(r["margin"])
+    return math.nan
 
 
 def _scene_values(rows, region, quantity) -> list[float]:
@@ -136,7 +218,7 @@ def _intervention_effect(rows, region) -> tuple[float, float, float]:
     return t_interval(diffs)
 
 
-def mitigation_table(runs: list[dict]) -> list[dict]:
+def mitigation_table(runs: list[dict], nulls: list[dict] | None = None) -> list[dict]:
     """The rows of :data:`MITIGATION_COLUMNS`.
 
     Parameters
@@ -147,7 +229,12 @@ def mitigation_table(runs: list[dict]) -> list[dict]:
         and ``aux_spp`` (the auxiliary pass's; 0 by default),
         ``correlation`` (its scenes' correlation rows), ``intervention`` (its scenes'
         intervention rows; may be empty) and ``scene_rows`` (its scenes' mitigation rows,
-        :data:`stereovar.jobs.mitigations.MITIGATION_SCENE_COLUMNS`).
+        :data:`stereovar.jobs.mitigations.MITIGATION_SCENE_COLUMNS`), and optionally
+        ``calibration_transform``: the transform whose matched null applies (``none`` by
+        default, for renders as rendered).
+    nulls : list of dict, optional
+        The calibration's matched nulls (:data:`stereovar.calibration.summary.NULL_COLUMNS`);
+        without them ``mc_specific`` and ``mc_cue`` are NaN and ``n/a``.
 
     Returns
     -------
@@ -184,7 +271,16 @@ def mitigation_table(runs: list[dict]) -> list[dict]:
             for column, method in CORRELATION_METHODS.items():
                 chosen = [r for r in corr if r["region"] == region and r["method"] == method]
                 row[column], row[f"{column}_low"], row[f"{column}_high"] = rows_interval(chosen)
-            row["mc_cue"] = mc_cue_state(row["partial_low"], row["partial_high"])
+            null, *diff = matched_difference(
+                corr,
+                nulls or [],
+                transform=run.get("calibration_transform", "none"),
+                region=region,
+            )
+            row["null_partial"] = null
+            row["mc_specific"], row["mc_specific_low"], row["mc_specific_high"] = diff
+            row["margin"] = equivalence_margin(nulls or [])
+            row["mc_cue"] = mc_cue_state(diff[1], diff[2], row["margin"])
             lift = (
                 wta_lift(run["intervention"], "render", region)
                 if run["intervention"]
@@ -232,44 +328,62 @@ def _iv(row, column, unit="", digits=3) -> str:
 
 
 def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
-    """Plain-language lines of the mitigation table over ``region``: per mitigation whether
-    the Monte Carlo-specific part of the cue (the intensity-controlled :math:`\\rho`) remains
-    or is removed, beside the renders as they are, and at what PSNR; then which mitigations
-    remove it and the cheapest in PSNR.
+    """Plain-language lines of the mitigation table over ``region``: per mitigation its
+    Monte Carlo-specific :math:`\\rho` (the intensity-controlled :math:`\\rho` minus its
+    matched null through the same transform) and verdict, beside the renders as they are,
+    and at what PSNR; then which mitigations remove it (inside the equivalence margin) and
+    the cheapest in PSNR.
 
     Examples
     --------
     >>> rows = [
-    ...     {"mitigation": "none", "region": "all", "partial": 0.5, "partial_low": 0.4,
-    ...      "partial_high": 0.6, "mc_cue": "remains", "psnr": 30.0, "psnr_low": 29.0,
-    ...      "psnr_high": 31.0},
-    ...     {"mitigation": "sensor_only", "region": "all", "partial": 0.01,
-    ...      "partial_low": -0.02, "partial_high": 0.04, "mc_cue": "removed", "psnr": 28.0,
-    ...      "psnr_low": 27.0, "psnr_high": 29.0},
+    ...     {"mitigation": "none", "region": "all", "mc_specific": 0.5, "mc_specific_low": 0.4,
+    ...      "mc_specific_high": 0.6, "null_partial": 0.0, "margin": 0.02, "mc_cue": "remains",
+    ...      "psnr": 30.0, "psnr_low": 29.0, "psnr_high": 31.0},
+    ...     {"mitigation": "sensor_only", "region": "all", "mc_specific": 0.001,
+    ...      "mc_specific_low": -0.01, "mc_specific_high": 0.012, "null_partial": 0.0,
+    ...      "margin": 0.02, "mc_cue": "removed", "psnr": 28.0, "psnr_low": 27.0,
+    ...      "psnr_high": 29.0},
     ... ]
     >>> print(mitigation_findings(rows)[-1])  # doctest: +NORMALIZE_WHITESPACE
-    Removes the Monte Carlo-specific part: sensor_only (PSNR 28.00 dB [27.00, 29.00]
-    against 30.00 dB [29.00, 31.00] as rendered).
+    Removes the Monte Carlo-specific part (its interval inside +/-0.020): sensor_only (PSNR
+    28.00 dB [27.00, 29.00] against 30.00 dB [29.00, 31.00] as rendered).
     """
     chosen = [r for r in rows if r["region"] == region]
     base = next((r for r in chosen if r["mitigation"] == "none"), None)
     lines = []
     for r in chosen:
         lines.append(
-            f"{r['mitigation']}: intensity-controlled rho {_iv(r, 'partial')} ({r['mc_cue']}), "
-            f"residual correlation at zero disparity {_iv(r, 'residual_rho_zero')}, "
-            f"PSNR {_iv(r, 'psnr', ' dB', 2)}"
+            f"{r['mitigation']}: Monte Carlo-specific rho {_iv(r, 'mc_specific')} "
+            f"({r['mc_cue']}; intensity-controlled rho minus its matched null "
+            f"{_f(r.get('null_partial')):.3f}), residual correlation at zero disparity "
+            f"{_iv(r, 'residual_rho_zero')}, PSNR {_iv(r, 'psnr', ' dB', 2)}"
         )
+    margins = [_f(r.get("margin")) for r in chosen if math.isfinite(_f(r.get("margin")))]
+    within = f" (its interval inside +/-{margins[0]:.3f})" if margins else ""
     removing = [r for r in chosen if r["mitigation"] != "none" and r["mc_cue"] == "removed"]
+    unclear = [r["mitigation"] for r in chosen if r["mc_cue"] in ("inconclusive", "n/a")]
     if not removing:
-        lines.append("No mitigation measured here removes the Monte Carlo-specific part.")
-        return lines
-    removing.sort(key=lambda r: -_f(r.get("psnr")) if math.isfinite(_f(r.get("psnr"))) else 1e9)
-    against = f" against {_iv(base, 'psnr', ' dB', 2)} as rendered" if base else ""
-    lines.append(
-        "Removes the Monte Carlo-specific part: "
-        + ", ".join(f"{r['mitigation']} (PSNR {_iv(r, 'psnr', ' dB', 2)}{against})"
-                    for r in removing)
-        + "."
-    )
+        lines.append(
+            "No mitigation measured here is shown to remove the Monte Carlo-specific part"
+            + (f"{within}." if within else " (no equivalence margin: run the calibration).")
+        )
+    else:
+        removing.sort(
+            key=lambda r: -_f(r.get("psnr")) if math.isfinite(_f(r.get("psnr"))) else 1e9
+        )
+        against = f" against {_iv(base, 'psnr', ' dB', 2)} as rendered" if base else ""
+        lines.append(
+            f"Removes the Monte Carlo-specific part{within}: "
+            + ", ".join(
+                f"{r['mitigation']} (PSNR {_iv(r, 'psnr', ' dB', 2)}{against})" for r in removing
+            )
+            + "."
+        )
+    if unclear:
+        lines.insert(
+            len(lines) - 1,
+            "Neither shown to remain nor to be removed (the interval covers 0 but reaches past "
+            "the margin): " + ", ".join(unclear) + ".",
+        )
     return lines

@@ -97,6 +97,10 @@ class Transform:
         Fields it uses when present (and works without).
     random : bool
         Whether it draws random numbers from ``rng_seed``.
+    expensive : bool
+        Whether one image costs far more than the statistics on it (the denoisers): the
+        calibration passes fewer replicates through it
+        (:mod:`stereovar.calibration.replicates`).
     """
 
     name: str
@@ -105,6 +109,7 @@ class Transform:
     reads: tuple[str, ...] = ()
     optional_reads: tuple[str, ...] = ()
     random: bool = False
+    expensive: bool = False
 
     def __post_init__(self):
         known = {f.name for f in fields(TransformInputs)}

@@ -15,6 +15,7 @@ DENOISE = Transform(
     description="OIDN denoiser on each render (albedo and normal when given), as BlenderProc",
     apply=apply_denoise,
     optional_reads=("albedo", "normal"),
+    expensive=True,
 )
 DENOISE_SENSOR = Transform(
     name="denoise_sensor",
@@ -22,6 +23,7 @@ DENOISE_SENSOR = Transform(
     apply=apply_denoise_sensor,
     optional_reads=("albedo", "normal"),
     random=True,
+    expensive=True,
 )
 EQUALISE = Transform(
     name="equalise",

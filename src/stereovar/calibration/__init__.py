@@ -1,0 +1,8 @@
+"""The calibration: every statistic, control and verdict rule checked on data whose answer is
+known (``DESIGN.md``, Calibration).
+
+:mod:`~stereovar.calibration.synthesis` draws matched nulls and planted cues from a run's own
+frames, :mod:`~stereovar.calibration.replicates` passes them through the run's transforms and
+statistics, and :mod:`~stereovar.calibration.summary` turns the replicates into false-positive
+rates, power curves and interval coverage.
+"""

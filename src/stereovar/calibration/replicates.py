@@ -1,0 +1,310 @@
+"""One scene's calibration replicates: synthetic frames through every transform and statistic.
+
+For each replicate :math:`r` and each design (a matched null, or the planted cue at one
+strength; :mod:`stereovar.calibration.synthesis`), :math:`N` frames per view are drawn around
+the scene's seed means, passed through each transform of the run exactly as the renders are
+(:mod:`stereovar.transforms`, the seed mean and variance over the :math:`N` frames), and
+measured by the same Eq. 1, Eq. 2 and every registered statistic with its block-bootstrap
+interval (:func:`stereovar.statistics.rows.correlation_rows`). Nothing is rendered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..seeding import derive_seed
+from .synthesis import (
+    NULL_KINDS,
+    camera_law,
+    draw_frames,
+    planted_pattern,
+    variance_fields,
+)
+
+NONE = "none"
+"""The identity transform: the statistics on the synthetic frames as drawn."""
+
+SKIPPED_METHODS = ("sensor", "sensor_sim")
+"""Statistics left out: the camera baselines draw their own frames from the seed mean, and
+the calibration's ``camera`` null is that baseline."""
+
+CALIBRATION_COLUMNS = [
+    "scene",
+    "replicate",
+    "kind",
+    "strength",
+    "strength_factor",
+    "transform",
+    "region",
+    "method",
+    "rho",
+    "boot_low",
+    "boot_high",
+    "n_pixels",
+]
+"""Columns of one scene's replicate rows (``results/.../calibration/{scene}/spp{spp}.csv``)."""
+
+
+@dataclass(frozen=True)
+class SceneFrames:
+    """What the calibration takes from one scene of the run.
+
+    Attributes
+    ----------
+    mean : dict
+        View to the seed mean :math:`\\bar I_V` (H, W, C).
+    variance : dict
+        View to the renders' Eq. 1 field :math:`\\sigma_V^2` (H, W).
+    ground_truth : dict
+        View to ``{"disparity", "valid"}`` (H, W).
+    glass : numpy.ndarray of bool (H, W)
+        The left view's glass mask.
+    sign : int
+        ``disparity_sign``.
+    n_seeds : int
+        :math:`N`, the frames per view of every replicate.
+    label : str
+        The scene and SPP (seeds the draws).
+    aux : dict, optional
+        View to ``{"albedo", "normal"}`` for the denoiser, as the run gives it.
+    """
+
+    mean: dict
+    variance: dict
+    ground_truth: dict
+    glass: np.ndarray
+    sign: int
+    n_seeds: int
+    label: str
+    aux: dict | None = None
+
+
+def transform_stack(name: str, frames, *, view: str, seed: int, aux=None, options=None):
+    """The run's transform ``name`` on each of :math:`N` frames of one view, as the
+    transform job applies it to renders: every frame sees the seed mean and unbiased
+    variance over all :math:`N` (:func:`stereovar.jobs.mitigations.seed_moments`'s
+    definition), the view's auxiliary passes when given, and its own random seed.
+
+    Returns
+    -------
+    numpy.ndarray (N, H, W, C), float32
+    """
+    if name == NONE:
+        return frames
+    from ..transforms import TransformInputs, get_transform
+
+    t = get_transform(name)
+    stack = np.asarray(frames, dtype=np.float64)
+    mean = stack.mean(axis=0)
+    var = stack.var(axis=0, ddof=1)
+    extra = dict(aux or {})
+    out = []
+    for i, frame in enumerate(frames):
+        inputs = TransformInputs(
+            render=np.asarray(frame, dtype=np.float32),
+            view=view,
+            seed_index=i,
+            rng_seed=derive_seed(seed, view, i),
+            seed_mean=mean,
+            seed_var=var,
+            n_seeds=len(frames),
+            **extra,
+        )
+        out.append(t(inputs, **dict(options or {})))
+    return np.stack(out)
+
+
+def statistic_rows(stacks: dict, scene: SceneFrames, settings, label: str) -> list[dict]:
+    """Eq. 1, Eq. 2 and every registered statistic (but :data:`SKIPPED_METHODS`) over every
+    region, on one view pair of frame stacks."""
+    from ..estimators.seeds import variance_field
+    from ..statistics.rows import SceneInputs, correlation_rows
+    from ..statistics.warp import align_variance
+
+    means, fields = {}, {}
+    for view, stack in stacks.items():
+        means[view], fields[view] = variance_field(np.asarray(stack))
+    gt_left = scene.ground_truth["left"]
+    aligned = align_variance(
+        fields["left"],
+        fields["right"],
+        gt_left,
+        sign=scene.sign,
+        finite_left=np.isfinite(fields["left"]),
+        finite_right=np.isfinite(fields["right"]),
+    )
+    inputs = SceneInputs(
+        ground_truth_left=gt_left,
+        sign=scene.sign,
+        mean=means,
+        n_seeds=scene.n_seeds,
+        label=label,
+    )
+    rows = correlation_rows(
+        fields["left"], fields["right"], aligned, scene.glass, settings=settings, inputs=inputs
+    )
+    return [r for r in rows if r["method"] not in SKIPPED_METHODS]
+
+
+def render_strength(scene: SceneFrames, settings, camera_rows_residual_var: float) -> float:
+    """The planted strength the renders show: the standard deviation of the part of
+    :math:`\\ln\\sigma_L^2` that intensity does not explain, beyond estimation noise.
+
+    .. math::
+
+        \\hat s = \\sqrt{\\max\\bigl(\\operatorname{Var}(e_L) - \\operatorname{Var}(e_L^{0}),
+            0\\bigr)}
+
+    with :math:`e_L` the intensity control's residual of the renders' left field over the
+    valid pixels (:func:`stereovar.controls.intensity.intensity_residuals`) and
+    :math:`e_L^0` the same residual on the ``camera`` null (estimation noise alone, same
+    :math:`N`).
+    """
+    residual_var = _residual_variance(scene.variance["left"], scene.mean["left"], scene)
+    return float(np.sqrt(max(residual_var - camera_rows_residual_var, 0.0)))
+
+
+def _residual_variance(variance, mean, scene: SceneFrames) -> float:
+    from ..controls.intensity import intensity_residuals
+    from ..statistics.robust import log_floor
+
+    gt = scene.ground_truth["left"]
+    ok = np.asarray(gt["valid"], dtype=bool) & np.isfinite(variance)
+    mu = np.asarray(mean, dtype=np.float64).mean(axis=-1)
+    ok &= np.isfinite(mu)
+    lv, _ = log_floor(np.asarray(variance, dtype=np.float64)[ok])
+    lm, _ = log_floor(mu[ok])
+    e = intensity_residuals(lv, lm)
+    return float(np.nanvar(e))
+
+
+def designs(strength_factors, render_s: float) -> list[tuple[str, float, float]]:
+    """``(kind, strength, strength_factor)`` of every design: the nulls, then the planted cue
+    at each factor times the renders' strength ``render_s``."""
+    out = [(k, 0.0, 0.0) for k in NULL_KINDS]
+    out += [("planted", float(f) * render_s, float(f)) for f in strength_factors]
+    return out
+
+
+def scene_calibration(
+    scene: SceneFrames,
+    *,
+    transforms,
+    settings,
+    replicates: int,
+    strength_factors,
+    expensive_replicates: int,
+    expensive: frozenset = frozenset(),
+    options: dict | None = None,
+    seed: int = 0,
+    min_strength: float = 0.05,
+) -> tuple[list[dict], dict]:
+    """Every replicate of one scene.
+
+    Parameters
+    ----------
+    scene : SceneFrames
+    transforms : sequence of str
+        :data:`NONE` and the run's store transforms.
+    settings : stereovar.statistics.fields.AnalysisSettings
+        The run's analysis settings (bootstrap tile, replicates and seed).
+    replicates : int
+        Replicates of every design.
+    strength_factors : sequence of float
+        The planted strengths, as multiples of what the renders show (:func:`render_strength`).
+    expensive_replicates : int
+        Replicates of the transforms in ``expensive`` (the denoisers), which see the
+        ``camera`` null and the planted cue at factor 1 only.
+    options : dict, optional
+        Transform name to its keyword options (the run's camera).
+    seed : int
+        Seeds every draw with the scene label.
+    min_strength : float
+        The renders' strength used when they show less (so the planted grid is not all 0).
+
+    Returns
+    -------
+    rows : list of dict
+        :data:`CALIBRATION_COLUMNS` (``scene`` left for the caller).
+    info : dict
+        ``camera_law`` (a, b), ``render_strength``, ``replicates`` and
+        ``expensive_replicates``.
+    """
+    mu = {v: np.asarray(m, dtype=np.float64).mean(axis=-1) for v, m in scene.mean.items()}
+    gt_valid = np.asarray(scene.ground_truth["left"]["valid"], dtype=bool)
+    law = camera_law(scene.variance["left"], mu["left"], gt_valid)
+    options = dict(options or {})
+    rows: list[dict] = []
+    render_s = None
+    for r in range(int(replicates)):
+        rng = np.random.default_rng(derive_seed("calibration", seed, scene.label, r))
+        gt_r = scene.ground_truth["right"]
+        pattern = planted_pattern(gt_r["disparity"], gt_r["valid"], sign=scene.sign, rng=rng)
+        if render_s is None:
+            # the estimation noise of ln sigma^2 at this N: the camera null's residual
+            v = variance_fields(
+                "camera", 0.0, mean=scene.mean, law=law, render_variance=scene.variance, rng=rng
+            )
+            from ..estimators.seeds import variance_field
+
+            _, null_field = variance_field(draw_frames(scene.mean["left"], v["left"],
+                                                       scene.n_seeds, rng))
+            noise_var = _residual_variance(null_field, scene.mean["left"], scene)
+            render_s = max(render_strength(scene, settings, noise_var), min_strength)
+        for kind, strength, factor in designs(strength_factors, render_s):
+            cheap_only = r >= expensive_replicates or not (
+                kind == "camera" or (kind == "planted" and factor == 1.0)
+            )
+            chosen = [t for t in transforms if not (cheap_only and t in expensive)]
+            if not chosen:
+                continue
+            v = variance_fields(
+                kind,
+                strength,
+                mean=scene.mean,
+                law=law,
+                render_variance=scene.variance,
+                pattern=pattern,
+                rng=rng,
+            )
+            frames = {view: draw_frames(scene.mean[view], v[view], scene.n_seeds, rng)
+                      for view in ("left", "right")}
+            for name in chosen:
+                stacks = {
+                    view: transform_stack(
+                        name,
+                        frames[view],
+                        view=view,
+                        seed=derive_seed("calibration-transform", seed, scene.label, r, kind,
+                                         factor, name),
+                        aux=(scene.aux or {}).get(view),
+                        options=options.get(name),
+                    )
+                    for view in ("left", "right")
+                }
+                label = f"{scene.label}|{r}|{kind}|{factor:g}|{name}"
+                for row in statistic_rows(stacks, scene, settings, label):
+                    rows.append(
+                        {
+                            "replicate": r,
+                            "kind": kind,
+                            "strength": strength,
+                            "strength_factor": factor,
+                            "transform": name,
+                            "region": row["region"],
+                            "method": row["method"],
+                            "rho": row["rho"],
+                            "boot_low": row["boot_low"],
+                            "boot_high": row["boot_high"],
+                            "n_pixels": row["n_pixels"],
+                        }
+                    )
+    info = {
+        "camera_law": law,
+        "render_strength": render_s,
+        "replicates": int(replicates),
+        "expensive_replicates": int(min(expensive_replicates, replicates)),
+    }
+    return rows, info

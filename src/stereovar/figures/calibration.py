@@ -1,0 +1,90 @@
+"""The calibration figure: each rule's false-positive rate on the matched nulls and its power
+on the planted cue, per transform."""
+
+from __future__ import annotations
+
+import math
+
+from .paper import _pyplot
+
+
+def _f(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def calibration_figure(table: list[dict], *, method: str = "partial", scope: str = "combined"):
+    """Two panels for one statistic (default the intensity-controlled :math:`\\rho`): the
+    power of the ``above_null`` rule against the planted strength (a multiple of what the
+    renders show), one line per transform, with 95% Wilson intervals and the 80% power line;
+    and the false-positive rate of ``above_zero`` and ``above_null`` on each matched null,
+    with the 5% level.
+
+    Parameters
+    ----------
+    table : list of dict
+        :data:`stereovar.calibration.summary.CALIBRATION_TABLE_COLUMNS` rows.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _pyplot()
+    rows = [r for r in table if r["method"] == method and r["scope"] == scope]
+    transforms = list(dict.fromkeys(r["transform"] for r in rows))
+    colours = plt.get_cmap("tab10")
+    fig, (power_ax, fpr_ax) = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    for k, name in enumerate(transforms):
+        points = sorted(
+            (_f(r["strength_factor"]), _f(r["value"]), _f(r["low"]), _f(r["high"]))
+            for r in rows
+            if r["transform"] == name and r["check"] == "power"
+        )
+        if not points:
+            continue
+        x, y, lo, hi = zip(*points, strict=True)
+        power_ax.errorbar(
+            x,
+            y,
+            yerr=[[a - b for a, b in zip(y, lo, strict=True)],
+                  [b - a for a, b in zip(y, hi, strict=True)]],
+            fmt="o-",
+            color=colours(k % 10),
+            capsize=3,
+            label=name,
+        )
+    power_ax.axhline(0.8, color="0.5", lw=0.8, ls="--")
+    power_ax.set_xscale("log", base=2)
+    power_ax.set_ylim(-0.03, 1.03)
+    power_ax.set_xlabel("planted strength (x what the renders show)")
+    power_ax.set_ylabel("power (above its matched null)")
+    power_ax.set_title("Detects a planted cue", fontsize=10)
+    if transforms:
+        power_ax.legend(fontsize=8, loc="lower right")
+    bars = [
+        r
+        for r in rows
+        if r["check"] == "false_positive_rate" and math.isfinite(_f(r["value"]))
+    ]
+    labels = [f"{r['transform']}\n{r['kind']}, {r['rule']}" for r in bars]
+    for i, r in enumerate(bars):
+        value = _f(r["value"])
+        fpr_ax.errorbar(
+            i,
+            value,
+            yerr=[[value - _f(r["low"])], [_f(r["high"]) - value]],
+            fmt="s",
+            color="tab:red" if _f(r["low"]) > 0.05 else "tab:blue",
+            capsize=3,
+        )
+    fpr_ax.axhline(0.05, color="0.5", lw=0.8, ls="--")
+    fpr_ax.set_xticks(range(len(bars)))
+    fpr_ax.set_xticklabels(labels, rotation=70, ha="right", fontsize=7)
+    fpr_ax.set_ylim(-0.03, 1.03)
+    fpr_ax.set_ylabel("false-positive rate")
+    fpr_ax.set_title("Calls a cue on a matched null (level 5%)", fontsize=10)
+    fig.suptitle(f"Calibration of {method} on synthetic frames from this run", fontsize=11)
+    fig.tight_layout()
+    return fig

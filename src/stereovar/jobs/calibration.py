@@ -1,0 +1,146 @@
+"""Jobs of ``workflow/rules/calibration.smk``: one scene's replicates, then the table."""
+
+from __future__ import annotations
+
+from .common import log
+
+DEFAULTS = {
+    "replicates": 16,
+    "denoised_replicates": 4,
+    "strengths": [0.125, 0.25, 0.5, 1.0, 2.0],
+    "seed": 0,
+}
+"""The ``calibration`` config section's defaults (``config.schema.yaml`` states them)."""
+
+
+def scene_frames(variance, ground_truth, aux=None):
+    """:class:`~stereovar.calibration.replicates.SceneFrames` of one scene: its seeds
+    variance store (the variance contract) and ground truth, and each view's auxiliary-pass
+    store when the run's denoiser reads them."""
+    import numpy as np
+
+    from ..calibration.replicates import SceneFrames
+    from ..io.store import load_store
+
+    v = load_store(variance, "variance store", ["mean", "variance", "finite"])
+    gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
+    views = ("left", "right")
+    mean = {k: v["mean"].sel(view=k).transpose("y", "x", "channel").values for k in views}
+    fields = {
+        k: np.where(
+            v["finite"].sel(view=k).transpose("y", "x").values,
+            v["variance"].sel(view=k).transpose("y", "x").values,
+            np.nan,
+        )
+        for k in views
+    }
+    truth = {
+        k: {
+            "disparity": gt["disparity"].sel(view=k).transpose("y", "x").values,
+            "valid": gt["valid"].sel(view=k).transpose("y", "x").values.astype(bool),
+        }
+        for k in views
+    }
+    passes = None
+    if aux:
+        passes = {}
+        for k, path in aux.items():
+            a = load_store(path, "auxiliary-pass store", ["albedo", "normal"])
+            passes[k] = {
+                name: a[name].transpose("y", "x", "channel").values.astype(np.float32)
+                for name in ("albedo", "normal")
+            }
+    mean = {k: np.where(np.isfinite(m), m, 0.0) for k, m in mean.items()}
+    return SceneFrames(
+        mean=mean,
+        variance=fields,
+        ground_truth=truth,
+        glass=gt["glass"].sel(view="left").transpose("y", "x").values.astype(bool),
+        sign=int(gt.attrs["disparity_sign"]),
+        n_seeds=int(v.attrs["n_seeds"]),
+        label=f"{v.attrs['scene']}|spp{int(v.attrs['spp'])}",
+        aux=passes,
+    )
+
+
+def calibration_scene_job(
+    variance,
+    ground_truth,
+    out,
+    *,
+    transforms,
+    options=None,
+    aux=None,
+    calibration=None,
+    analysis=None,
+    controls=None,
+) -> list[dict]:
+    """One scene's calibration replicates
+    (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV."""
+    from ..calibration.replicates import CALIBRATION_COLUMNS, scene_calibration
+    from ..io.tables import write_tables
+    from ..transforms import get_transform
+    from .correlation import analysis_settings
+
+    settings, _ = analysis_settings(analysis, controls)
+    cal = {**DEFAULTS, **dict(calibration or {})}
+    scene = scene_frames(variance, ground_truth, aux)
+    expensive = frozenset(
+        t for t in transforms if t != "none" and get_transform(t).expensive
+    )
+    rows, info = scene_calibration(
+        scene,
+        transforms=list(transforms),
+        settings=settings,
+        replicates=int(cal["replicates"]),
+        strength_factors=[float(s) for s in cal["strengths"]],
+        expensive_replicates=int(cal["denoised_replicates"]),
+        expensive=expensive,
+        options=options,
+        seed=int(cal["seed"]),
+    )
+    name = scene.label.split("|")[0]
+    for row in rows:
+        row["scene"] = name
+    log.info(
+        "%s: camera law a %.4g b %.4g; the renders' strength (sd of ln sigma^2 beyond "
+        "intensity and estimation noise) %.3f; %d replicates (%d through %s)",
+        name,
+        *info["camera_law"],
+        info["render_strength"],
+        info["replicates"],
+        info["expensive_replicates"],
+        ", ".join(sorted(expensive)) or "no denoiser",
+    )
+    write_tables(rows, CALIBRATION_COLUMNS, {"csv": out})
+    return rows
+
+
+def calibration_table_job(rows, outputs: dict, *, nulls, figure=None) -> list[dict]:
+    """``results/tables/calibration.*``, the matched nulls and the figure from every scene's
+    replicates (:func:`stereovar.calibration.summary.calibration_table`)."""
+    from ..calibration.summary import (
+        CALIBRATION_TABLE_COLUMNS,
+        NULL_COLUMNS,
+        calibration_table,
+        headline,
+    )
+    from ..io.tables import read_rows, write_tables
+
+    replicates = [r for path in rows for r in read_rows(path)]
+    table, null_rows = calibration_table(replicates)
+    sentence = headline(table)
+    write_tables(
+        table,
+        CALIBRATION_TABLE_COLUMNS,
+        outputs,
+        caption=sentence,
+    )
+    write_tables(null_rows, NULL_COLUMNS, {"csv": nulls})
+    if figure is not None:
+        from ..figures.calibration import calibration_figure
+        from .common import save_figure
+
+        save_figure(calibration_figure(table), figure)
+    log.info("%s", sentence)
+    return table

@@ -1,0 +1,237 @@
+"""The calibration: synthetic data with a known answer through the run's own transforms,
+statistics and verdict rules (stereovar.calibration)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.ndimage import gaussian_filter
+
+from stereovar.calibration.replicates import (
+    SceneFrames,
+    scene_calibration,
+    statistic_rows,
+    transform_stack,
+)
+from stereovar.calibration.summary import (
+    calibration_table,
+    detectable,
+    difference_interval,
+    headline,
+    rate,
+)
+from stereovar.calibration.synthesis import (
+    camera_law,
+    draw_frames,
+    misaligned_variance,
+    planted_pattern,
+    variance_fields,
+)
+from stereovar.statistics.fields import AnalysisSettings
+from stereovar.statistics.mitigations import matched_difference, mc_cue_state
+from stereovar.statistics.warp import WarpPlan
+
+H, W, D = 64, 96, 3.0
+
+
+@pytest.fixture(scope="module")
+def scene():
+    """A textured scene whose right view is the left seen ``D`` px further right (paper
+    convention, x_R = x_L + d), with the camera law's variance as its renders'."""
+    rng = np.random.default_rng(3)
+    texture = gaussian_filter(rng.normal(0.0, 1.0, (H, W)), 1.5)
+    mu = np.exp(1.2 * texture / texture.std() - 1.0)
+    left = np.repeat(mu[..., None], 3, axis=-1)
+    mean = {"left": left, "right": np.roll(left, int(D), axis=1)}
+    truth = {v: {"disparity": np.full((H, W), D), "valid": np.ones((H, W), bool)} for v in mean}
+    variance = {v: 0.02 * m.mean(axis=-1) + 1e-4 for v, m in mean.items()}
+    return SceneFrames(mean, variance, truth, np.zeros((H, W), bool), 1, 8, "synthetic|spp8")
+
+
+def partial_row(stacks, scene, label):
+    rows = statistic_rows(stacks, scene, AnalysisSettings(), label)
+    return next(r for r in rows if (r["region"], r["method"]) == ("all", "partial"))
+
+
+def camera_stacks(scene, rng, transform="none", seed=0):
+    law = variance_fields(
+        "camera", 0.0, mean=scene.mean, law=(0.02, 1e-4), render_variance={}, rng=rng
+    )
+    return {
+        v: transform_stack(
+            transform, draw_frames(scene.mean[v], law[v], scene.n_seeds, rng), view=v, seed=seed
+        )
+        for v in ("left", "right")
+    }
+
+
+def test_camera_law_is_read_from_a_field_with_fireflies():
+    """The law comes from binned medians: 1% of pixels 100x too high leave it unchanged."""
+    rng = np.random.default_rng(0)
+    mu = rng.uniform(0.05, 2.0, (60, 60))
+    field = 0.03 * mu + 0.002
+    spikes = rng.random(mu.shape) < 0.01
+    a, b = camera_law(np.where(spikes, 100 * field, field), mu)
+    assert a == pytest.approx(0.03, rel=0.02) and b == pytest.approx(0.002, rel=0.1)
+
+
+def test_planted_pattern_lines_up_through_the_warp(scene):
+    """Eq. 2 carries the right view's pattern back onto the left's."""
+    rng = np.random.default_rng(1)
+    z_left, z_right = planted_pattern(
+        scene.ground_truth["right"]["disparity"], scene.ground_truth["right"]["valid"],
+        sign=1, rng=rng,
+    )
+    plan = WarpPlan(scene.ground_truth["left"]["disparity"], sign=1,
+                    valid=scene.ground_truth["left"]["valid"])
+    back = plan.apply(z_right)
+    inside = plan.omega.copy()
+    inside[:, : int(D) + 1] = False  # where the right pattern was seen from the left image
+    assert np.corrcoef(back[inside], z_left[inside])[0, 1] > 0.99
+    # unaligned (same pixel coordinates) the smooth pattern correlates far less
+    assert np.corrcoef(z_left[inside], z_right[inside])[0, 1] < 0.8
+
+
+def test_misaligned_null_moves_the_field_far():
+    rng = np.random.default_rng(2)
+    field = np.arange(40 * 80, dtype=float).reshape(40, 80)
+    for _ in range(20):
+        moved = misaligned_variance(field, rng)
+        dy = int(np.argwhere(moved == 0)[0][0])
+        dx = int(np.argwhere(moved == 0)[0][1])
+        assert min(dx, 80 - dx) >= 20 or min(dy, 40 - dy) >= 10
+
+
+def test_planted_cue_comes_through_and_the_null_does_not(scene):
+    """The partial rho of a planted cue is far above the camera null's, which is about 0."""
+    rng = np.random.default_rng(4)
+    null = partial_row(camera_stacks(scene, rng), scene, "null")
+    pattern = planted_pattern(
+        scene.ground_truth["right"]["disparity"], scene.ground_truth["right"]["valid"],
+        sign=1, rng=rng,
+    )
+    v = variance_fields("planted", 1.5, mean=scene.mean, law=(0.02, 1e-4),
+                        render_variance={}, pattern=pattern, rng=rng)
+    planted = partial_row(
+        {k: draw_frames(scene.mean[k], v[k], scene.n_seeds, rng) for k in v}, scene, "planted"
+    )
+    assert abs(null["rho"]) < 0.05 and null["boot_low"] <= 0 <= null["boot_high"]
+    assert planted["boot_low"] > 0.2
+
+
+def test_denoised_camera_noise_is_no_cue_after_its_matched_null(scene):
+    """The review's artefact: noise with exactly a camera's variance, through OIDN, gives a
+    large intensity-controlled rho; the same statistic on the matched null through the same
+    denoiser removes it (about 0, its interval covering 0)."""
+    pytest.importorskip("pyoidn")
+    rng = np.random.default_rng(5)
+    data = partial_row(camera_stacks(scene, rng, "denoise", 1), scene, "data")
+    null = partial_row(camera_stacks(scene, rng, "denoise", 2), scene, "null")
+    assert data["rho"] > 0.15  # the artefact itself
+    diff, low, high = difference_interval(data["rho"], data["boot_low"], data["boot_high"],
+                                          null["rho"], 0.0)
+    assert abs(diff) < 0.06 and low <= 0 <= high
+
+
+def test_scene_calibration_rows_and_render_strength(scene):
+    rows, info = scene_calibration(
+        scene,
+        transforms=["none", "sensor_only"],
+        settings=AnalysisSettings(),
+        replicates=2,
+        strength_factors=[1.0],
+        expensive_replicates=0,
+    )
+    assert info["camera_law"][0] == pytest.approx(0.02, rel=0.05)
+    # the renders here follow the camera law: no structure beyond it, so the floor
+    assert info["render_strength"] == pytest.approx(0.05)
+    designs = {(r["kind"], r["strength_factor"], r["transform"]) for r in rows}
+    assert designs == {
+        (k, f, t) for k, f in (("camera", 0.0), ("misaligned", 0.0), ("planted", 1.0))
+        for t in ("none", "sensor_only")
+    }
+    assert {r["replicate"] for r in rows} == {0, 1}
+
+
+# ------------------------------------------------------------------------- the summary
+
+
+def replicate(scene, r, kind, factor, rho, half, transform="none", method="partial"):
+    return {"scene": scene, "replicate": r, "kind": kind, "strength": factor,
+            "strength_factor": factor, "transform": transform, "region": "all",
+            "method": method, "rho": rho, "boot_low": rho - half, "boot_high": rho + half,
+            "n_pixels": 1000}
+
+
+def test_rates_power_and_coverage_on_known_replicates():
+    """Replicates drawn from known laws: a null whose interval fires in 10% of replicates, a
+    planted cue always detected at factor 2 and never at 0.5, intervals of exact coverage."""
+    rng = np.random.default_rng(6)
+    rows = []
+    n = 400
+    half = 1.96 * 0.01
+    for r in range(n):
+        for scene in ("a",):
+            rows.append(replicate(scene, r, "camera", 0.0, rng.normal(0.0, 0.01), half))
+            rows.append(replicate(scene, r, "misaligned", 0.0,
+                                  0.03 if r % 10 == 0 else 0.0, 0.01))
+            rows.append(replicate(scene, r, "planted", 0.5, rng.normal(0.0, 0.01), half))
+            rows.append(replicate(scene, r, "planted", 2.0, rng.normal(0.2, 0.01), half))
+    table, nulls = calibration_table(rows)
+    pick = {(t["check"], t["rule"], t["scope"], t["kind"], t["strength_factor"]): t
+            for t in table}
+    fpr = pick[("false_positive_rate", "above_zero", "scene", "misaligned", 0.0)]
+    assert fpr["value"] == pytest.approx(0.1) and fpr["meets_target"] == "no"
+    camera = pick[("false_positive_rate", "above_zero", "scene", "camera", 0.0)]
+    assert camera["value"] < 0.06 and camera["meets_target"] == "yes"
+    assert pick[("power", "above_null", "scene", "planted", 2.0)]["value"] == 1.0
+    assert pick[("power", "above_null", "scene", "planted", 0.5)]["value"] < 0.1
+    smallest = pick[("smallest_detectable", "above_null", "scene", "planted", detectable(
+        [(0.5, pick[("power", "above_null", "scene", "planted", 0.5)]["value"]), (2.0, 1.0)]
+    ))]
+    assert 0.5 < smallest["value"] < 2.0
+    coverage = pick[("coverage", "rho", "scene", "camera", 0.0)]
+    assert abs(coverage["value"] - 0.95) < 3 * math.sqrt(0.95 * 0.05 / n)
+    (null,) = nulls
+    assert null["null_rho"] == pytest.approx(np.mean([r["rho"] for r in rows
+                                                      if r["kind"] == "camera"]))
+    assert "calls a Monte Carlo-specific cue where there is none" in headline(table) or \
+        "No calibration" in headline(table)
+
+
+def test_rate_and_detectable_against_direct_computation():
+    value, low, high = rate(3, 40)
+    assert value == 3 / 40 and low < value < high
+    assert detectable([(0.25, 0.9)]) == 0.25
+    assert math.isnan(detectable([(0.25, 0.1), (1.0, 0.5)]))
+
+
+# ------------------------------------------------------- the mitigation verdict (review)
+
+
+def test_an_interval_covering_zero_is_not_removal():
+    """The old rule called any interval covering 0 "removed"; without equivalence inside the
+    margin it is inconclusive."""
+    assert mc_cue_state(-0.1, 0.2, 0.02) == "inconclusive"
+    assert mc_cue_state(-0.01, 0.015, 0.02) == "removed"
+    assert mc_cue_state(-0.1, 0.2) == "inconclusive"
+
+
+def test_matched_difference_subtracts_each_scenes_null():
+    corr = [
+        {"scene": s, "region": "all", "method": "partial", "rho": rho, "boot_low": rho - 0.02,
+         "boot_high": rho + 0.02}
+        for s, rho in (("a", 0.70), ("b", 0.66))
+    ]
+    nulls = [
+        {"scene": s, "transform": "equalise", "region": "all", "method": "partial",
+         "null_rho": n, "null_se": 0.0, "n": 16, "margin": 0.03}
+        for s, n in (("a", 0.70), ("b", 0.64))
+    ]
+    null, diff, low, high = matched_difference(corr, nulls, transform="equalise", region="all")
+    assert null == pytest.approx(0.67) and diff == pytest.approx(0.01)
+    half = 1.96 * math.sqrt(2 * (0.02 / 1.959963984540054) ** 2) / 2
+    assert (low, high) == pytest.approx((0.01 - half, 0.01 + half), rel=1e-3)
+    assert mc_cue_state(low, high, 0.03) == "removed"

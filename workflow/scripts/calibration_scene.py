@@ -1,0 +1,19 @@
+"""Snakemake adapter: one scene's calibration replicates."""
+
+from stereovar.jobs.calibration import calibration_scene_job
+from stereovar.jobs.common import run_job
+
+aux = {
+    view: snakemake.input[f"aux_{view}"]
+    for view in ("left", "right")
+    if f"aux_{view}" in snakemake.input.keys()
+}
+run_job(
+    snakemake.log[0],
+    calibration_scene_job,
+    variance=snakemake.input.variance,
+    ground_truth=snakemake.input.ground_truth,
+    out=snakemake.output[0],
+    aux=aux or None,
+    **dict(snakemake.params.items()),
+)
