@@ -12,6 +12,7 @@ from scipy.ndimage import gaussian_filter
 from stereovar.calibration.replicates import (
     SceneFrames,
     scene_calibration,
+    shipped_stack,
     statistic_rows,
     transform_stack,
 )
@@ -150,9 +151,40 @@ def test_scene_calibration_rows_and_render_strength(scene):
     designs = {(r["kind"], r["strength_factor"], r["transform"]) for r in rows}
     assert designs == {
         (k, f, t) for k, f in (("camera", 0.0), ("misaligned", 0.0), ("planted", 1.0))
-        for t in ("none", "sensor_only")
+        for t in ("none", "sensor_only", "sensor_only|shipped")
     }
     assert {r["replicate"] for r in rows} == {0, 1}
+
+
+def test_what_ships_carries_the_seed_means_monte_carlo_noise(scene):
+    """The review's simulation: ``sensor_only`` builds every image from the seed mean, whose
+    Monte Carlo noise (variance sigma^2/k for k seeds) lines up across the views. Eq. 1 over
+    the N transformed images cannot see it (about 0); over independent repetitions of the
+    shipped image it shows, and falls toward 0 as the seeds behind the mean grow."""
+    rng = np.random.default_rng(7)
+    pattern = planted_pattern(
+        scene.ground_truth["right"]["disparity"], scene.ground_truth["right"]["valid"],
+        sign=1, rng=rng,
+    )
+    v = variance_fields("planted", 1.0, mean=scene.mean, law=(0.02, 1e-5),
+                        render_variance={}, pattern=pattern, rng=rng)
+    camera = {"gain": 400.0, "read_noise": 0.0}  # a*mu = mu/400: sigma^2/8 of the renders
+    shipped = []
+    for k in (2, 16, 128):
+        frames = {x: draw_frames(scene.mean[x], v[x], 4 * k, rng) for x in v}
+        per_k = SceneFrames(scene.mean, {}, scene.ground_truth, scene.glass, 1, 4 * k, "k")
+        if k == 2:
+            hidden = partial_row(
+                {x: transform_stack("sensor_only", frames[x], view=x, seed=1, options=camera)
+                 for x in v}, per_k, "n-images")
+            assert abs(hidden["rho"]) < 0.05
+        stacks = {x: shipped_stack("sensor_only", frames[x], view=x, seed=1, options=camera,
+                                   size=k) for x in v}
+        assert stacks["left"].shape[0] == 4
+        shipped.append(partial_row(stacks, per_k, f"shipped{k}"))
+    assert shipped[0]["boot_low"] > 0.4  # the remnant, with 2 seeds behind the mean
+    rhos = [r["rho"] for r in shipped]
+    assert rhos[0] > rhos[1] > rhos[2] and abs(rhos[2]) < 0.1
 
 
 # ------------------------------------------------------------------------- the summary

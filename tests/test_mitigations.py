@@ -93,7 +93,7 @@ def test_mitigation_runs_follow_the_config():
     }
     runs = {r.name: r for r in mitigation_runs(config)}
     assert list(runs) == ["none", "spp_x4", "spp_x2", "shared_seed", "equalise"]
-    assert (runs["spp_x4"].spp, runs["spp_x4"].scenes) == (128, ("a",))  # the sweep's renders
+    assert (runs["spp_x4"].spp, runs["spp_x4"].scenes) == (128, ("a", "b"))  # every scene
     assert (runs["spp_x2"].spp, runs["spp_x2"].scenes) == (64, ("a", "b"))
     assert runs["shared_seed"].mitigation.seed_policy == "shared"
     assert runs["equalise"].transform == "equalise" and runs["none"].transform == NONE

@@ -367,6 +367,15 @@ def mitigation_tables(source: str | None = None) -> list[str]:
     return table_paths("mitigations")
 
 
+def mitigation_headline_tables(source: str | None = None) -> list[str]:
+    """The mitigation table's headline (at most 8 columns, what the pages show):
+    ``results/tables/mitigations_headline.*``, or an audit's under
+    ``results/audit/{name}/tables``."""
+    if source is not None and is_audit(source):
+        return table_paths("mitigations_headline", f"{RESULTS}/{source}/tables")
+    return table_paths("mitigations_headline")
+
+
 def probe_network(source: str, spp, fold, seed, transform: str = NONE) -> str:
     """One trained probe network of a training condition (its renders at ``spp``), fold and
     training seed:

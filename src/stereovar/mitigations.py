@@ -8,8 +8,8 @@ a **seed policy** (``shared_seed``)
     a render-time policy: the scenes rendered anew with the policy's sampler seeds
     (:data:`stereovar.seeding.SEED_POLICIES`), under ``results/{source}/{name}/renders/``;
 ``spp_xK``
-    K times the main SPP: the source's own renders at that SPP (the SPP sweep's renders of
-    the sweep scene when the sweep has it, else every scene rendered at K x SPP);
+    K times the main SPP: every scene rendered at K x SPP (the SPP sweep's renders of its
+    scene are reused), the equal-budget row;
 a **store transform** (:data:`stereovar.transforms.TRANSFORMS`)
     a pure function of each render (``denoise``, ``denoise_sensor``, ``equalise``,
     ``sensor_only``) applied to the source's renders, under
@@ -191,20 +191,15 @@ def mitigation_runs(config: dict) -> list[MitigationRun]:
     Returns
     -------
     list of MitigationRun
-        Every row at the main SPP on every scene, except ``spp_xK``: at K x SPP, on the SPP
-        sweep's scene when the sweep renders that SPP (no render is added), else on every
-        scene.
+        Every row on every scene, at the main SPP, except ``spp_xK`` at K x SPP: the
+        equal-budget row that every mitigation is compared with (the SPP sweep's renders of
+        its scene are reused when the sweep renders that SPP).
     """
     names = list(dict.fromkeys([NONE, *config.get("mitigations", {}).get("names", [])]))
     render = config["render"]
     spp = int(render["spp"])
     scenes = tuple(config["scenes"])
-    sweep = render["spp_sweep"]
-    runs = []
-    for name in names:
-        m = resolve_mitigation(name)
-        run_spp, run_scenes = spp * m.spp_factor, scenes
-        if m.kind == "spp" and run_spp in {int(s) for s in sweep["spp"]}:
-            run_scenes = (sweep["scene"],)
-        runs.append(MitigationRun(m, render["renderer"], run_spp, run_scenes))
-    return runs
+    return [
+        MitigationRun(m, render["renderer"], spp * m.spp_factor, scenes)
+        for m in map(resolve_mitigation, names)
+    ]

@@ -660,6 +660,7 @@ else:
     MITIGATION_RUNS = mitigation_runs(config) if MITIGATIONS["names"] else []
 MITIGATION_SOURCE = get_renderer()  # the renderer, or the audit's source
 MITIGATION_TABLES = layout.mitigation_tables(MITIGATION_SOURCE)
+MITIGATION_HEADLINE = layout.mitigation_headline_tables(MITIGATION_SOURCE)
 MITIGATION_FIGURE = layout.mitigation_figure(MITIGATION_SOURCE)
 REFERENCE_SPP = MITIGATIONS["reference_spp"]
 AUX_SPP = MITIGATIONS["aux_spp"]
@@ -762,6 +763,7 @@ def mitigation_table_inputs(wildcards):
             p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths
         ],
         "nulls": layout.calibration_nulls(MITIGATION_SOURCE),
+        "calibration": calibration_table_inputs(),
     }
 
 
@@ -801,11 +803,13 @@ def mitigation_targets():
     the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty)."""
     if not MITIGATION_RUNS:
         return []
-    return [*MITIGATION_TABLES, MITIGATION_FIGURE]
+    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, MITIGATION_FIGURE]
 
 
 # The calibration (stereovar.calibration): each scene of the run's source, at the main SPP,
 # through "none" and every store transform of the mitigation rows.
+from stereovar.calibration.replicates import reads_seed_mean
+
 CALIBRATION_TRANSFORMS = [
     "none",
     *dict.fromkeys(r.transform for r in MITIGATION_RUNS if r.mitigation.kind == "transform"),
@@ -839,6 +843,9 @@ def calibration_scene_inputs(wildcards):
     if wants and wants <= set(source_aux_passes(source)):
         for view in VIEWS:
             inputs[f"aux_{view}"] = layout.aux_store(source, wildcards.scene, view)
+    if any(reads_seed_mean(t) for t in CALIBRATION_TRANSFORMS):
+        stores = seed_stores(run_config(source), wildcards.scene, wildcards.spp)
+        inputs.update({f"renders_{view}": paths for view, paths in stores.items()})
     return inputs
 
 

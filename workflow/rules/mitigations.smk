@@ -131,6 +131,10 @@ rule mitigations_table:
             category="Tables",
             labels={"table": "mitigations"},
         ),
+        headline_csv=MITIGATION_HEADLINE[0],
+        headline_md=MITIGATION_HEADLINE[1],
+        headline_tex=MITIGATION_HEADLINE[2],
+        headline_html=MITIGATION_HEADLINE[3],
         figure=report(
             MITIGATION_FIGURE,
             caption="../report/mitigations_figure.rst",

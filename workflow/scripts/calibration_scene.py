@@ -8,6 +8,11 @@ aux = {
     for view in ("left", "right")
     if f"aux_{view}" in snakemake.input.keys()
 }
+renders = {
+    view: list(snakemake.input[f"renders_{view}"])
+    for view in ("left", "right")
+    if f"renders_{view}" in snakemake.input.keys()
+}
 run_job(
     snakemake.log[0],
     calibration_scene_job,
@@ -15,5 +20,6 @@ run_job(
     ground_truth=snakemake.input.ground_truth,
     out=snakemake.output[0],
     aux=aux or None,
+    renders=renders or None,
     **dict(snakemake.params.items()),
 )

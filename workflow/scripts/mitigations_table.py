@@ -9,5 +9,7 @@ run_job(
     runs=snakemake.params.runs,
     outputs={k: snakemake.output[k] for k in ("csv", "md", "tex", "html")},
     figure=snakemake.output.figure,
+    headline={k: snakemake.output[f"headline_{k}"] for k in ("csv", "md", "tex", "html")},
     nulls=snakemake.input.nulls,
+    calibration=list(snakemake.input.calibration),
 )

@@ -26,6 +26,9 @@ from .synthesis import (
 NONE = "none"
 """The identity transform: the statistics on the synthetic frames as drawn."""
 
+SHIPPED = "|shipped"
+"""Suffix of a transform's label when it is measured on what ships (:func:`shipped_stack`)."""
+
 SKIPPED_METHODS = ("sensor", "sensor_sim")
 """Statistics left out: the camera baselines draw their own frames from the seed mean, and
 the calibration's ``camera`` null is that baseline."""
@@ -116,6 +119,69 @@ def transform_stack(name: str, frames, *, view: str, seed: int, aux=None, option
     return np.stack(out)
 
 
+def reads_seed_mean(name: str) -> bool:
+    """Whether transform ``name`` builds its images from the seed statistics, so that Eq. 1
+    over its :math:`N` outputs cannot see the Monte Carlo noise left in the seed mean."""
+    if name == NONE:
+        return False
+    from ..transforms import get_transform
+
+    return bool({"seed_mean", "seed_var"} & set(get_transform(name).reads))
+
+
+def seed_groups(n: int, size: int = 2) -> list[np.ndarray]:
+    """Disjoint groups of ``size`` consecutive seed indices among ``n`` (the last takes the
+    rest); at least two groups, or none when :math:`n < 2\\,\\text{size}`.
+
+    Examples
+    --------
+    >>> [g.tolist() for g in seed_groups(8)]
+    [[0, 1], [2, 3], [4, 5], [6, 7]]
+    >>> [g.tolist() for g in seed_groups(5)]
+    [[0, 1], [2, 3, 4]]
+    """
+    count = n // size
+    if count < 2:
+        return []
+    return np.array_split(np.arange(count * size), count)[:-1] + [
+        np.arange((count - 1) * size, n)
+    ]
+
+
+def shipped_stack(name: str, frames, *, view: str, seed: int, aux=None, options=None, size=2):
+    """What a transform that reads the seed mean ships, over independent repetitions.
+
+    The :math:`N` frames are split into :math:`G = \\lfloor N/k \\rfloor` disjoint groups of
+    :math:`k` (``size``, :func:`seed_groups`); each group is transformed with its own seed
+    mean :math:`\\bar I_g` and variance, and its first image kept, so the :math:`G` images
+    are independent repetitions of the shipped image:
+
+    .. math::
+
+        I'_g = T\\bigl(I^{(n_g)};\\ \\bar I_g, \\hat\\sigma^2_g\\bigr), \\qquad
+        \\operatorname{Var}_g[I'_g] = \\operatorname{Var}[\\bar I_g] + \\text{camera}
+            = \\frac{\\sigma^2}{k} + a\\mu + b
+
+    and Eq. 1 over them sees the Monte Carlo noise the seed mean carries
+    (:math:`\\sigma^2/k` here, :math:`\\sigma^2/N` in the images a team ships, so the remnant
+    is shown :math:`N/k` times stronger relative to the camera noise than it ships).
+
+    Returns
+    -------
+    numpy.ndarray (G, H, W, C), float32
+        Empty (G = 0) when :math:`N < 2k`.
+    """
+    groups = seed_groups(len(frames), size)
+    images = [
+        transform_stack(
+            name, np.asarray(frames)[g], view=view, seed=derive_seed(seed, "group", i),
+            aux=aux, options=options,
+        )[0]
+        for i, g in enumerate(groups)
+    ]
+    return np.stack(images) if images else np.empty((0, *np.shape(frames)[1:]), np.float32)
+
+
 def statistic_rows(stacks: dict, scene: SceneFrames, settings, label: str) -> list[dict]:
     """Eq. 1, Eq. 2 and every registered statistic (but :data:`SKIPPED_METHODS`) over every
     region, on one view pair of frame stacks."""
@@ -146,6 +212,60 @@ def statistic_rows(stacks: dict, scene: SceneFrames, settings, label: str) -> li
         fields["left"], fields["right"], aligned, scene.glass, settings=settings, inputs=inputs
     )
     return [r for r in rows if r["method"] not in SKIPPED_METHODS]
+
+
+def measured_rows(
+    frames, name, scene, settings, *, label, seed, options=None, design=None, shipped_only=False
+):
+    """:data:`CALIBRATION_COLUMNS` rows (but ``scene``) of one view pair of frame stacks
+    through transform ``name``: as the transform job applies it (unless ``shipped_only``),
+    and, for a transform that reads the seed mean, also on what it ships
+    (:func:`shipped_stack`, labelled ``name`` + :data:`SHIPPED`)."""
+    paths = [] if shipped_only else [(name, transform_stack)]
+    if reads_seed_mean(name) and seed_groups(scene.n_seeds):
+        paths.append((name + SHIPPED, shipped_stack))
+    rows = []
+    for label_name, apply in paths:
+        stacks = {
+            view: apply(name, frames[view], view=view, seed=derive_seed(seed, view),
+                        aux=(scene.aux or {}).get(view), options=options)
+            for view in ("left", "right")
+        }
+        for row in statistic_rows(stacks, scene, settings, f"{label}|{label_name}"):
+            rows.append(
+                {
+                    **dict(design or {}),
+                    "transform": label_name,
+                    "region": row["region"],
+                    "method": row["method"],
+                    "rho": row["rho"],
+                    "boot_low": row["boot_low"],
+                    "boot_high": row["boot_high"],
+                    "n_pixels": row["n_pixels"],
+                }
+            )
+    return rows
+
+
+def renders_shipped_rows(renders: dict, scene: SceneFrames, *, transforms, settings,
+                         options=None, seed: int = 0) -> list[dict]:
+    """What each transform that reads the seed mean ships, measured on the run's own renders
+    (:func:`shipped_stack` over disjoint seed groups; ``kind`` ``renders``)."""
+    options = dict(options or {})
+    rows = []
+    for name in transforms:
+        if not reads_seed_mean(name):
+            continue
+        rows += measured_rows(
+            renders, name, scene, settings,
+            label=f"{scene.label}|renders|{name}",
+            seed=derive_seed("calibration-renders", seed, scene.label, name),
+            options=options.get(name),
+            design={"replicate": 0, "kind": "renders", "strength": float("nan"),
+                    "strength_factor": float("nan")},
+            shipped_only=True,
+        )
+    return rows
 
 
 def render_strength(scene: SceneFrames, settings, camera_rows_residual_var: float) -> float:
@@ -215,8 +335,8 @@ def scene_calibration(
     strength_factors : sequence of float
         The planted strengths, as multiples of what the renders show (:func:`render_strength`).
     expensive_replicates : int
-        Replicates of the transforms in ``expensive`` (the denoisers), which see the
-        ``camera`` null and the planted cue at factor 1 only.
+        Replicates of the transforms in ``expensive`` (the denoisers), which see the nulls
+        and the planted cue at factor 1 only.
     options : dict, optional
         Transform name to its keyword options (the run's camera).
     seed : int
@@ -255,7 +375,7 @@ def scene_calibration(
             render_s = max(render_strength(scene, settings, noise_var), min_strength)
         for kind, strength, factor in designs(strength_factors, render_s):
             cheap_only = r >= expensive_replicates or not (
-                kind == "camera" or (kind == "planted" and factor == 1.0)
+                kind in NULL_KINDS or (kind == "planted" and factor == 1.0)
             )
             chosen = [t for t in transforms if not (cheap_only and t in expensive)]
             if not chosen:
@@ -272,35 +392,15 @@ def scene_calibration(
             frames = {view: draw_frames(scene.mean[view], v[view], scene.n_seeds, rng)
                       for view in ("left", "right")}
             for name in chosen:
-                stacks = {
-                    view: transform_stack(
-                        name,
-                        frames[view],
-                        view=view,
-                        seed=derive_seed("calibration-transform", seed, scene.label, r, kind,
-                                         factor, name),
-                        aux=(scene.aux or {}).get(view),
-                        options=options.get(name),
-                    )
-                    for view in ("left", "right")
-                }
-                label = f"{scene.label}|{r}|{kind}|{factor:g}|{name}"
-                for row in statistic_rows(stacks, scene, settings, label):
-                    rows.append(
-                        {
-                            "replicate": r,
-                            "kind": kind,
-                            "strength": strength,
-                            "strength_factor": factor,
-                            "transform": name,
-                            "region": row["region"],
-                            "method": row["method"],
-                            "rho": row["rho"],
-                            "boot_low": row["boot_low"],
-                            "boot_high": row["boot_high"],
-                            "n_pixels": row["n_pixels"],
-                        }
-                    )
+                design = {"replicate": r, "kind": kind, "strength": strength,
+                          "strength_factor": factor}
+                rows += measured_rows(
+                    frames, name, scene, settings,
+                    label=f"{scene.label}|{r}|{kind}|{factor:g}|{name}",
+                    seed=derive_seed("calibration-transform", seed, scene.label, r, kind,
+                                     factor, name),
+                    options=options.get(name), design=design,
+                )
     info = {
         "camera_law": law,
         "render_strength": render_s,

@@ -7,7 +7,7 @@ from .common import log
 DEFAULTS = {
     "replicates": 16,
     "denoised_replicates": 4,
-    "strengths": [0.125, 0.25, 0.5, 1.0, 2.0],
+    "strengths": [0.0625, 0.125, 0.25, 1.0, 2.0],
     "seed": 0,
 }
 """The ``calibration`` config section's defaults (``config.schema.yaml`` states them)."""
@@ -71,13 +71,21 @@ def calibration_scene_job(
     transforms,
     options=None,
     aux=None,
+    renders=None,
     calibration=None,
     analysis=None,
     controls=None,
 ) -> list[dict]:
     """One scene's calibration replicates
-    (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV."""
-    from ..calibration.replicates import CALIBRATION_COLUMNS, scene_calibration
+    (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV, and with
+    ``renders`` (each view's render stores) what every transform that reads the seed mean
+    ships, measured on the renders themselves
+    (:func:`stereovar.calibration.replicates.renders_shipped_rows`)."""
+    from ..calibration.replicates import (
+        CALIBRATION_COLUMNS,
+        renders_shipped_rows,
+        scene_calibration,
+    )
     from ..io.tables import write_tables
     from ..transforms import get_transform
     from .correlation import analysis_settings
@@ -99,6 +107,19 @@ def calibration_scene_job(
         options=options,
         seed=int(cal["seed"]),
     )
+    if renders:
+        import numpy as np
+
+        from .common import view_stack
+
+        stacks = {}
+        for view, paths in renders.items():
+            stack, seeds, _, _ = view_stack(paths)
+            stacks[view] = stack[np.argsort(seeds, kind="stable")]
+        rows += renders_shipped_rows(
+            stacks, scene, transforms=transforms, settings=settings, options=options,
+            seed=int(cal["seed"]),
+        )
     name = scene.label.split("|")[0]
     for row in rows:
         row["scene"] = name

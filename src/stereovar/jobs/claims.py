@@ -280,10 +280,12 @@ def results_page_job(
 
     mitigation_section = None
     if mitigations:
-        from ..statistics.mitigations import mitigation_findings
+        from ..statistics.mitigations import headline_table, mitigation_findings
 
+        mitigation_rows = read_rows(mitigations)
         mitigation_section = {
-            "lines": mitigation_findings(read_rows(mitigations)),
+            "lines": mitigation_findings(mitigation_rows),
+            "headline": headline_table(mitigation_rows),
             "figure": _page_figure(mitigation_figure, captions) if mitigation_figure else None,
             "tables": section_tables("mitigations"),
         }

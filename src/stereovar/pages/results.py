@@ -499,6 +499,26 @@ def _links_html(tables: list[dict]) -> str:
     )
 
 
+def _mitigation_headline_html(rows: list[dict]) -> str:
+    """The mitigation headline table
+    (:func:`stereovar.statistics.mitigations.headline_table`), all pixels."""
+    if not rows:
+        return ""
+    columns = list(rows[0])
+    head = "".join(f"<th>{_e(c)}</th>" for c in columns)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{_e(r[c])}</td>" for c in columns) + "</tr>" for r in rows
+    )
+    return (
+        '<table class="mitigations"><thead><tr>' + head + "</tr></thead><tbody>" + body
+        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals. The Monte "
+        "Carlo-specific rho is the intensity-controlled rho minus its matched null through "
+        "the same transform; <em>removed</em> means its interval lies inside the "
+        "calibration's equivalence margin, <em>inconclusive</em> that it covers 0 but "
+        "reaches past it. The full table (every region and control) is linked below.</p>"
+    )
+
+
 def to_html_page(s: dict) -> str:
     """The page as one self-contained HTML document (no script)."""
     nav = [("headline", "Headline"), ("claims", "Claims"), ("figures", "Figures")]
@@ -526,6 +546,7 @@ def to_html_page(s: dict) -> str:
         items = "".join(f"<li>{_e(x)}</li>" for x in m["lines"])
         body += [
             '<section id="mitigations"><h2>Mitigations</h2>',
+            _mitigation_headline_html(m.get("headline") or []),
             f"<ul>{items}</ul>",
             _figure_html(m["figure"]) if m.get("figure") else "",
             _links_html(m.get("tables") or []),

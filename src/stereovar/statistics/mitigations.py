@@ -22,6 +22,12 @@ contrast, which both views share), and only the difference is Monte Carlo's. ``m
 when it lies inside the equivalence margin (``margin``: the Monte Carlo-specific
 :math:`\\rho` that the calibration detects with 80% power on untransformed frames), else
 ``inconclusive`` (an interval that merely covers 0 is no evidence of removal).
+
+A transform that builds its images from the seed mean (``sensor_only``, ``equalise``) hides
+the seed mean's Monte Carlo noise from Eq. 1 over its :math:`N` outputs;
+``shipped_mc_specific`` is the same difference measured on what it ships, over disjoint seed
+groups (:func:`stereovar.calibration.replicates.shipped_stack`); where it is measured,
+``mc_cue`` is its verdict.
 """
 
 from __future__ import annotations
@@ -54,6 +60,9 @@ MITIGATION_COLUMNS = [
     "mc_specific_high",
     "margin",
     "mc_cue",
+    "shipped_mc_specific",
+    "shipped_mc_specific_low",
+    "shipped_mc_specific_high",
     "null_shift",
     "null_shift_low",
     "null_shift_high",
@@ -141,8 +150,9 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
         \\Delta_s = \\rho_s - \\bar\\rho_{0,s}, \\qquad
         \\bar\\Delta = \\frac1S \\sum_s \\Delta_s
 
-    with each scene's interval from its bootstrap interval and the null mean's standard
-    error (:func:`stereovar.calibration.summary.difference_interval`), combined over scenes
+    with each scene's interval from its bootstrap interval, the null mean's standard error
+    and the chance correlation of unaligned fields
+    (:func:`stereovar.calibration.summary.difference_interval`), combined over scenes
     (:func:`stereovar.statistics.across.combined_interval`).
 
     Parameters
@@ -174,7 +184,12 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
             continue
         null = table[r["scene"]]
         d = difference_interval(
-            r["rho"], r["boot_low"], r["boot_high"], null["null_rho"], null["null_se"]
+            r["rho"],
+            r["boot_low"],
+            r["boot_high"],
+            null["null_rho"],
+            null["null_se"],
+            null.get("chance_sd", math.nan),
         )
         if not all(math.isfinite(x) for x in d):
             continue
@@ -218,7 +233,9 @@ def _intervention_effect(rows, region) -> tuple[float, float, float]:
     return t_interval(diffs)
 
 
-def mitigation_table(runs: list[dict], nulls: list[dict] | None = None) -> list[dict]:
+def mitigation_table(
+    runs: list[dict], nulls: list[dict] | None = None, *, shipped: list[dict] | None = None
+) -> list[dict]:
     """The rows of :data:`MITIGATION_COLUMNS`.
 
     Parameters
@@ -235,6 +252,10 @@ def mitigation_table(runs: list[dict], nulls: list[dict] | None = None) -> list[
     nulls : list of dict, optional
         The calibration's matched nulls (:data:`stereovar.calibration.summary.NULL_COLUMNS`);
         without them ``mc_specific`` and ``mc_cue`` are NaN and ``n/a``.
+    shipped : list of dict, optional
+        The calibration's ``renders`` rows: each seed-mean transform's statistics on what it
+        ships (over disjoint seed groups), whose difference from their own matched null is
+        ``shipped_mc_specific`` (NaN for the other rows).
 
     Returns
     -------
@@ -281,6 +302,21 @@ def mitigation_table(runs: list[dict], nulls: list[dict] | None = None) -> list[
             row["mc_specific"], row["mc_specific_low"], row["mc_specific_high"] = diff
             row["margin"] = equivalence_margin(nulls or [])
             row["mc_cue"] = mc_cue_state(diff[1], diff[2], row["margin"])
+            label = run.get("calibration_transform", "none") + "|shipped"
+            _, *ships = matched_difference(
+                [r for r in shipped or [] if r["transform"] == label],
+                nulls or [],
+                transform=label,
+                region=region,
+            )
+            (
+                row["shipped_mc_specific"],
+                row["shipped_mc_specific_low"],
+                row["shipped_mc_specific_high"],
+            ) = ships
+            if all(math.isfinite(x) for x in ships):
+                # what a team ships decides: the seed mean's Monte Carlo noise counts
+                row["mc_cue"] = mc_cue_state(ships[1], ships[2], row["margin"])
             lift = (
                 wta_lift(run["intervention"], "render", region)
                 if run["intervention"]
@@ -369,9 +405,7 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
             + (f"{within}." if within else " (no equivalence margin: run the calibration).")
         )
     else:
-        removing.sort(
-            key=lambda r: -_f(r.get("psnr")) if math.isfinite(_f(r.get("psnr"))) else 1e9
-        )
+        removing.sort(key=lambda r: -_f(r.get("psnr")) if math.isfinite(_f(r.get("psnr"))) else 1e9)
         against = f" against {_iv(base, 'psnr', ' dB', 2)} as rendered" if base else ""
         lines.append(
             f"Removes the Monte Carlo-specific part{within}: "
@@ -387,3 +421,83 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
             "the margin): " + ", ".join(unclear) + ".",
         )
     return lines
+
+
+HEADLINE_COLUMNS = [
+    "mitigation",
+    "samples per image",
+    "Monte Carlo-specific rho",
+    "matched null",
+    "what ships",
+    "C_sigma lift",
+    "PSNR against equal budget",
+    "verdict",
+]
+"""Columns of ``results/tables/mitigations_headline.*``: what the results page shows."""
+
+
+def equal_budget_psnr(rows: list[dict], row: dict) -> tuple[float, str]:
+    """The PSNR a raw render reaches at ``row``'s samples per image: the ``spp_xK`` row
+    rendered at that SPP when the table has it (``rendered``), else the renders' PSNR moved
+    by the Monte Carlo variance's :math:`1/\\mathrm{SPP}` law (``predicted``).
+
+    .. math::
+
+        \\mathrm{PSNR}(B) = \\mathrm{PSNR}_{\\text{none}}
+            + 10 \\log_{10} \\frac{B}{\\mathrm{SPP}}
+
+    (an unbiased estimator's error variance falls as :math:`1/B`; the ``spp_xK`` rows test
+    the law). NaN and ``""`` when neither is possible.
+
+    Examples
+    --------
+    >>> rows = [{"mitigation": "none", "kind": "baseline", "region": "all", "spp": 32,
+    ...          "render_spp": 32, "psnr": 25.0}]
+    >>> psnr, how = equal_budget_psnr(rows, {"region": "all", "render_spp": 256})
+    >>> round(psnr, 2), how
+    (34.03, 'predicted')
+    """
+    region, budget = row["region"], _f(row.get("render_spp"))
+    for r in rows:
+        if r["region"] == region and r.get("kind") == "spp" and _f(r["spp"]) == budget:
+            return _f(r["psnr"]), "rendered"
+    base = next((r for r in rows if r["region"] == region and r["mitigation"] == "none"), None)
+    if base is None or not (math.isfinite(budget) and budget > 0):
+        return math.nan, ""
+    psnr, spp = _f(base.get("psnr")), _f(base.get("spp"))
+    if not (math.isfinite(psnr) and spp > 0):
+        return math.nan, ""
+    return psnr + 10.0 * math.log10(budget / spp), "predicted"
+
+
+def headline_table(rows: list[dict], region: str = "all") -> list[dict]:
+    """The mitigation table in :data:`HEADLINE_COLUMNS`, one row per mitigation over
+    ``region``: each number with its 95% interval, the Monte Carlo-specific part beside its
+    matched null through the same transform, what seed-mean transforms ship, and PSNR beside
+    a raw render at the same samples per image (:func:`equal_budget_psnr`)."""
+    out = []
+    chosen = [r for r in rows if r["region"] == region]
+    for r in chosen:
+        psnr = _iv(r, "psnr", " dB", 2)
+        budget, how = equal_budget_psnr(chosen, r)
+        if r["mitigation"] != "none" and math.isfinite(budget) and r.get("kind") != "spp":
+            psnr += f" vs {budget:.2f} dB ({how})"
+        null = _f(r.get("null_partial"))
+        lift = _iv(r, "cs_lift")
+        out.append(
+            {
+                "mitigation": r["mitigation"],
+                "samples per image": int(_f(r.get("render_spp")))
+                if math.isfinite(_f(r.get("render_spp")))
+                else "",
+                "Monte Carlo-specific rho": _iv(r, "mc_specific"),
+                "matched null": f"{null:.3f}" if math.isfinite(null) else "n/a",
+                "what ships": _iv(r, "shipped_mc_specific")
+                if math.isfinite(_f(r.get("shipped_mc_specific")))
+                else "as measured",
+                "C_sigma lift": lift,
+                "PSNR against equal budget": psnr,
+                "verdict": r["mc_cue"],
+            }
+        )
+    return out
