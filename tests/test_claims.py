@@ -34,9 +34,7 @@ S = 4
 def correlation_rows(rho, half, *, method="warp", region="all", glass=None, non_glass=1.0):
     """S scenes' rows of one (region, method): scene s has ``rho[s]`` with the bootstrap
     interval rho +- ``half``, and ``mean_a`` ``glass[s]`` / ``non_glass`` when given.
-
-    With equal half-widths h the combined interval (scenes independent, se = h / z) is
-    mean(rho) +- h / sqrt(S): the known answer of these tests."""
+    :func:`scenes_interval` of ``rho`` is the known answer of these tests."""
     rows = []
     for s, r in enumerate(rho):
         rows.append(
@@ -51,6 +49,14 @@ def correlation_rows(rho, half, *, method="warp", region="all", glass=None, non_
             }
         )
     return rows
+
+
+def scenes_interval(rho, level=0.95):
+    """The interval for the mean over scenes like these, by scipy: the Student-t interval of
+    the scene values (their spread holds the between-scene variance and each scene's
+    error)."""
+    rho = np.asarray(rho, dtype=np.float64)
+    return stats.t.interval(level, rho.size - 1, loc=rho.mean(), scale=stats.sem(rho))
 
 
 def ratio_rows(glass, non_glass):
@@ -86,45 +92,59 @@ def log_interval(ratios):
 # ------------------------------------------------------------------------- the level rule
 
 
+SPREAD = np.array([-3.0, -1.0, 1.0, 3.0])
+"""Scene offsets with mean 0 and SD sqrt(20 / 3): scaled by k, the 95% t interval over the
+S = 4 scenes is the mean +- t_{0.975,3} k sqrt(20 / 3) / 2 = +- 4.11 k."""
+
+
 @pytest.mark.parametrize(
-    ("rho_mean", "half", "sensor", "expected"),
+    ("rho_mean", "k", "sensor", "expected"),
     [
-        # [-0.1, 0.9]: contains 0.754 and 0, so the claim cannot be told from no effect
-        (0.4, 1.0, 0.1, UNTESTABLE),
-        # [0.70, 0.80]: contains 0.754, excludes 0, the sensor's [0.08, 0.12] below it
-        (0.75, 0.1, 0.1, HOLDS),
-        # the same, with a sensor whose [0.70, 0.74] reaches ours
-        (0.75, 0.1, 0.72, EXPLAINED),
-        # [0.1, 0.3]: excludes the paper's value and the null
-        (0.2, 0.2, 0.1, FAILS),
-        # [-0.1, 0.3]: contains the null but not the paper's value, which it rules out
-        (0.1, 0.4, 0.1, FAILS),
+        # [-0.01, 0.81]: contains 0.754 and 0, so the claim cannot be told from no effect
+        (0.4, 0.1, 0.1, UNTESTABLE),
+        # [0.71, 0.79]: contains 0.754, excludes 0, the sensor's [0.06, 0.14] far below it
+        (0.75, 0.01, 0.1, HOLDS),
+        # the same, with a sensor at [0.68, 0.76]: ours minus it, 0.03 +- 0.06, reaches 0
+        (0.75, 0.01, 0.72, EXPLAINED),
+        # [0.12, 0.28]: excludes the paper's value and the null
+        (0.2, 0.02, 0.1, FAILS),
+        # [-0.11, 0.31]: contains the null but not the paper's value, which it rules out
+        (0.1, 0.05, 0.1, FAILS),
     ],
 )
 def test_level_claim_holds_only_with_the_paper_inside_and_the_null_outside(
-    rho_mean, half, sensor, expected
+    rho_mean, k, sensor, expected
 ):
-    spread = np.array([-0.03, -0.01, 0.01, 0.03])  # mean 0: the scenes average to rho_mean
-    rows = correlation_rows(rho_mean + spread, half) + correlation_rows(
-        sensor + spread, 0.04, method="sensor_sim"
-    )
+    """The interval is for the mean over scenes like these: the scenes' spread sets it, and
+    their bootstrap half-widths (0.05 here) do not enter."""
+    ours, theirs = rho_mean + k * SPREAD, sensor + 0.01 * SPREAD
+    rows = correlation_rows(ours, 0.05) + correlation_rows(theirs, 0.05, method="sensor_sim")
     row = by_id(rows)["rho_all"]
-    # the known answer: mean +- h / sqrt(S)
     assert row["ours"] == pytest.approx(rho_mean)
-    assert row["ours_low"] == pytest.approx(rho_mean - half / math.sqrt(S))
-    assert row["ours_high"] == pytest.approx(rho_mean + half / math.sqrt(S))
-    assert row["control_high"] == pytest.approx(sensor + 0.04 / math.sqrt(S))
+    low, high = scenes_interval(ours)
+    assert (row["ours_low"], row["ours_high"]) == pytest.approx((low, high))
+    assert high - rho_mean == pytest.approx(4.11 * k, rel=1e-3)
+    assert row["control_high"] == pytest.approx(scenes_interval(theirs)[1])
     assert row["null"] == 0.0
     assert row["verdict"] == expected
 
 
-def test_a_claim_that_the_value_is_the_null_is_not_testable_when_the_interval_holds_it():
-    """Real sensors' rho = 0 is the null itself: an interval around 0 cannot confirm it."""
-    spread = np.array([-0.03, -0.01, 0.01, 0.03])
-    near_zero = correlation_rows(0.0 + spread, 0.2, method="sensor_sim")
-    assert by_id(near_zero)["real_sensors_rho_zero"]["verdict"] == UNTESTABLE
-    far = correlation_rows(0.6 + spread, 0.2, method="sensor_sim")
-    assert by_id(far)["real_sensors_rho_zero"]["verdict"] == FAILS
+def test_a_claim_that_the_value_is_the_null_is_decided_by_equivalence():
+    """Real sensors' rho = 0 is the null itself: an interval that must exclude the null
+    cannot confirm it, so the claim has a margin and holds when the 90% interval lies inside
+    it (two one-sided tests at 5%)."""
+    margin = 0.1
+    for k, expected in ((0.04, UNTESTABLE), (0.01, HOLDS)):
+        sensor = k * SPREAD
+        low90, high90 = scenes_interval(sensor, level=0.90)
+        inside = -margin < low90 and high90 < margin
+        assert inside == (expected == HOLDS)  # +-0.12 and +-0.03 against 0.1
+        row = by_id(correlation_rows(sensor, 0.05, method="sensor_sim"))["real_sensors_rho_zero"]
+        assert row["verdict"] == expected
+    far = 0.6 + 0.04 * SPREAD
+    assert scenes_interval(far)[0] > margin
+    row = by_id(correlation_rows(far, 0.05, method="sensor_sim"))["real_sensors_rho_zero"]
+    assert row["verdict"] == FAILS
 
 
 def test_verdict_rule_on_intervals():
@@ -139,9 +159,11 @@ def test_verdict_rule_on_intervals():
     assert verdict("level", 0.5, 0.5, 0.3, 0.7) == HOLDS
     # an undefined interval
     assert verdict("ratio", 7.0, 7.0, math.nan, math.nan) == UNTESTABLE
-    # tolerance: the paper's value is the tolerance
-    assert verdict("tolerance", 0.01, -0.009, *nan3[:2]) == HOLDS
-    assert verdict("tolerance", 0.01, 0.011, *nan3[:2]) == FAILS
+    # tolerance: the paper's value is the tolerance, decided by equivalence on the interval
+    assert verdict("tolerance", 0.01, -0.009, -0.0095, -0.0085) == HOLDS
+    assert verdict("tolerance", 0.01, -0.009, -0.012, -0.006) == UNTESTABLE
+    assert verdict("tolerance", 0.01, 0.011, 0.0105, 0.0115) == FAILS
+    assert verdict("tolerance", 0.01, -0.009, *nan3[:2]) == UNTESTABLE  # no interval
     with pytest.raises(ValueError, match="unknown claim kind"):
         verdict("band", 1.0, 1.0, 0.0, 2.0)
 
@@ -270,7 +292,7 @@ def test_the_table_takes_the_paper_values_from_the_file(tmp_path):
     path = tmp_path / "claims.yaml"
     path.write_text(yaml.safe_dump(raw, sort_keys=False))
     spread = np.array([-0.03, -0.01, 0.01, 0.03])
-    rows = correlation_rows(0.4 + spread, 0.1)  # [0.35, 0.45]
+    rows = correlation_rows(0.4 + spread, 0.1)  # [0.36, 0.44]
     table = {c["id"]: c for c in claims_table(rows, claims=load_claims(path))}
     assert "rho_no_warp" not in table and len(table) == len(raw["claims"])
     assert table["rho_all"]["claim"] == "rho (all) = 0.4"
@@ -380,6 +402,46 @@ def _drop(claim_id, *keys):
             ),
             "claims[10] (table3_residual_sad_gt_margin_glass).control.statistic",
             "the claim's own statistic",
+        ),
+        (
+            _drop("real_sensors_rho_zero", "rule", "equivalence_margin"),
+            "claims[8] (real_sensors_rho_zero).rule",
+            "give equivalence_margin",
+        ),
+        (
+            _set("real_sensors_rho_zero", "rule", "equivalence_margin", value=0.0),
+            "claims[8] (real_sensors_rho_zero).rule.equivalence_margin",
+            "less than or equal to the minimum of 0",
+        ),
+        (
+            _set("real_sensors_rho_zero", "rule", "control_explains", value=True),
+            "claims[8] (real_sensors_rho_zero).rule",
+            "set control_explains: false",
+        ),
+        (
+            _set("rho_glass_below_non_glass", "rule", "equivalence_margin", value=0.1),
+            "claims[3] (rho_glass_below_non_glass).rule.equivalence_margin",
+            "a direction claim has no equivalence_margin",
+        ),
+        (
+            _set("spp_invariance", "rule", "equivalence_margin", value=0.1),
+            "claims[5] (spp_invariance).rule.equivalence_margin",
+            "its margin is its tolerance",
+        ),
+        (
+            _set("glass_variance_ratio", "paper", value=1.0),
+            "claims[7] (glass_variance_ratio).paper",
+            "could never hold",
+        ),
+        (
+            _set("rho_no_warp", "rule", "control_share", value=0.5),
+            "claims[4] (rho_no_warp).rule.control_share",
+            "needs a control that can explain",
+        ),
+        (
+            _set("rho_all", "rule", "control_share", value=1.5),
+            "claims[0] (rho_all).rule.control_share",
+            "greater than the maximum of 1",
         ),
         (lambda raw: raw["rules"].pop("ratio"), "rules", "'ratio' is a required property"),
         (lambda raw: raw.update(extra=1), "(top level)", "extra"),

@@ -4,7 +4,8 @@
 statistic; :func:`curve_table` the per-scene seed-subset curves. The interval of a
 cross-scene mean combines the scenes' bootstrap intervals (:func:`combined_interval`), so it
 is conditional on the scenes that were run; the spread between scenes is the ``std_rho``
-column beside it.
+column beside it. :func:`random_effects_interval` adds the variance between scenes: the
+interval for the mean over scenes like those run, which the claims table uses.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import stats
 from scipy.special import ndtri
 
 from .regions import REGIONS
@@ -84,6 +86,63 @@ def combined_interval(rhos, lows, highs) -> tuple[float, float, float]:
     se = (hi - lo) / (2 * Z)
     half = Z * math.sqrt(float((se * se).sum())) / r.size
     mean = float(r.mean())
+    return mean, mean - half, mean + half
+
+
+def random_effects_interval(values, *, level=0.95) -> tuple[float, float, float]:
+    """The mean of :math:`S` scenes' values and its interval for the mean over scenes like
+    them: the variance between scenes counted with each scene's own error (a random-effects
+    interval, the scenes weighted equally).
+
+    Scene :math:`s`'s value is :math:`x_s = m + u_s + e_s`: :math:`m` the mean over scenes,
+    :math:`u_s` the scene's departure from it (variance :math:`\\tau^2`, between scenes) and
+    :math:`e_s` its estimation error (variance :math:`v_s`, what its bootstrap interval
+    measures). Then :math:`\\operatorname{Var}\\bar x = (\\tau^2 + \\bar v)/S`, :math:`\\bar v`
+    the mean of the :math:`v_s`, and the sample variance :math:`s_x^2` of the values has
+    expectation :math:`\\tau^2 + \\bar v` whatever the :math:`v_s`
+    (:math:`\\mathrm{E}(x_s - \\bar x)^2 = (\\tau^2 + v_s)(1 - 2/S) + (\\tau^2 + \\bar v)/S`
+    sums over :math:`s` to :math:`(S - 1)(\\tau^2 + \\bar v)`). With the moment estimate
+    :math:`\\hat\\tau^2 = s_x^2 - \\bar v`,
+
+    .. math::
+
+        \\bar x \\pm t_{(1+\\gamma)/2,\\,S-1}
+        \\sqrt{\\frac{\\hat\\tau^2}{S} + \\frac{\\bar v}{S}}
+        = \\bar x \\pm t_{(1+\\gamma)/2,\\,S-1}\\,\\frac{s_x}{\\sqrt S}
+
+    at level :math:`\\gamma`: the Student-t interval of the scene values, which carry both
+    variances, so the bootstraps' :math:`\\bar v` cancels. :math:`\\hat\\tau^2` is not
+    truncated at 0: :math:`\\max(s_x^2, \\bar v)` is biased up, and over-covers (99.9% for
+    :math:`S = 4` scenes without spread between them, against 95.9% untruncated, in
+    simulation). :func:`combined_interval` is the same mean with :math:`\\tau^2 = 0`,
+    conditional on the scenes run, and misses the mean over scenes whenever they differ by
+    more than their errors.
+
+    Only finite values count; NaN when there are none. With one scene the between-scene
+    variance cannot be estimated, and the interval is NaN: that scene's own bootstrap
+    interval says nothing about other scenes.
+
+    Parameters
+    ----------
+    values : sequence of float
+        Each scene's value.
+    level : float, keyword-only
+        The interval's level :math:`\\gamma` (0.90 for two one-sided tests at 5%).
+
+    Examples
+    --------
+    >>> mean, low, high = random_effects_interval([0.6, 0.8])
+    >>> round(mean, 3), round(high - mean, 3)  # t_{0.975,1} * 0.1414 / sqrt(2)
+    (0.7, 1.271)
+    """
+    x = _finite(values)
+    if x.size == 0:
+        return math.nan, math.nan, math.nan
+    mean = float(x.mean())
+    if x.size < 2:
+        return mean, math.nan, math.nan
+    half = float(stats.t.ppf(0.5 + level / 2, x.size - 1)) * float(x.std(ddof=1))
+    half /= math.sqrt(x.size)
     return mean, mean - half, mean + half
 
 

@@ -6,25 +6,39 @@ the paper's value, its kind and rule settings, the statistic it is tested on and
 control. :func:`load_claims` reads and validates it; :func:`claims_table` computes each claim's
 statistic and control (:data:`STATISTICS`) on a run and gives one row per claim with a verdict
 of :func:`verdict`, whose rules the file states for the table's caption
-(:meth:`Claims.caption`):
+(:meth:`Claims.caption`). Every interval is 95% and, for a level, is for the mean over scenes
+like those run (:func:`~stereovar.statistics.across.random_effects_interval`: the variance
+between scenes is counted; one scene gives no interval). The rules:
 
 * **level** claims (a value, e.g. :math:`\\rho = 0.754`): *not testable at this scale* when
   ours or its interval is undefined; *does not hold* when the paper's value is outside our
   interval; *not testable at this scale* when the interval contains the null too (no effect,
-  :math:`\\rho = 0`: the data cannot tell the claim from no effect); *explained by a control*
-  when the control's interval reaches ours (its upper end at or above our lower end: a camera
-  or an unrelated alignment gives as much); *holds* otherwise;
+  :math:`\\rho = 0`: the data cannot tell the claim from no effect); *explained by a
+  control* when the control accounts for ours (:func:`explained_by_control`: the interval of
+  ours minus the control reaches 0, or the control is at least the claim's ``control_share``
+  of ours); *holds* otherwise;
+* **level claims with an equivalence margin** :math:`m` (required when the paper's value is
+  the null, e.g. real sensors' :math:`\\rho = 0`, which an interval that must exclude the
+  null could never confirm): decided by equivalence, :func:`equivalence_verdict` around the
+  paper's value;
 * **ratio** claims (e.g. glass variance :math:`7\\times` non-glass): the level rule with the
   null 1, on the geometric mean over scenes and the exponentiated Student-t interval of the
   per-scene log ratios (:func:`geometric_t_interval`); a scene with a ratio that is not
   positive has no logarithm, and the claim is *not testable* with that scene named;
 * **direction** claims (a sign, e.g. Table 3's normal minus decorrelated): *not testable at
   this scale* when our interval spans 0; *does not hold* when it lies on the other side;
-  *explained by a control* when the control's interval lies on the paper's side too;
-  *holds* otherwise;
-* **tolerance** claims (a relative change within the paper's :math:`\\pm t`): *not testable
-  at this scale* when undefined; *holds* when :math:`|\\text{ours}| \\le t`; *does not hold*
-  otherwise.
+  *explained by a control* when the control accounts for ours, as for a level; *holds*
+  otherwise (beyond its control);
+* **tolerance** claims (a relative change within the paper's :math:`\\pm t`): equivalence
+  with the margin :math:`t` around 0 (:func:`equivalence_verdict`): a statistic without an
+  interval cannot show it.
+
+Equivalence is two one-sided tests (TOST) at 5%: *holds* when the 90% interval lies inside
+:math:`(c - m,\\ c + m)`; *does not hold* when the 95% interval lies wholly outside
+:math:`[c - m,\\ c + m]`; *not testable at this scale* otherwise (too wide to show either).
+The 90% interval is the claim's statistic computed again at level 0.90 (Student-t
+quantile :math:`t_{0.95,\\,S-1}` in place of :math:`t_{0.975,\\,S-1}`), and the row's note
+gives it.
 """
 
 from __future__ import annotations
@@ -42,7 +56,7 @@ from scipy import stats
 
 from ..errors import ClaimsError
 from ..schema import load_yaml
-from .across import combined_interval, rows_interval
+from .across import random_effects_interval
 
 HOLDS = "holds"
 FAILS = "does not hold"
@@ -86,6 +100,127 @@ def _ok(*values) -> bool:
     return all(v is not None and math.isfinite(float(v)) for v in values)
 
 
+def difference_interval(ours, control) -> tuple[float, float, float]:
+    """Ours minus the control with its interval, the two taken as independent.
+
+    .. math::
+
+        d = \\hat\\theta - \\hat\\theta_c, \\qquad
+        \\left[\\, d - \\sqrt{(\\hat\\theta - \\ell)^2 + (h_c - \\hat\\theta_c)^2},\\ \\
+        d + \\sqrt{(h - \\hat\\theta)^2 + (\\hat\\theta_c - \\ell_c)^2} \\,\\right]
+
+    (each side's half-widths in quadrature: the interval of a difference of independent
+    estimates; for symmetric intervals the half-width is :math:`\\sqrt{w^2 + w_c^2}`). Ours
+    and the control are computed on the same scenes, so they are usually positively
+    correlated and the difference is then better known than this: the interval errs wide,
+    toward "explained by a control".
+
+    Parameters
+    ----------
+    ours, control : tuple (value, low, high)
+
+    Examples
+    --------
+    >>> d, low, high = difference_interval((0.088, 0.065, 0.111), (0.003, 0.0026, 0.0034))
+    >>> round(d, 3), round(low, 4), round(high, 4)
+    (0.085, 0.062, 0.108)
+    """
+    a, a_low, a_high = (float(v) for v in ours)
+    b, b_low, b_high = (float(v) for v in control)
+    d = a - b
+    return d, d - math.hypot(a - a_low, b_high - b), d + math.hypot(a_high - a, b - b_low)
+
+
+def explained_by_control(
+    ours, control, *, side: float, null: float = 0.0, share: float | None = None
+) -> bool:
+    """Whether the control accounts for ours: the interval of ours minus the control
+    (:func:`difference_interval`) reaches 0 or lies on the control's side, or, with a
+    ``share`` :math:`q`, the control's effect is at least :math:`q` of ours,
+
+    .. math::
+
+        \\sigma\\,(\\hat\\theta_c - \\theta_0) \\ge q\\,\\sigma\\,(\\hat\\theta - \\theta_0),
+
+    :math:`\\sigma` the side of the claim (+1 or -1) and :math:`\\theta_0` its null. A control
+    on the claim's side but far smaller than ours explains nothing.
+
+    Parameters
+    ----------
+    ours, control : tuple (value, low, high)
+    side : float, keyword-only
+        The claim's side: the sign of the paper's value (a direction) or of the paper's
+        value minus the null (a level or ratio).
+    null : float, keyword-only
+        The no-effect value the shares are measured from.
+    share : float, keyword-only, optional
+        The claim's ``control_share``; None: the interval alone decides.
+
+    Examples
+    --------
+    >>> explained_by_control((0.088, 0.065, 0.111), (0.003, 0.0026, 0.0034), side=1)
+    False
+    >>> explained_by_control((0.088, 0.065, 0.111), (0.08, 0.07, 0.09), side=1)
+    True
+    >>> explained_by_control((0.088, 0.065, 0.111), (0.05, 0.049, 0.051), side=1, share=0.5)
+    True
+    """
+    sign = math.copysign(1.0, side)
+    if _ok(*ours, *control):
+        _, low, high = difference_interval(ours, control)
+        if (low if sign > 0 else -high) <= 0:
+            return True
+    if share is not None and _ok(ours[0], control[0]):
+        theirs, mine = sign * (float(control[0]) - null), sign * (float(ours[0]) - null)
+        if theirs >= share * mine:
+            return True
+    return False
+
+
+def equivalence_verdict(ours, low, high, *, centre: float, margin: float, interval90=None) -> str:
+    """The verdict of equivalence to ``centre`` within ``margin``: two one-sided tests
+    (TOST) at 5%.
+
+    .. math::
+
+        \\text{holds} \\iff c - m < \\ell_{90} \\ \\text{and}\\ h_{90} < c + m, \\qquad
+        \\text{does not hold} \\iff \\ell_{95} > c + m \\ \\text{or}\\ h_{95} < c - m
+
+    *Holds* rejects both :math:`\\theta \\le c - m` and :math:`\\theta \\ge c + m`, each at
+    5% one-sided, which is the 90% interval inside the margin; *does not hold* when the 95%
+    interval (the one the table shows) lies wholly outside it; *not testable at this scale*
+    otherwise, and when ours or its interval is undefined: a point value without an interval
+    cannot show equivalence.
+
+    Parameters
+    ----------
+    ours, low, high : float
+        Our value and its 95% interval.
+    centre, margin : float, keyword-only
+        The claimed value :math:`c` and the margin :math:`m > 0`.
+    interval90 : tuple (low, high), keyword-only, optional
+        The 90% interval. None: the 95% interval is used for "holds" too, a conservative
+        TOST at 2.5% each side.
+
+    Examples
+    --------
+    >>> equivalence_verdict(0.0, -0.05, 0.05, centre=0.0, margin=0.002)
+    'not testable at this scale'
+    >>> equivalence_verdict(0.03, 0.01, 0.05, centre=0.0, margin=0.1)
+    'holds'
+    >>> equivalence_verdict(0.3, 0.2, 0.4, centre=0.0, margin=0.1)
+    'does not hold'
+    """
+    if not _ok(ours, low, high, centre, margin):
+        return UNTESTABLE
+    low90, high90 = (low, high) if interval90 is None else interval90
+    if _ok(low90, high90) and centre - margin < low90 and high90 < centre + margin:
+        return HOLDS
+    if low > centre + margin or high < centre - margin:
+        return FAILS
+    return UNTESTABLE
+
+
 def verdict(
     kind: str,
     paper: float,
@@ -96,8 +231,16 @@ def verdict(
     *,
     control_explains: bool = True,
     null_value: float | None = None,
+    equivalence_margin: float | None = None,
+    equivalence_interval=None,
+    control_share: float | None = None,
 ) -> str:
     """The verdict of one claim (the rules of the module docstring).
+
+    A tolerance claim, and a level claim with an ``equivalence_margin``, is decided by
+    :func:`equivalence_verdict` (its control is shown for context only); a level, ratio or
+    direction claim that would hold is *explained by a control* when
+    :func:`explained_by_control`.
 
     Parameters
     ----------
@@ -108,19 +251,45 @@ def verdict(
     ours, low, high : float
         Our value and its 95% interval (a ratio's on the ratio scale).
     control : tuple (value, low, high)
-        The bearing control.
+        The bearing control with its 95% interval.
     control_explains : bool, keyword-only
         Whether the control can explain the claim away (False when it is shown for context).
     null_value : float, keyword-only, optional
         The no-effect value a level or ratio interval must exclude (default :data:`NULLS`).
+    equivalence_margin : float, keyword-only, optional
+        A level claim's margin: the claim is then equivalence to the paper's value within it.
+        A tolerance claim's margin is its tolerance, ``paper``.
+    equivalence_interval : tuple (low, high), keyword-only, optional
+        The 90% interval for the equivalence test (default: the 95% one, a conservative TOST
+        at 2.5%).
+    control_share : float, keyword-only, optional
+        The share of ours a control must reach to explain it whatever the intervals.
+
+    Examples
+    --------
+    The default run's Table 3 residual SAD gt_margin on non-glass, against its sensor
+    control, 30 times smaller:
+
+    >>> verdict("direction", 59, 0.088, 0.065, 0.111, (0.003, 0.0026, 0.0034))
+    'holds'
     """
-    _, c_low, c_high = control
-    if kind == "tolerance":
-        if not _ok(ours, paper):
-            return UNTESTABLE
-        return HOLDS if abs(float(ours)) <= float(paper) else FAILS
     if kind not in KINDS:
         raise ValueError(f"unknown claim kind {kind!r}")
+    if kind == "tolerance":
+        return equivalence_verdict(
+            ours, low, high, centre=0.0, margin=paper, interval90=equivalence_interval
+        )
+    if equivalence_margin is not None:
+        if kind != "level":
+            raise ValueError(f"a {kind} claim has no equivalence margin")
+        return equivalence_verdict(
+            ours,
+            low,
+            high,
+            centre=paper,
+            margin=equivalence_margin,
+            interval90=equivalence_interval,
+        )
     if not _ok(ours, low, high):
         return UNTESTABLE
     if kind in NULLS:
@@ -129,22 +298,24 @@ def verdict(
             return FAILS
         if low <= null <= high:
             return UNTESTABLE
-        if control_explains and _ok(c_high) and c_high >= low:
-            return EXPLAINED
-        return HOLDS
-    side = math.copysign(1.0, paper)
-    if low <= 0 <= high:
-        return UNTESTABLE
-    if (low > 0) != (side > 0):
-        return FAILS
-    if control_explains and _ok(c_low, c_high):
-        if (c_low > 0 and side > 0) or (c_high < 0 and side < 0):
-            return EXPLAINED
+        side = paper - null
+    else:
+        null, side = 0.0, paper
+        if low <= 0 <= high:
+            return UNTESTABLE
+        if (low > 0) != (side > 0):
+            return FAILS
+    ours3 = (ours, low, high)
+    if control_explains and explained_by_control(
+        ours3, tuple(control), side=side, null=null, share=control_share
+    ):
+        return EXPLAINED
     return HOLDS
 
 
-def t_interval(values) -> tuple[float, float, float]:
-    """Mean of the finite values and its 95% Student-t interval (NaN below 2 values)."""
+def t_interval(values, *, level: float = 0.95) -> tuple[float, float, float]:
+    """Mean of the finite values and its Student-t interval at ``level`` (95%; NaN below 2
+    values)."""
     v = np.asarray([float(x) for x in values], dtype=np.float64)
     v = v[np.isfinite(v)]
     if v.size == 0:
@@ -152,12 +323,12 @@ def t_interval(values) -> tuple[float, float, float]:
     mean = float(v.mean())
     if v.size < 2:
         return mean, math.nan, math.nan
-    half = float(stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size))
+    half = float(stats.t.ppf(0.5 + level / 2, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size))
     return mean, mean - half, mean + half
 
 
-def geometric_t_interval(ratios) -> tuple[float, float, float]:
-    """Geometric mean of positive ratios and its 95% interval from their logarithms.
+def geometric_t_interval(ratios, *, level: float = 0.95) -> tuple[float, float, float]:
+    """Geometric mean of positive ratios and its interval (95%) from their logarithms.
 
     .. math::
 
@@ -174,6 +345,8 @@ def geometric_t_interval(ratios) -> tuple[float, float, float]:
     ----------
     ratios : sequence of float
         Per-scene ratios, each finite and > 0.
+    level : float, keyword-only
+        The interval's level (the quantile :math:`t_{(1+\\gamma)/2,\\,S-1}`).
 
     Raises
     ------
@@ -186,7 +359,7 @@ def geometric_t_interval(ratios) -> tuple[float, float, float]:
         raise ValueError(f"ratio {bad[0]!r} has no logarithm; every ratio must be finite and > 0")
     if r.size >= 2 and np.all(r == r[0]):
         return float(r[0]), float(r[0]), float(r[0])
-    mean, low, high = t_interval(np.log(r))
+    mean, low, high = t_interval(np.log(r), level=level)
     return math.exp(mean), math.exp(low), math.exp(high)
 
 
@@ -204,8 +377,8 @@ class ClaimInputs(NamedTuple):
 
 
 class Estimate(NamedTuple):
-    """A statistic's value with its 95% interval, and why it is undefined or what it left
-    out (empty when nothing)."""
+    """A statistic's value with its interval (95% unless the statistic was asked for another
+    level), and why it is undefined or what it left out (empty when nothing)."""
 
     value: float
     low: float
@@ -225,44 +398,53 @@ def _select(rows, region, method):
     return [r for r in rows if r["region"] == region and r["method"] == method]
 
 
-def _rho(inputs: ClaimInputs, *, region, method) -> Estimate:
-    """Mean :math:`\\rho` over scenes with the scenes' bootstrap intervals combined."""
-    return Estimate(*rows_interval(_select(inputs.rows, region, method)))
+def _over_scenes(values, level) -> Estimate:
+    """:func:`~stereovar.statistics.across.random_effects_interval`, with a note when one
+    scene leaves no between-scene variance to estimate."""
+    value, low, high = random_effects_interval(values, level=level)
+    note = ""
+    if math.isfinite(value) and not math.isfinite(low):
+        note = (
+            "one scene: the variance between scenes cannot be estimated, so there is no "
+            "interval for the mean over scenes"
+        )
+    return Estimate(value, low, high, note)
 
 
-def _rho_difference(inputs: ClaimInputs, *, region, minus, method) -> Estimate:
-    """Mean over scenes of :math:`\\rho_{region} - \\rho_{minus}`, each scene's half-width
-    the root sum of squares of the two bootstrap intervals' half-widths, combined."""
+def _rho(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate:
+    """Mean :math:`\\rho` over scenes with the random-effects interval (the variance between
+    scenes with the scenes' own errors)."""
+    return _over_scenes([r["rho"] for r in _select(inputs.rows, region, method)], level)
+
+
+def _rho_difference(inputs: ClaimInputs, *, region, minus, method, level=0.95) -> Estimate:
+    """Mean over scenes of :math:`\\rho_{region} - \\rho_{minus}` with the random-effects
+    interval of the per-scene differences."""
     selected = [r for r in inputs.rows if r["method"] == method and r["region"] in (region, minus)]
-    diffs, lows, highs = [], [], []
+    diffs = []
     for pair in _per_scene(selected, "region").values():
         a, b = pair.get(region), pair.get(minus)
-        if not a or not b or not _ok(a["rho"], b["rho"]):
-            continue
-        diffs.append(float(a["rho"]) - float(b["rho"]))
-        half = (
-            math.hypot(
-                float(a["boot_high"]) - float(a["boot_low"]),
-                float(b["boot_high"]) - float(b["boot_low"]),
-            )
-            / 2
-        )
-        lows.append(diffs[-1] - half)
-        highs.append(diffs[-1] + half)
-    return Estimate(*combined_interval(diffs, lows, highs))
+        if a and b and _ok(a["rho"], b["rho"]):
+            diffs.append(float(a["rho"]) - float(b["rho"]))
+    return _over_scenes(diffs, level)
 
 
-def _sweep_spread(inputs: ClaimInputs, *, column) -> Estimate:
+def _sweep_spread(inputs: ClaimInputs, *, column, level=0.95) -> Estimate:
     """Relative spread of Table 2's ``column`` over the SPP sweep, (max - min) / |mean|; no
-    interval."""
+    interval (one value per SPP), so no equivalence can be shown with it."""
     rho = np.array([float(r.get(column, math.nan)) for r in inputs.sweep], dtype=np.float64)
     rho = rho[np.isfinite(rho)]
     if rho.size < 2:
         return Estimate(*_NAN3)
-    return Estimate(float((rho.max() - rho.min()) / abs(rho.mean())), math.nan, math.nan)
+    return Estimate(
+        float((rho.max() - rho.min()) / abs(rho.mean())),
+        math.nan,
+        math.nan,
+        "a spread over the sweep has no interval",
+    )
 
 
-def _seed_change(inputs: ClaimInputs, *, region, method) -> Estimate:
+def _seed_change(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate:
     """Mean over scenes of the relative change of :math:`\\rho` from the second-largest
     seed subset to all seeds of the seed curve, (full - half) / |full|, with a t interval."""
     selected = [r for r in inputs.curve if (r["region"], r["method"]) == (region, method)]
@@ -274,16 +456,19 @@ def _seed_change(inputs: ClaimInputs, *, region, method) -> Estimate:
         full, half = pts[ordered[-1]], pts[ordered[-2]]
         if _ok(full, half) and full != 0:
             changes.append((full - half) / abs(full))
-    return Estimate(*t_interval(changes))
+    return Estimate(*t_interval(changes, level=level))
 
 
-def _corrected_rho(inputs: ClaimInputs, *, region, method) -> Estimate:
+def _corrected_rho(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate:
     """Mean over scenes of the attenuation-corrected :math:`\\rho` with a t interval."""
     rows = _select(inputs.rows, region, method)
-    return Estimate(*t_interval(float(r.get("rho_corrected", math.nan)) for r in rows))
+    values = [float(r.get("rho_corrected", math.nan)) for r in rows]
+    return Estimate(*t_interval(values, level=level))
 
 
-def _region_ratio(inputs: ClaimInputs, *, column, method, numerator, denominator) -> Estimate:
+def _region_ratio(
+    inputs: ClaimInputs, *, column, method, numerator, denominator, level=0.95
+) -> Estimate:
     """Geometric mean over scenes of ``column`` in region ``numerator`` over region
     ``denominator`` (:func:`geometric_t_interval`).
 
@@ -316,10 +501,12 @@ def _region_ratio(inputs: ClaimInputs, *, column, method, numerator, denominator
     note = f"left out, no finite {column}: {', '.join(missing)}" if missing else ""
     if not ratios:
         return Estimate(*_NAN3, note)
-    return Estimate(*geometric_t_interval(ratios), note)
+    return Estimate(*geometric_t_interval(ratios, level=level), note)
 
 
-def _intervention_effect(inputs: ClaimInputs, *, cost, metric, region, source) -> Estimate:
+def _intervention_effect(
+    inputs: ClaimInputs, *, cost, metric, region, source, level=0.95
+) -> Estimate:
     """Mean over scenes of normal minus decorrelated for one Table 3 cell, with a t
     interval (rows of ``source``: ``render`` or ``sensor``; no ``source`` is ``render``)."""
     selected = [
@@ -333,7 +520,7 @@ def _intervention_effect(inputs: ClaimInputs, *, cost, metric, region, source) -
         for c in _per_scene(selected, "condition", lambda r: r["value"]).values()
         if "normal" in c and "decorrelated" in c and _ok(c["normal"], c["decorrelated"])
     ]
-    return Estimate(*t_interval(diffs))
+    return Estimate(*t_interval(diffs, level=level))
 
 
 def _regions():
@@ -401,7 +588,8 @@ class Statistic:
     Attributes
     ----------
     compute : callable
-        ``compute(inputs, **settings) -> Estimate``.
+        ``compute(inputs, level=0.95, **settings) -> Estimate``: the value with its interval
+        at ``level`` (0.90 for an equivalence test).
     settings : dict
         Each setting's name to a function giving its allowed values.
     check : callable, optional
@@ -447,9 +635,9 @@ STATISTICS = {
 """What a claim in ``claims.yaml`` can be tested on (its ``statistic: {name: ...}``)."""
 
 
-def _estimate(statistic: dict, inputs: ClaimInputs) -> Estimate:
+def _estimate(statistic: dict, inputs: ClaimInputs, level: float = 0.95) -> Estimate:
     settings = {k: v for k, v in statistic.items() if k != "name"}
-    return STATISTICS[statistic["name"]].compute(inputs, **settings)
+    return STATISTICS[statistic["name"]].compute(inputs, level=level, **settings)
 
 
 # ------------------------------------------------------------------------------ the file
@@ -480,8 +668,11 @@ class Claims:
     sha256: str
 
     def caption(self) -> str:
-        """The rules and intervals, as the claims table's caption states them."""
-        return " ".join(["Verdicts.", *(self.rules[k] for k in KINDS), self.intervals])
+        """The rules of each kind of claim and how the intervals are made, from the file's
+        ``rules`` and ``intervals``, as the claims table's caption states them."""
+        return " ".join(
+            ["Verdicts, by kind of claim:", *(self.rules[k] for k in KINDS), self.intervals]
+        )
 
 
 @lru_cache(maxsize=1)
@@ -542,6 +733,42 @@ def _check_claim(index: int, claim: dict, seen: dict) -> tuple[list, str] | None
         return where + ["paper"], "a direction claim's paper value must be non-zero (its sign)"
     if kind == "tolerance" and paper <= 0:
         return where + ["paper"], "a tolerance claim's paper value (the tolerance) must be > 0"
+    margin = rule.get("equivalence_margin")
+    if margin is not None:
+        if kind != "level":
+            return where + ["rule", "equivalence_margin"], (
+                f"a {kind} claim has no equivalence_margin"
+                + (" (its margin is its tolerance, paper)" if kind == "tolerance" else "")
+                + "; remove it"
+            )
+        if not (math.isfinite(margin) and margin > 0):
+            return where + ["rule", "equivalence_margin"], f"{margin!r} must be finite and > 0"
+        if claim["control"] is not None and rule.get("control_explains", True):
+            return where + ["rule"], (
+                "an equivalence claim's control is shown for context; set control_explains: false"
+            )
+    elif kind == "ratio" and paper == rule["null_value"]:
+        return where + ["paper"], (
+            f"the paper's value {paper:g} is the null, which a ratio claim's interval must "
+            "exclude, so it could never hold; equivalence margins are for level claims"
+        )
+    elif kind == "level" and paper == rule["null_value"]:
+        return where + ["rule"], (
+            f"the paper's value {paper:g} is the null, which an interval that must exclude "
+            "the null can never confirm; give equivalence_margin, the largest departure "
+            "from it that still counts as the claim"
+        )
+    share = rule.get("control_share")
+    if share is not None:
+        if not rule.get("control_explains", True) or claim["control"] is None:
+            return where + ["rule", "control_share"], (
+                "control_share needs a control that can explain the claim "
+                "(control_explains: true); remove it"
+            )
+        if kind == "tolerance":
+            return where + ["rule", "control_share"], (
+                "a tolerance claim's control is shown for context; remove it"
+            )
     parts = [("statistic", claim["statistic"])]
     if claim["control"] is not None:
         parts.append(("control", claim["control"]["statistic"]))
@@ -587,7 +814,9 @@ def load_claims(path=None) -> Claims:
     ClaimsError
         One line naming the file, the key and the problem, when the file is missing, not
         YAML, or breaks ``claims.schema.yaml`` or a rule across keys (unique ids, a level or
-        ratio claim's null_value, a known statistic with its settings).
+        ratio claim's null_value, an equivalence_margin where the paper's value is the null
+        and only on level claims, control_share only where a control can explain the claim,
+        a known statistic with its settings).
     """
     path = Path(CLAIMS_PATH if path is None else path)
     try:
@@ -632,6 +861,21 @@ def claims_digest(path=None) -> str:
 # ------------------------------------------------------------------------------ the table
 
 
+def _tost_note(claim: dict, tost: Estimate) -> str:
+    """The equivalence test's 90% interval and margin, for the row's note."""
+    paper = float(claim["paper"])
+    if claim["kind"] == "tolerance":
+        centre, margin = 0.0, paper
+    else:
+        centre, margin = paper, float(claim["rule"]["equivalence_margin"])
+    if not _ok(tost.low, tost.high):
+        return f"equivalence within {centre:g} +- {margin:g} needs an interval"
+    return (
+        f"equivalence (two one-sided tests at 5%): 90% interval [{tost.low:.3g}, "
+        f"{tost.high:.3g}] against {centre:g} +- {margin:g}"
+    )
+
+
 def _claim_row(claim: dict, inputs: ClaimInputs, *, moments: bool) -> dict:
     ours = _estimate(claim["statistic"], inputs)
     control = claim["control"]
@@ -641,6 +885,10 @@ def _claim_row(claim: dict, inputs: ClaimInputs, *, moments: bool) -> dict:
         label = control.get("label_moments", control["label"]) if moments else control["label"]
     rule = claim["rule"]
     notes = [ours.note, f"control: {theirs.note}" if theirs.note else ""]
+    tost = None
+    if claim["kind"] == "tolerance" or "equivalence_margin" in rule:
+        tost = _estimate(claim["statistic"], inputs, level=0.90)
+        notes.append(_tost_note(claim, tost))
     return {
         "id": claim["id"],
         "claim": claim["text"],
@@ -664,6 +912,9 @@ def _claim_row(claim: dict, inputs: ClaimInputs, *, moments: bool) -> dict:
             theirs[:3],
             control_explains=rule.get("control_explains", True),
             null_value=rule.get("null_value"),
+            equivalence_margin=rule.get("equivalence_margin"),
+            equivalence_interval=None if tost is None else (tost.low, tost.high),
+            control_share=rule.get("control_share"),
         ),
         "note": "; ".join(n for n in notes if n),
     }
