@@ -29,9 +29,11 @@ NONE = "none"
 SHIPPED = "|shipped"
 """Suffix of a transform's label when it is measured on what ships (:func:`shipped_stack`)."""
 
-SKIPPED_METHODS = ("sensor", "sensor_sim")
-"""Statistics left out: the camera baselines draw their own frames from the seed mean, and
-the calibration's ``camera`` null is that baseline."""
+CALIBRATED_METHODS = ("warp", "log", "spearman", "partial", "relative", "null_shift")
+"""The statistics every replicate measures (over all valid pixels): the paper's Eq. 3, its
+robust versions, the intensity controls and a wrong alignment. The camera baselines are left
+out: they draw their own frames from the seed mean, and the calibration's ``camera`` null
+is that baseline."""
 
 CALIBRATION_COLUMNS = [
     "scene",
@@ -84,7 +86,9 @@ class SceneFrames:
     aux: dict | None = None
 
 
-def transform_stack(name: str, frames, *, view: str, seed: int, aux=None, options=None):
+def transform_stack(
+    name: str, frames, *, view: str, seed: int, aux=None, options=None, first_only=False
+):
     """The run's transform ``name`` on each of :math:`N` frames of one view, as the
     transform job applies it to renders: every frame sees the seed mean and unbiased
     variance over all :math:`N` (:func:`stereovar.jobs.mitigations.seed_moments`'s
@@ -93,6 +97,7 @@ def transform_stack(name: str, frames, *, view: str, seed: int, aux=None, option
     Returns
     -------
     numpy.ndarray (N, H, W, C), float32
+        Only the first frame's output (1, H, W, C) with ``first_only``.
     """
     if name == NONE:
         return frames
@@ -104,7 +109,7 @@ def transform_stack(name: str, frames, *, view: str, seed: int, aux=None, option
     var = stack.var(axis=0, ddof=1)
     extra = dict(aux or {})
     out = []
-    for i, frame in enumerate(frames):
+    for i, frame in enumerate(frames[:1] if first_only else frames):
         inputs = TransformInputs(
             render=np.asarray(frame, dtype=np.float32),
             view=view,
@@ -175,18 +180,32 @@ def shipped_stack(name: str, frames, *, view: str, seed: int, aux=None, options=
     images = [
         transform_stack(
             name, np.asarray(frames)[g], view=view, seed=derive_seed(seed, "group", i),
-            aux=aux, options=options,
+            aux=aux, options=options, first_only=True,
         )[0]
         for i, g in enumerate(groups)
     ]
     return np.stack(images) if images else np.empty((0, *np.shape(frames)[1:]), np.float32)
 
 
-def statistic_rows(stacks: dict, scene: SceneFrames, settings, label: str) -> list[dict]:
-    """Eq. 1, Eq. 2 and every registered statistic (but :data:`SKIPPED_METHODS`) over every
-    region, on one view pair of frame stacks."""
+def statistic_rows(
+    stacks: dict, scene: SceneFrames, settings, label: str, *, methods=None
+) -> list[dict]:
+    """Eq. 1, Eq. 2 and each calibrated statistic over all valid pixels, on one view pair of
+    frame stacks, by the same functions as the correlation rows
+    (:func:`stereovar.statistics.registry.evaluate` with its block bootstrap; the region
+    ``all`` of :func:`stereovar.statistics.rows.correlation_rows`).
+
+    Parameters
+    ----------
+    methods : sequence of str, optional
+        Registered statistics (default :data:`CALIBRATED_METHODS`).
+    """
     from ..estimators.seeds import variance_field
-    from ..statistics.rows import SceneInputs, correlation_rows
+    from ..seeding import derive_seed as seed_of
+    from ..statistics.bootstrap import tile_labels
+    from ..statistics.fields import aligned_fields, channel_mean, warped_intensity
+    from ..statistics.pixels import PixelSet
+    from ..statistics.registry import METHODS, BootstrapDraws, evaluate
     from ..statistics.warp import align_variance
 
     means, fields = {}, {}
@@ -201,17 +220,25 @@ def statistic_rows(stacks: dict, scene: SceneFrames, settings, label: str) -> li
         finite_left=np.isfinite(fields["left"]),
         finite_right=np.isfinite(fields["right"]),
     )
-    inputs = SceneInputs(
-        ground_truth_left=gt_left,
-        sign=scene.sign,
-        mean=means,
-        n_seeds=scene.n_seeds,
-        label=label,
+    right = np.where(np.isfinite(fields["right"]), fields["right"], np.nan)
+    intensity = (
+        channel_mean(means["left"]),
+        warped_intensity(means["right"], gt_left, sign=scene.sign),
     )
-    rows = correlation_rows(
-        fields["left"], fields["right"], aligned, scene.glass, settings=settings, inputs=inputs
+    aligned_set = aligned_fields(
+        fields["left"], right, aligned["warped"], ground_truth_left=gt_left, sign=scene.sign,
+        settings=settings, intensity=intensity,
     )
-    return [r for r in rows if r["method"] not in SKIPPED_METHODS]
+    pixels = PixelSet(
+        np.asarray(aligned["omega"], dtype=bool),
+        tile_labels(fields["left"].shape, settings.bootstrap.tile),
+    )
+    draws = BootstrapDraws(settings.bootstrap, seed_of(settings.bootstrap.seed, label, "all"))
+    rows = []
+    for name in methods or CALIBRATED_METHODS:
+        result = evaluate(METHODS.get(name), aligned_set, pixels, settings=settings, draws=draws)
+        rows.append({"region": "all", "method": name, **result})
+    return rows
 
 
 def measured_rows(

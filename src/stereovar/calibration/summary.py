@@ -83,7 +83,7 @@ NULL_COLUMNS = [
 """Columns of ``results/tables/calibration_nulls.csv``: each scene's matched null per
 transform and statistic, and the equivalence margin."""
 
-SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative")
+SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative", "null_shift")
 """The statistics the table reports (every calibrated one stays in the replicate rows)."""
 
 
