@@ -73,11 +73,12 @@ def test_two_copied_renders_are_named(tmp_path, monkeypatch):
 
 def pooled_zero_disparity_rho(left, right, mask):
     """Pearson of the channel-mean per-seed residuals of the two views at the same pixel,
-    pooled over seeds and the pixels of ``mask`` (a plain loop over seeds)."""
+    each pixel's standardised over its seeds, pooled over seeds and the pixels of ``mask``
+    (a plain loop over seeds)."""
     a, b = [], []
     for stack, out in ((left, a), (right, b)):
         grey = stack.astype(np.float64).mean(axis=-1)
-        residual = grey - grey.mean(axis=0)
+        residual = (grey - grey.mean(axis=0)) / grey.std(axis=0, ddof=1)
         for n in range(stack.shape[0]):
             out.append(residual[n][mask])
     return float(np.corrcoef(np.concatenate(a), np.concatenate(b))[0, 1])

@@ -16,7 +16,8 @@ SETTINGS = BootstrapSettings(tile=4, reps=400, seed=1)
 
 
 def brute_force_rho(left, right, disparity, sign, mask, alignment):
-    """Pearson over explicitly listed (seed, pixel) pairs, with Python loops."""
+    """Pearson over explicitly listed (seed, pixel) pairs, each pixel's residuals standardised
+    over its seeds, with Python loops."""
     n, h, w = left.shape[:3]
     lum_l = [
         [[float(np.mean(left[k, y, x])) for x in range(w)] for y in range(h)] for k in range(n)
@@ -28,15 +29,19 @@ def brute_force_rho(left, right, disparity, sign, mask, alignment):
     def residual(lum, k, y, x):
         return lum[k][y][x] - sum(lum[m][y][x] for m in range(n)) / n
 
+    def standardise(values):
+        mean = sum(values) / n
+        sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1))
+        return [(v - mean) / sd for v in values]
+
     xs, ys = [], []
     for y in range(h):
         for x in range(w):
             if not mask[y, x]:
                 continue
             if alignment == "zero":
-                for k in range(n):
-                    xs.append(residual(lum_l, k, y, x))
-                    ys.append(residual(lum_r, k, y, x))
+                xs += standardise([residual(lum_l, k, y, x) for k in range(n)])
+                ys += standardise([residual(lum_r, k, y, x) for k in range(n)])
                 continue
             d = float(disparity[y, x])
             pos = x + sign * d
@@ -44,9 +49,13 @@ def brute_force_rho(left, right, disparity, sign, mask, alignment):
                 continue
             x0 = min(math.floor(pos), w - 2)
             t = pos - x0
-            for k in range(n):
-                xs.append(residual(lum_l, k, y, x))
-                ys.append((1 - t) * residual(lum_r, k, y, x0) + t * residual(lum_r, k, y, x0 + 1))
+            xs += standardise([residual(lum_l, k, y, x) for k in range(n)])
+            ys += standardise(
+                [
+                    (1 - t) * residual(lum_r, k, y, x0) + t * residual(lum_r, k, y, x0 + 1)
+                    for k in range(n)
+                ]
+            )
     xs, ys = np.array(xs), np.array(ys)
     mx, my = xs.sum() / xs.size, ys.sum() / ys.size
     num = sum((a - mx) * (b - my) for a, b in zip(xs, ys, strict=True))

@@ -189,9 +189,23 @@ MITIGATION_SCENE_COLUMNS = [
 """Columns of ``results/{source}[/{transform}]/seeds/mitigation/{scene}/spp{spp}.csv``: one
 row per region and quantity (:data:`SCENE_QUANTITIES`)."""
 
+RESIDUAL_QUANTITIES = {"ground_truth": "residual_rho_gt", "zero": "residual_rho_zero"}
+"""The quantity of each alignment's residual correlation over every disparity; a band's is
+``{quantity}_{band}`` (:func:`stereovar.statistics.residuals.band_label`, e.g.
+``residual_rho_gt_d0-2``)."""
+
+
 SCENE_QUANTITIES = (
     "residual_rho_gt",
     "residual_rho_zero",
+    # per band of stereovar.statistics.residuals.DISPARITY_BANDS (literal: this module imports
+    # no statistics at import time)
+    "residual_rho_gt_d0-2",
+    "residual_rho_gt_d2-8",
+    "residual_rho_gt_d8-inf",
+    "residual_rho_zero_d0-2",
+    "residual_rho_zero_d2-8",
+    "residual_rho_zero_d8-inf",
     "psnr",
     "mse",
     "relative_mse",
@@ -200,10 +214,12 @@ SCENE_QUANTITIES = (
     "reference_noise",
     "transform_ms_per_mpix",
 )
-"""What one scene's mitigation rows measure: the cross-view residual correlation at the
-ground-truth alignment and at zero disparity (with block-bootstrap intervals), the image
-quality of the renders against the converged reference (both views pooled), and the store
-transform's time per megapixel (NaN for renders that were not transformed)."""
+"""What one scene's mitigation rows measure: the cross-view residual correlation, each pixel
+standardised, at the ground-truth alignment and at zero disparity over every disparity (with
+block-bootstrap intervals) and per disparity band
+(:data:`stereovar.statistics.residuals.DISPARITY_BANDS`), the image quality of the images
+against the converged reference (both views pooled), and the store transform's time per
+megapixel (NaN for renders that were not transformed)."""
 
 
 def reference_moments(path) -> tuple[np.ndarray, np.ndarray]:
@@ -234,56 +250,153 @@ def reference_moments(path) -> tuple[np.ndarray, np.ndarray]:
     return np.where(ok, m1, np.nan), np.where(ok, var, np.nan)
 
 
-def _reference(spec, loaded: dict):
-    """``quality(images, seeds, mask)`` against one view's reference: a moment store's path
-    (:func:`reference_moments`), or a list of the source's untransformed render stores, whose
-    seeds other than the graded image's give its reference (:func:`leave_one_out_quality`).
-    ``loaded`` maps a tuple of render-store paths already read to ``(stack, seeds)``: the
-    untransformed row grades its own renders, which are not read again."""
-    from ..statistics.utility import image_quality
+def _reference(spec, loaded: dict, *, images, seeds, attrs: dict, paths, view: str):
+    """``quality(mask)`` of one view's images (sorted by seed index ``seeds``) against its
+    reference: a moment store's path (:func:`reference_moments`,
+    :func:`stereovar.statistics.utility.image_quality`), or a list of the source's
+    untransformed render stores, split in half (:func:`split_half_images`,
+    :func:`stereovar.statistics.utility.split_half_quality`). ``loaded`` maps a tuple of
+    render-store paths already read to ``(stack, seeds)``: the untransformed row grades its own
+    renders, which are not read again."""
+    from ..statistics.utility import RESULT_KEYS, image_quality, split_half_quality
+    from ..transforms import get_transform
 
     if isinstance(spec, (list, tuple)):
         key = tuple(str(p) for p in spec)
         if key not in loaded:
             loaded[key] = view_stack(spec)[:2]
         raw, raw_seeds = loaded[key]
-        return lambda images, seeds, mask: leave_one_out_quality(
-            images, seeds, raw, raw_seeds, mask=mask
-        )
+        order = np.argsort(raw_seeds, kind="stable")
+        raw, raw_seeds = raw[order], np.asarray(raw_seeds)[order]
+        if not np.array_equal(raw_seeds, seeds):
+            raise StereovarError(
+                f"{view} view: the images have seed indices {seeds.tolist()} and the source's "
+                f"renders {raw_seeds.tolist()}; split-half grading needs the same seeds"
+            )
+        halves = split_halves(len(seeds))
+        name = attrs.get("transform")
+        if name and "seed_var" in get_transform(name).reads and len(halves[0]) < 2:
+            reason = (
+                f"split-half grading of {name} needs at least 2 seeds per half "
+                f"(N >= 4, got {len(seeds)})"
+            )
+            return lambda mask: {
+                **dict.fromkeys(RESULT_KEYS, np.nan),
+                "n_pixels": 0,
+                "n_images": len(seeds),
+                "reason": reason,
+            }
+        made = split_half_images(images, raw, seeds, halves, attrs=attrs, paths=paths, view=view)
+        raw_halves = tuple(raw[h] for h in halves)
+        return lambda mask: split_half_quality(images, made, raw_halves, mask=mask)
     mean, var = reference_moments(spec)
-    return lambda images, seeds, mask: image_quality(images, mean, reference_var=var, mask=mask)
+    return lambda mask: image_quality(images, mean, reference_var=var, mask=mask)
 
 
-def leave_one_out_quality(images, seeds, raw, raw_seeds, *, mask=None) -> dict:
-    r"""Image quality of renders against the mean of the source's other seeds.
+def split_halves(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Positions of the two halves of :math:`n` seeds sorted by seed index: the first
+    :math:`\\lfloor n/2 \\rfloor` and the rest.
 
-    Image :math:`k` of seed index :math:`s_k` is graded against the mean of the untransformed
-    renders of every other seed, whose noise is independent of it when the image depends on
-    its own seed only:
-
-    .. math::
-
-        R_{-k} = \frac1{N-1} \sum_{n \ne s_k} I_n, \qquad
-        V_{-k} = \frac{\hat\sigma^2_{-k}}{N-1},
-
-    with :math:`\hat\sigma^2_{-k}` the unbiased variance of those :math:`N - 1` renders
-    (:func:`seed_moments`); a seed index not among the renders is graded against all
-    :math:`N`. MSE, relative MSE, bias and the reference noise are the images' means, the
-    relative bias the mean bias over the mean reference and PSNR follows from the mean MSE
-    (:func:`stereovar.statistics.utility.image_quality` per image). A transform that reads the
-    seed mean (``equalise``, ``sensor_only``) shares noise with this reference, so its error
-    is underestimated by up to :math:`\sigma^2/N`.
+    Examples
+    --------
+    >>> [h.tolist() for h in split_halves(5)]
+    [[0, 1], [2, 3, 4]]
     """
-    from ..statistics.utility import image_quality
+    if n < 2:
+        raise StereovarError(f"split-half grading needs at least 2 seeds per view, got {n}")
+    return np.arange(n // 2), np.arange(n // 2, n)
 
-    raw = np.asarray(raw)
-    results = []
-    for image, s in zip(np.asarray(images), seeds, strict=True):
-        keep = np.asarray(raw_seeds) != s
-        mean, var = seed_moments(raw[keep])
-        n = int(keep.sum())
-        results.append(image_quality(image[None], mean, reference_var=var / n, mask=mask))
-    return _pooled_quality(results)
+
+MEAN_READS = frozenset({"seed_mean", "seed_var", "n_seeds"})
+"""The :class:`~stereovar.transforms.base.TransformInputs` fields computed over a view's
+seeds: a transform that reads one is remade from each half for split-half grading."""
+
+
+def split_half_images(images, raw, seeds, halves, *, attrs: dict, paths, view: str) -> tuple:
+    """The images of each half of the seeds made from that half's renders alone.
+
+    An image that reads its own render only (no transform, a render-time policy, ``denoise``,
+    ``denoise_sensor``) is the shipped one. A transform that reads the seed statistics
+    (:data:`MEAN_READS`: ``equalise``, ``sensor_only``) read them over all :math:`N` seeds, so
+    its shipped images share every render's noise; it is applied again to each half's renders
+    with that half's seed mean, variance and count (:func:`seed_moments`), its options from the
+    store (``transform_options``) and each seed's recorded draw seed (``transform_seed``), as
+    :func:`transform_job` applies it. What this grading can and cannot take out is in
+    :func:`stereovar.statistics.utility.split_half_quality`.
+
+    Parameters
+    ----------
+    images : numpy.ndarray, shape (N, H, W, 3)
+        The shipped images, sorted by seed index.
+    raw : numpy.ndarray, shape (N, H, W, 3)
+        The source's renders of the same seeds, in the same order.
+    seeds : numpy.ndarray of int (N,)
+        Their seed indices.
+    halves : pair of numpy.ndarray of int
+        Positions of each half (:func:`split_halves`).
+    attrs : dict, keyword-only
+        The images' store attributes (``transform``, ``transform_options``).
+    paths : list, keyword-only
+        The images' render stores (read again for ``transform_seed`` only when remade).
+    view : str, keyword-only
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        One (M, H, W, 3) stack per half.
+    """
+    import ast
+
+    from ..transforms import TransformInputs, check_reads, get_transform
+
+    name = attrs.get("transform")
+    t = get_transform(name) if name else None
+    if t is None or not MEAN_READS & {*t.reads, *t.optional_reads}:
+        return tuple(images[h] for h in halves)
+    available = {*MEAN_READS, "render", "view", "seed_index", "rng_seed"}
+    check_reads(t, available, source=f"split-half grading of {view} {name} images")
+    options = dict(ast.literal_eval(attrs.get("transform_options") or "[]"))
+    draws = _transform_seeds(paths)
+    made = []
+    for h in halves:
+        mean, var = seed_moments(raw[h])
+        made.append(
+            np.stack(
+                [
+                    t(
+                        TransformInputs(
+                            render=raw[k].astype(np.float32),
+                            view=view,
+                            seed_index=int(seeds[k]),
+                            rng_seed=draws[int(seeds[k])],
+                            seed_mean=mean,
+                            seed_var=var,
+                            n_seeds=len(h),
+                        ),
+                        **options,
+                    )
+                    for k in h
+                ]
+            )
+        )
+    return tuple(made)
+
+
+def _transform_seeds(paths) -> dict[int, int]:
+    """Each seed index's recorded ``transform_seed`` in transformed render stores."""
+    from ..io.store import load_store
+
+    out = {}
+    for path in paths:
+        ds = load_store(path, "render store", ["radiance"])
+        out.update(
+            zip(
+                (int(s) for s in ds["seed"].values),
+                (int(s) for s in ds["transform_seed"].values),
+                strict=True,
+            )
+        )
+    return out
 
 
 def mitigation_scene_job(
@@ -292,23 +405,26 @@ def mitigation_scene_job(
     """One scene's mitigation measurements (:data:`MITIGATION_SCENE_COLUMNS`).
 
     ``left`` and ``right`` are the view's render stores (transformed or not), ``reference``
-    maps each view to its converged reference: a moment store, or the source's untransformed
-    render stores (an audit's; :func:`leave_one_out_quality`). The residual correlation
-    (:func:`stereovar.statistics.residuals.residual_correlation`) is over the left view's
-    regions of the valid set :math:`\\Omega`; the image quality
-    (:func:`stereovar.statistics.utility.image_quality`) over each view's own regions (its
-    ground-truth glass mask), both views pooled by pixel count.
+    maps each view to its converged reference: a moment store
+    (:func:`stereovar.statistics.utility.image_quality`), or the source's untransformed render
+    stores (an audit's, Cycles'), split in half (:func:`split_half_images`,
+    :func:`stereovar.statistics.utility.split_half_quality`). The residual correlation
+    (:func:`stereovar.statistics.residuals.residual_correlation`, each pixel standardised) is
+    over the left view's regions of the valid set :math:`\\Omega`, over every disparity and
+    per band of :data:`~stereovar.statistics.residuals.DISPARITY_BANDS`; the image quality over
+    each view's own regions (its ground-truth glass mask), both views pooled by pixel count.
     """
     from ..io.store import load_store
     from ..io.tables import write_tables
     from ..statistics.regions import REGIONS, region_masks, valid_set
-    from ..statistics.residuals import residual_correlation
+    from ..statistics.residuals import ALL_BANDS, DISPARITY_BANDS, residual_correlation
     from .correlation import analysis_settings
 
     settings, _ = analysis_settings(analysis, controls)
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
     stacks, attrs, seed_order, loaded = {}, {}, {}, {}
-    for view, paths in (("left", left), ("right", right)):
+    paths_of = {"left": left, "right": right}
+    for view, paths in paths_of.items():
         stacks[view], seeds, _, attrs[view] = view_stack(paths)
         loaded[tuple(str(p) for p in paths)] = (stacks[view], seeds)
         order = np.argsort(seeds, kind="stable")
@@ -348,19 +464,33 @@ def mitigation_scene_job(
         sign=sign,
         masks=masks,
         valid=gl["valid"].transpose("y", "x").values,
+        bands=DISPARITY_BANDS,
         settings=settings.bootstrap,
         min_pixels=settings.min_pixels,
     )
     for r in residual:
-        quantity = "residual_rho_gt" if r["alignment"] == "ground_truth" else "residual_rho_zero"
+        quantity = RESIDUAL_QUANTITIES[r["alignment"]]
+        if r["band"] != ALL_BANDS:
+            quantity = f"{quantity}_{r['band']}"
         add(r["region"], quantity, r["rho"], r["low"], r["high"], r["n_pixels"], r["reason"])
-    refs = {view: _reference(reference[view], loaded) for view in ("left", "right")}
+    refs = {
+        view: _reference(
+            reference[view],
+            loaded,
+            images=stacks[view],
+            seeds=seed_order[view],
+            attrs=attrs[view],
+            paths=paths_of[view],
+            view=view,
+        )
+        for view in ("left", "right")
+    }
     for region in regions:
         per_view = []
         for view in ("left", "right"):
             glass = gt.sel(view=view)["glass"].transpose("y", "x").values.astype(bool)
             mask = {"all": None, "glass": glass, "non_glass": ~glass}[region]
-            per_view.append(refs[view](stacks[view], seed_order[view], mask))
+            per_view.append(refs[view](mask))
         pooled = _pooled_quality(per_view)
         for quantity in ("psnr", "mse", "relative_mse", "bias", "relative_bias"):
             add(
