@@ -318,6 +318,13 @@ def test_the_table_summarises_its_inputs_exactly():
                         "n_pixels": 100,
                     }
                 )
+    nulls = [
+        {"scene": scene, "transform": "denoise", "region": "all", "method": "partial",
+         "null_rho": 0.1 * k, "null_se": 0.01, "chance_sd": 0.02, "n": 16, "margin": 0.05}
+        for k, scene in enumerate(["a", "b", "c"])
+    ]
+    # the margin of "removed" is the untransformed frames' detectable effect
+    nulls.append({**nulls[0], "transform": "none", "margin": 0.05})
     (row,) = mitigation_table(
         [
             {
@@ -325,19 +332,36 @@ def test_the_table_summarises_its_inputs_exactly():
                 "kind": "transform",
                 "description": "d",
                 "spp": 32,
+                "calibration_transform": "denoise",
                 "correlation": corr,
                 "intervention": intervention,
                 "scene_rows": scene_rows,
             }
-        ]
+        ],
+        nulls,
     )
     part = [r for r in corr if r["method"] == "partial"]
     want = combined_interval(
         [r["rho"] for r in part], [r["boot_low"] for r in part], [r["boot_high"] for r in part]
     )
     assert (row["partial"], row["partial_low"], row["partial_high"]) == pytest.approx(want)
+    # the Monte Carlo-specific part: each scene's partial minus its null, the half-widths
+    # of the bootstrap interval, the null's standard error and the chance correlation
+    # added in quadrature, then the scenes combined
+    z = 1.959963984540054
+    diffs = [r["rho"] - 0.1 * k for k, r in enumerate(part)]
+    halves = [
+        z * math.sqrt(((r["boot_high"] - r["boot_low"]) / (2 * z)) ** 2 + 0.01**2 + 0.02**2)
+        for r in part
+    ]
+    mean = sum(diffs) / 3
+    half = z * math.sqrt(sum((h / z) ** 2 for h in halves)) / 3
+    assert (row["mc_specific"], row["mc_specific_low"], row["mc_specific_high"]) == (
+        pytest.approx((mean, mean - half, mean + half))
+    )
+    assert row["null_partial"] == pytest.approx(0.1) and row["margin"] == 0.05
     assert row["mc_cue"] == (
-        "remains" if want[1] > 0 else "removed" if want[2] >= 0 else "reversed"
+        "remains" if mean - half > 0 else "reversed" if mean + half < 0 else "inconclusive"
     )
     assert (row["psnr"], row["psnr_low"], row["psnr_high"]) == pytest.approx(
         t_interval([20.0, 21.0, 22.0])

@@ -30,6 +30,7 @@ TINY = {
     },
     "preview": {"spp": 4},
     "mitigations": {"names": []},  # tests/test_mitigations.py runs the mitigations
+    "calibration": {"replicates": 4},
 }
 #: Jobs that depend on one non-sweep scene at the main SPP.
 SCENE_CHAIN = {"render": 1, "variance": 1, "warp": 1, "correlation": 1}
@@ -191,6 +192,8 @@ def test_editing_one_scene_reruns_only_that_scene(workdir):
             "intervention": 1,
             "intervention_table": 1,
             "margin_figure": 1,
+            "calibration_scene": 1,
+            "calibration_table": 1,
             **SUMMARIES,
             "all": 1,
         }
@@ -224,6 +227,8 @@ def test_analysis_parameter_change_renders_nothing(workdir):
         "cross_scene_table": 1,
         "spp_sweep_table": 1,
         "rho_vs_spp_figure": 1,
+        "calibration_scene": 2,
+        "calibration_table": 1,
         **SUMMARIES,
         "all": 1,
     }

@@ -670,8 +670,8 @@ AUX_SPP = MITIGATIONS["aux_spp"]
 def reference_from_moments(source):
     """Whether a source's converged reference is a moments render of each view at
     ``mitigations.reference_spp`` (a renderer with sample moments, rendering with the
-    independent sampler and the box filter), else the mean of its other seeds
-    (:func:`stereovar.jobs.mitigations.leave_one_out_quality`: audits, Cycles)."""
+    independent sampler and the box filter), else a split-half reference of its own renders
+    (:func:`stereovar.statistics.utility.split_half_quality`: audits, Cycles)."""
     from stereovar.config import moments_settings_error
 
     render = config["render"]

@@ -29,6 +29,10 @@ NONE = "none"
 SHIPPED = "|shipped"
 """Suffix of a transform's label when it is measured on what ships (:func:`shipped_stack`)."""
 
+TRANSFORM_MIN_FACTOR = 0.25
+"""The weakest planted strength passed through a transform: the finer strengths, which set
+the instrument's smallest detectable effect, run untransformed only."""
+
 CALIBRATED_METHODS = ("warp", "log", "spearman", "partial", "relative", "null_shift")
 """The statistics every replicate measures (over all valid pixels): the paper's Eq. 3, its
 robust versions, the intensity controls and a wrong alignment. The camera baselines are left
@@ -360,7 +364,8 @@ def scene_calibration(
     replicates : int
         Replicates of every design.
     strength_factors : sequence of float
-        The planted strengths, as multiples of what the renders show (:func:`render_strength`).
+        The planted strengths, as multiples of what the renders show (:func:`render_strength`);
+        a transform sees those from :data:`TRANSFORM_MIN_FACTOR` up.
     expensive_replicates : int
         Replicates of the transforms in ``expensive`` (the denoisers), which see the nulls
         and the planted cue at factor 1 only.
@@ -404,7 +409,12 @@ def scene_calibration(
             cheap_only = r >= expensive_replicates or not (
                 kind in NULL_KINDS or (kind == "planted" and factor == 1.0)
             )
-            chosen = [t for t in transforms if not (cheap_only and t in expensive)]
+            chosen = [
+                t
+                for t in transforms
+                if not (cheap_only and t in expensive)
+                and (t == NONE or kind != "planted" or factor >= TRANSFORM_MIN_FACTOR)
+            ]
             if not chosen:
                 continue
             v = variance_fields(
