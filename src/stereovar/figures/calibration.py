@@ -57,34 +57,46 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
         )
     power_ax.axhline(0.8, color="0.5", lw=0.8, ls="--")
     power_ax.set_xscale("log", base=2)
+    factors = sorted({_f(r["strength_factor"]) for r in rows if r["check"] == "power"})
+    if factors:
+        power_ax.set_xticks(factors)
+        power_ax.set_xticklabels([f"{f:g}" for f in factors])
+        power_ax.minorticks_off()
     power_ax.set_ylim(-0.03, 1.03)
     power_ax.set_xlabel("planted strength (x what the renders show)")
     power_ax.set_ylabel("power (above its matched null)")
     power_ax.set_title("Detects a planted cue", fontsize=10)
     if transforms:
-        power_ax.legend(fontsize=8, loc="lower right")
+        power_ax.legend(fontsize=8, loc="center right")
     bars = [
         r
         for r in rows
         if r["check"] == "false_positive_rate" and math.isfinite(_f(r["value"]))
     ]
-    labels = [f"{r['transform']}\n{r['kind']}, {r['rule']}" for r in bars]
+    labels = []
     for i, r in enumerate(bars):
         value = _f(r["value"])
+        above_null = r["rule"] == "above_null"
+        colour = "tab:red" if _f(r["low"]) > 0.05 else "tab:blue"
         fpr_ax.errorbar(
             i,
             value,
             yerr=[[value - _f(r["low"])], [_f(r["high"]) - value]],
-            fmt="s",
-            color="tab:red" if _f(r["low"]) > 0.05 else "tab:blue",
+            fmt="s" if above_null else "o",
+            mfc=colour if above_null else "white",
+            color=colour,
             capsize=3,
         )
+        labels.append(f"{r['transform']}: {r['kind']}")
     fpr_ax.axhline(0.05, color="0.5", lw=0.8, ls="--")
     fpr_ax.set_xticks(range(len(bars)))
     fpr_ax.set_xticklabels(labels, rotation=70, ha="right", fontsize=7)
     fpr_ax.set_ylim(-0.03, 1.03)
     fpr_ax.set_ylabel("false-positive rate")
-    fpr_ax.set_title("Calls a cue on a matched null (level 5%)", fontsize=10)
+    fpr_ax.set_title(
+        "Calls a cue on a matched null: filled, above its null (the verdict); open, above 0",
+        fontsize=9,
+    )
     fig.suptitle(f"Calibration of {method} on synthetic frames from this run", fontsize=11)
     fig.tight_layout()
     return fig
