@@ -83,7 +83,10 @@ def test_sensor_frames_are_reproducible_and_views_independent():
 
 
 def test_partial_correlation_matches_lstsq_residuals():
-    """Residual correlation is 0.5 by construction once a cubic in ln mu is removed."""
+    """Residual correlation is 0.5 by construction once the intensity relation is removed.
+
+    The control's spline space holds every cubic, so its residuals are least-squares residuals
+    orthogonal to 1, ln mu, ..., (ln mu)^3; with one knot interval they are the cubic's."""
     rng = np.random.default_rng(1)
     n = 20000
     log_mu = rng.uniform(-3, 1, size=n)
@@ -95,9 +98,13 @@ def test_partial_correlation_matches_lstsq_residuals():
     mu = np.exp(log_mu)
     ra, rb = partial_pair(np.exp(log_var_l), np.exp(log_var_r), mu, mu)
     design = np.vander(log_mu, 4)
-    for got, y in ((ra, log_var_l), (rb, log_var_r)):
+    for got, y, e in ((ra, log_var_l, e_l), (rb, log_var_r, e_r)):
         beta, *_ = np.linalg.lstsq(design, y, rcond=None)
-        np.testing.assert_allclose(got, y - design @ beta, atol=1e-8)
+        cubic = y - design @ beta
+        scale = np.linalg.norm(design, axis=0) * np.linalg.norm(got)
+        assert np.all(np.abs(design.T @ got) < 1e-9 * scale)  # orthogonal to every cubic
+        assert np.linalg.norm(got - e) < 0.05 * np.linalg.norm(e)  # the relation, removed
+        np.testing.assert_allclose(intensity_residuals(y, log_mu, intervals=1), cubic, atol=1e-8)
     assert stats.pearsonr(ra, rb)[0] == pytest.approx(0.5, abs=0.03)
     # the raw logs are dominated by intensity: far from 0.5
     assert abs(stats.pearsonr(log_var_l, log_var_r)[0] - 0.5) > 0.1

@@ -452,7 +452,7 @@ def flipped_pair(fields: AlignedFields):
 
 @register_method(
     "partial",
-    "Pearson of ln sigma^2 residuals after a cubic in ln mu, per view and region",
+    "Pearson of ln sigma^2 residuals after a spline in ln mu (knots by GCV), per view and region",
     transform=_partial,
 )
 def partial_pair(fields: AlignedFields):
