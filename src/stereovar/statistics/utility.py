@@ -143,14 +143,8 @@ def image_quality(
         relative_mse=float((sq * weight).mean() - (vv * weight).mean()),
         bias=float(diff.mean()),
     )
-    mean_r = float(rv.mean())
-    result["reference_mean"] = mean_r
-    result["relative_bias"] = result["bias"] / mean_r if mean_r != 0 else nan
-    if mse > 0:
-        result["psnr"] = 10.0 * math.log10(float(peak) ** 2 / mse)
-    else:
-        result["reason"] = NOT_ABOVE_NOISE
-    return result
+    result["reference_mean"] = float(rv.mean())
+    return _finish(result, mse, peak)
 
 
 def split_half_quality(
@@ -298,8 +292,14 @@ def split_half_quality(
         bias=float((ybar - mean_raw).mean()),
         reference_mean=float(mean_raw.mean()),
     )
+    return _finish(result, mse, peak)
+
+
+def _finish(result: dict, mse: float, peak: float) -> dict:
+    """``result`` with its relative bias (bias over the reference mean) and its PSNR, or the
+    reason there is none (an MSE not above the reference's noise)."""
     mean_r = result["reference_mean"]
-    result["relative_bias"] = result["bias"] / mean_r if mean_r != 0 else nan
+    result["relative_bias"] = result["bias"] / mean_r if mean_r != 0 else math.nan
     if mse > 0:
         result["psnr"] = 10.0 * math.log10(float(peak) ** 2 / mse)
     else:
