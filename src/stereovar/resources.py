@@ -84,6 +84,42 @@ def analysis_runtime(width: int, height: int, n_reads: int, *, attempt=1) -> int
     return _minutes(30.0 + 0.1 * n_reads * width * height / 1e6, attempt)
 
 
+CALIBRATION_SECONDS_PER_PIXEL = 0.5e-6
+"""Seconds per pixel of one synthetic image through a cheap transform and the statistics
+(measured about 0.2 us at 320x180, N = 8, on one core; twice that for a loaded node)."""
+
+DENOISE_SECONDS_PER_PIXEL = 5e-6
+"""Seconds per pixel of one OIDN image on one thread (measured 0.17-0.37 s at 320x180)."""
+
+
+def calibration_runtime(
+    width: int,
+    height: int,
+    n_seeds: int,
+    *,
+    replicates: int,
+    designs: int,
+    transforms: int,
+    denoised_replicates: int = 0,
+    denoisers: int = 0,
+    attempt=1,
+) -> int:
+    """Wall-time request (minutes) of one scene's calibration: every replicate draws
+    :math:`2N` images per design and transform (plus :math:`N/2` for what a seed-mean
+    transform ships) and measures them; each denoiser sees 3 designs in
+    ``denoised_replicates`` replicates at OIDN's cost per image.
+
+    .. math::
+
+        t = 30 + WH\,\bigl(c\, R\, D\, T \cdot 2.5 N + c_{\text{OIDN}}\, R_d \cdot 3
+            \cdot T_d \cdot 2N\bigr)
+    """
+    pixels = int(width) * int(height)
+    cheap = CALIBRATION_SECONDS_PER_PIXEL * replicates * designs * transforms * 2.5 * n_seeds
+    denoise = DENOISE_SECONDS_PER_PIXEL * denoised_replicates * 3 * denoisers * 2 * n_seeds
+    return _minutes(30.0 + pixels * (cheap + denoise), attempt)
+
+
 def intervention_runtime(
     width: int, height: int, n_seeds: int, n_disparities: int, *, attempt=1
 ) -> int:

@@ -23,7 +23,7 @@ rule calibration_scene:
         "benchmarks/{renderer}/seeds/calibration/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
-        **analysis_resources(images=4 * N_SEEDS + 16, n_reads=4),
+        **calibration_resources(),
     conda:
         ENV
     script:

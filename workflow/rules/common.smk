@@ -828,6 +828,28 @@ def calibration_options():
     }
 
 
+def calibration_resources():
+    """Memory (every frame of both views, the transformed stacks and the renders: 4N + 16
+    images) and runtime (:func:`stereovar.resources.calibration_runtime`) of one scene's
+    calibration."""
+    cal = config["calibration"]
+    denoisers = [
+        t for t in CALIBRATION_TRANSFORMS[1:] if get_transform(t).expensive
+    ]
+    runtime = lambda wildcards, attempt: sizing.calibration_runtime(
+        WIDTH,
+        HEIGHT,
+        N_SEEDS,
+        replicates=int(cal["replicates"]),
+        designs=2 + len(cal["strengths"]),
+        transforms=len(CALIBRATION_TRANSFORMS) - len(denoisers),
+        denoised_replicates=int(cal["denoised_replicates"]),
+        denoisers=len(denoisers),
+        attempt=attempt,
+    )
+    return {**analysis_resources(images=4 * N_SEEDS + 16, n_reads=2 * N_SEEDS), "runtime": runtime}
+
+
 def calibration_scene_inputs(wildcards):
     """One scene's seeds variance store and ground truth, and each view's auxiliary passes
     when a calibrated transform reads them and the source renders them."""
