@@ -75,6 +75,12 @@ DEFAULTS = {
         "max_mem_mb": None,
     },
     "preview": {"spp": 32},
+    "calibration": {
+        "replicates": 16,
+        "denoised_replicates": 4,
+        "strengths": [0.0625, 0.125, 0.25, 1.0, 2.0],
+        "seed": 0,
+    },
     "validation": {"n_seeds": 64, "spp": None},
     "export": {"formats": ["exr"]},
     "mitigations": {
@@ -145,7 +151,7 @@ BAD_CONFIGS = [
             "'colour'",
             "not known",
             "scenes, generator, resolution, rig, renderers, render, analysis, controls, "
-            "validation, export, audit, intervention, cluster, preview",
+            "calibration, validation, export, audit, intervention, cluster, preview",
         ],
         id="unknown-top-level-key",
     ),

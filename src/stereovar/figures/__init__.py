@@ -14,6 +14,8 @@ The caller saves the figure; nothing here reads or writes results.
     One scene's variance fields from every renderer, side by side.
 ``mitigations``
     The cue each mitigation leaves against its image-quality cost.
+``calibration``
+    Each rule's power on a planted cue and its false-positive rate on the matched nulls.
 ``probe``
     The learned probe's accuracy on each test input, per training condition.
 ``preview``
