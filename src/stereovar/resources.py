@@ -111,8 +111,8 @@ def calibration_runtime(
 
     .. math::
 
-        t = 30 + WH\,\bigl(c\, R\, D\, T \cdot 2.5 N + c_{\text{OIDN}}\, R_d \cdot 3
-            \cdot T_d \cdot 2N\bigr)
+        t = 30 + WH\\,\\bigl(c\\, R\\, D\\, T \\cdot 2.5 N + c_{\\text{OIDN}}\\, R_d \\cdot 3
+            \\cdot T_d \\cdot 2N\\bigr)
     """
     pixels = int(width) * int(height)
     cheap = CALIBRATION_SECONDS_PER_PIXEL * replicates * designs * transforms * 2.5 * n_seeds
