@@ -132,7 +132,12 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     assert open_dataset(base / "denoise/renders/f00/left/spp0/seeds0-15.zarr").attrs[
         "transform_aux"] == "none"
     page = (base / "verdict.md").read_text()
-    assert "## Mitigations" in page and "denoise: intensity-controlled rho" in page
+    assert "## Mitigations" in page and "denoise: Monte Carlo-specific rho" in page
+    # the calibration step: its table, and its sentence on the page and in the summary
+    assert (base / "tables/calibration.csv").is_file()
+    assert summary["calibration"].startswith("On data like yours") and summary[
+        "calibration"] in page
+    assert rows[("Monte Carlo-specific rho", "all")]["low"] > 0
     assert "figures/mitigations.png" in page and (base / "figures/mitigations.png").is_file()
     assert summary["mitigations"][-1] in page
     # audit.probe: networks trained on one frame and tested on the other, for the baseline,

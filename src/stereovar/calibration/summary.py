@@ -49,6 +49,10 @@ COVERAGE_TARGET = (0.93, 0.97)
 POWER = 0.8
 """The power at which a strength counts as detectable."""
 
+MARGIN_REPLICATES = 8
+"""Fewest replicates of the scenes combined whose power curve sets a transform's equivalence
+margin; with fewer (the denoisers' few replicates), the scenes' pooled curve sets it."""
+
 Z = float(stats.norm.ppf(0.975))
 
 CALIBRATION_TABLE_COLUMNS = [
@@ -69,7 +73,7 @@ CALIBRATION_TABLE_COLUMNS = [
 ]
 """Columns of ``results/tables/calibration.*``."""
 
-NULL_COLUMNS = [
+NULL_COLUMNS = [  # margin: the equivalence margin of the row's transform and statistic
     "scene",
     "transform",
     "region",
@@ -399,7 +403,9 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             if math.isfinite(smallest):
                 # the mean Monte Carlo-specific rho at the detectable strength: interpolated
                 margin = _interpolated_diff(by_design, smallest)
-            margins[(scope, transform, method)] = margin
+            replicates = max((len(v) for k, v in by_design.items() if k[0] == "planted"),
+                             default=0)
+            margins[(scope, transform, method)] = (margin, replicates)
             add("smallest_detectable", "above_null", scope, transform, method, "planted",
                 smallest, (smallest, math.nan, math.nan), sum(len(v) for v in by_design.values()),
                 "", "", f"equivalence margin (mean rho minus null there) {margin:.4f}"
@@ -429,6 +435,14 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                     r = rate(k, n)
                     add("coverage", what, scope, transform, method, kind, factor, r, n,
                         "0.95 +/- 0.02", _meets_coverage(r))
+    def margin_of(transform, method):
+        """The combined scope's margin when at least :data:`MARGIN_REPLICATES` replicates
+        set it, else the pooled scenes'."""
+        combined, n = margins.get(("combined", transform, method), (math.nan, 0))
+        if n >= MARGIN_REPLICATES:
+            return combined
+        return margins.get(("scene", transform, method), (math.nan, 0))[0]
+
     nulls = []
     for (scene, transform, region_, method), null in null_means.items():
         nulls.append(
@@ -441,7 +455,7 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                 "null_se": null["se"],
                 "n": null["n"],
                 "chance_sd": null["chance_sd"],
-                "margin": margins.get(("combined", transform, method), math.nan),
+                "margin": margin_of(transform, method),
             }
         )
     return table, nulls

@@ -6,7 +6,7 @@ from .common import log
 
 DEFAULTS = {
     "replicates": 16,
-    "denoised_replicates": 4,
+    "denoised_replicates": 2,
     "strengths": [0.0625, 0.125, 0.25, 1.0, 2.0],
     "seed": 0,
 }

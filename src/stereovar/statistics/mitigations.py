@@ -20,8 +20,9 @@ transform can make pure camera noise look like a cue (a denoiser's variance foll
 contrast, which both views share), and only the difference is Monte Carlo's. ``mc_cue``:
 ``remains`` when the difference's interval lies above 0, ``reversed`` below 0, ``removed``
 when it lies inside the equivalence margin (``margin``: the Monte Carlo-specific
-:math:`\\rho` that the calibration detects with 80% power on untransformed frames), else
-``inconclusive`` (an interval that merely covers 0 is no evidence of removal).
+:math:`\\rho` that the calibration detects with 80% power through the same transform; none
+when no planted strength reaches that power through it), else ``inconclusive`` (an interval
+that merely covers 0 is no evidence of removal).
 
 A transform that builds its images from the seed mean (``sensor_only``, ``equalise``) hides
 the seed mean's Monte Carlo noise from Eq. 1 over its :math:`N` outputs;
@@ -202,11 +203,15 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
     return (float(np.mean(null_values)), *combined_interval(diffs, lows, highs))
 
 
-def equivalence_margin(nulls, method="partial") -> float:
-    """The margin of ``removed``: the calibration's detectable Monte Carlo-specific
-    :math:`\\rho` on untransformed frames (the nulls' ``margin`` of transform ``none``)."""
+def equivalence_margin(nulls, transform: str = "none", method="partial") -> float:
+    """The margin of ``removed`` for rows measured through ``transform``: the Monte
+    Carlo-specific :math:`\\rho` that the calibration detects with 80% power through that
+    transform (the nulls' ``margin``). NaN when no planted strength reaches 80% power
+    through it: the instrument cannot then show that the cue is gone."""
     for r in nulls:
-        if (r["transform"], r["method"]) == ("none", method) and math.isfinite(_f(r["margin"])):
+        if (r["transform"], r["method"]) == (transform, method) and math.isfinite(
+            _f(r.get("margin"))
+        ):
             return _f(r["margin"])
     return math.nan
 
@@ -300,9 +305,10 @@ def mitigation_table(
             )
             row["null_partial"] = null
             row["mc_specific"], row["mc_specific_low"], row["mc_specific_high"] = diff
-            row["margin"] = equivalence_margin(nulls or [])
+            matched = run.get("calibration_transform", "none")
+            row["margin"] = equivalence_margin(nulls or [], matched)
             row["mc_cue"] = mc_cue_state(diff[1], diff[2], row["margin"])
-            label = run.get("calibration_transform", "none") + "|shipped"
+            label = matched + "|shipped"
             _, *ships = matched_difference(
                 [r for r in shipped or [] if r["transform"] == label],
                 nulls or [],
@@ -316,6 +322,7 @@ def mitigation_table(
             ) = ships
             if all(math.isfinite(x) for x in ships):
                 # what a team ships decides: the seed mean's Monte Carlo noise counts
+                row["margin"] = equivalence_margin(nulls or [], label)
                 row["mc_cue"] = mc_cue_state(ships[1], ships[2], row["margin"])
             lift = (
                 wta_lift(run["intervention"], "render", region)
@@ -382,8 +389,9 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     ...      "psnr_high": 29.0},
     ... ]
     >>> print(mitigation_findings(rows)[-1])  # doctest: +NORMALIZE_WHITESPACE
-    Removes the Monte Carlo-specific part (its interval inside +/-0.020): sensor_only (PSNR
-    28.00 dB [27.00, 29.00] against 30.00 dB [29.00, 31.00] as rendered).
+    Removes the Monte Carlo-specific part (its interval inside the calibration's equivalence
+    margin): sensor_only (PSNR 28.00 dB [27.00, 29.00] against 30.00 dB [29.00, 31.00] as
+    rendered).
     """
     chosen = [r for r in rows if r["region"] == region]
     base = next((r for r in chosen if r["mitigation"] == "none"), None)
@@ -396,7 +404,7 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
             f"{_iv(r, 'residual_rho_zero')}, PSNR {_iv(r, 'psnr', ' dB', 2)}"
         )
     margins = [_f(r.get("margin")) for r in chosen if math.isfinite(_f(r.get("margin")))]
-    within = f" (its interval inside +/-{margins[0]:.3f})" if margins else ""
+    within = " (its interval inside the calibration's equivalence margin)" if margins else ""
     removing = [r for r in chosen if r["mitigation"] != "none" and r["mc_cue"] == "removed"]
     unclear = [r["mitigation"] for r in chosen if r["mc_cue"] in ("inconclusive", "n/a")]
     if not removing:
