@@ -267,3 +267,18 @@ def test_matched_difference_subtracts_each_scenes_null():
     half = 1.96 * math.sqrt(2 * (0.02 / 1.959963984540054) ** 2) / 2
     assert (low, high) == pytest.approx((0.01 - half, 0.01 + half), rel=1e-3)
     assert mc_cue_state(low, high, 0.03) == "removed"
+
+
+def test_the_results_page_shows_the_calibration_sentence():
+    from stereovar.pages.results import page_sections, to_html_page
+
+    sentence = headline([
+        {"check": "false_positive_rate", "rule": "above_null", "scope": "scene",
+         "transform": "none", "method": "partial", "kind": "camera", "value": 0.02,
+         "low": 0.0, "high": 0.08, "n": 64},
+    ])
+    sections = page_sections(summary={}, claims=[], claims_text="", rules=[], figures=[],
+                             tables=[], calibration=sentence)
+    page = to_html_page(sections)
+    assert "2% of the time per scene [0, 8]" in sentence and sentence in page
+    assert 'id="headline"' in page and page.index(sentence) < page.index('id="claims"')

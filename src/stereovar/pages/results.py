@@ -112,6 +112,7 @@ code {{ font-size: 0.92em; background: #f3f3f3; padding: 0 0.2em; border-radius:
 .headline {{ display: flex; flex-wrap: wrap; gap: 1.5em; align-items: flex-start;
   border: 1px solid #ccc; border-radius: 6px; padding: 0.8em 1.2em; }}
 .headline .rho {{ flex: 0 0 17em; }}
+.headline .calibration {{ flex: 1 0 100%; margin: 0; font-size: 0.92em; }}
 .headline .what {{ color: #555; font-size: 0.9em; margin: 0; }}
 .headline .value {{ font-size: 2.3em; font-weight: 600; margin: 0.1em 0 0; }}
 .headline .interval {{ font-size: 1.15em; margin: 0 0 0.4em; }}
@@ -417,7 +418,6 @@ def _headline_html(s: dict) -> str:
         + (f"; mean over {_e(n)} scenes" if n not in (None, "") else "")
         + ". Read it against the controls beside it.</p>"
         + (f'<p class="tally"><a href="#claims">Claims</a>: {_e(tally)}.</p>' if tally else "")
-        + (f'<p class="calibration">{_e(s["calibration"])}</p>' if s.get("calibration") else "")
         + "</div>"
     )
     head = "".join(f"<th>{_e(label)}</th>" for label in REGIONS.values())
@@ -438,7 +438,15 @@ def _headline_html(s: dict) -> str:
         + (f'<p class="notes">{notes}.</p>' if notes else "")
         + "</div>"
     )
-    return f'<section id="headline" class="headline">{left}{controls}</section>'
+    calibration = (
+        f'<p class="calibration"><b>Calibration</b>: {_e(s["calibration"])} '
+        '(<code>tables/calibration.md</code>)</p>'
+        if s.get("calibration")
+        else ""
+    )
+    return (
+        f'<section id="headline" class="headline">{left}{controls}{calibration}</section>'
+    )
 
 
 def _claims_html(s: dict) -> str:
