@@ -144,6 +144,7 @@ figcaption {{ font-size: 0.9em; color: #333; max-width: 70em; }}
 figcaption p {{ margin: 0.3em 0; }}
 h3.group {{ color: #555; font-weight: 600; font-size: 1em; margin: 1.2em 0 0; }}
 table.links td {{ white-space: normal; }}
+table.mitigations td {{ white-space: normal; vertical-align: top; }}
 table.links a {{ margin-right: 0.6em; }}
 """
 

@@ -397,8 +397,11 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     base = next((r for r in chosen if r["mitigation"] == "none"), None)
     lines = []
     for r in chosen:
+        ships = ""
+        if math.isfinite(_f(r.get("shipped_mc_specific"))):
+            ships = f", {_iv(r, 'shipped_mc_specific')} in what it ships"
         lines.append(
-            f"{r['mitigation']}: Monte Carlo-specific rho {_iv(r, 'mc_specific')} "
+            f"{r['mitigation']}: Monte Carlo-specific rho {_iv(r, 'mc_specific')}{ships} "
             f"({r['mc_cue']}; intensity-controlled rho minus its matched null "
             f"{_f(r.get('null_partial')):.3f}), residual correlation at zero disparity "
             f"{_iv(r, 'residual_rho_zero')}, PSNR {_iv(r, 'psnr', ' dB', 2)}"
@@ -410,7 +413,11 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     if not removing:
         lines.append(
             "No mitigation measured here is shown to remove the Monte Carlo-specific part"
-            + (f"{within}." if within else " (no equivalence margin: run the calibration).")
+            + (
+                " (that needs its interval inside the calibration's equivalence margin)."
+                if within
+                else " (no equivalence margin: run the calibration)."
+            )
         )
     else:
         removing.sort(key=lambda r: -_f(r.get("psnr")) if math.isfinite(_f(r.get("psnr"))) else 1e9)
@@ -486,10 +493,10 @@ def headline_table(rows: list[dict], region: str = "all") -> list[dict]:
     out = []
     chosen = [r for r in rows if r["region"] == region]
     for r in chosen:
-        psnr = _iv(r, "psnr", " dB", 2)
+        psnr = _iv(r, "psnr", " dB", 1)
         budget, how = equal_budget_psnr(chosen, r)
         if r["mitigation"] != "none" and math.isfinite(budget) and r.get("kind") != "spp":
-            psnr += f" vs {budget:.2f} dB ({how})"
+            psnr += f"; {budget:.1f} dB at equal budget ({how})"
         null = _f(r.get("null_partial"))
         lift = _iv(r, "cs_lift")
         out.append(
