@@ -51,7 +51,7 @@ ROWS = (
     ("log", "log-Pearson rho", "robust to fireflies"),
     ("trimmed", "Pearson rho without the top 0.1%", "robust to fireflies"),
     ("partial", "intensity-controlled rho", "the Monte Carlo-specific part"),
-    ("relative", "rho of sigma^2 / mu^2", "intensity control"),
+    ("relative", "rho of sigma^2 / mu^2", "not a Monte Carlo test: fails the calibration"),
     ("sensor_sim", "camera baseline: simulated sensor, same N", "what a camera shows"),
     ("sensor", "camera baseline: analytic a*mu + b", "what a camera shows"),
     ("no_warp", "null: no warp", "alignment control"),
