@@ -318,10 +318,11 @@ def mitigation_rows(source: str, estimator: str, scene: str, spp, transform: str
     return f"{run_prefix(source, estimator, transform)}/mitigation/{scene}/spp{spp}.csv"
 
 
-def calibration_rows(source: str, scene: str, spp) -> str:
+def calibration_rows(source: str, estimator: str, scene: str, spp) -> str:
     """One scene's calibration replicates (synthetic nulls and planted cues through every
-    transform and statistic): ``results/{source}/seeds/calibration/{scene}/spp{spp}.csv``."""
-    return f"{run_prefix(source, 'seeds')}/calibration/{scene}/spp{spp}.csv"
+    transform and statistic), drawn as the estimator's variance store was:
+    ``results/{source}/{estimator}/calibration/{scene}/spp{spp}.csv``."""
+    return f"{run_prefix(source, estimator)}/calibration/{scene}/spp{spp}.csv"
 
 
 def calibration_tables(source: str | None = None) -> list[str]:

@@ -10,7 +10,7 @@ rule calibration_scene:
     input:
         unpack(calibration_scene_inputs),
     output:
-        layout.calibration_rows("{renderer}", "{scene}", "{spp}"),
+        layout.calibration_rows("{renderer}", "{estimator}", "{scene}", "{spp}"),
     params:
         transforms=CALIBRATION_TRANSFORMS,
         options=calibration_options(),
@@ -18,9 +18,9 @@ rule calibration_scene:
         analysis=config["analysis"],
         controls=config["controls"],
     log:
-        "logs/{renderer}/seeds/calibration/{scene}/spp{spp}.log",
+        "logs/{renderer}/{estimator}/calibration/{scene}/spp{spp}.log",
     benchmark:
-        "benchmarks/{renderer}/seeds/calibration/{scene}/spp{spp}.tsv"
+        "benchmarks/{renderer}/{estimator}/calibration/{scene}/spp{spp}.tsv"
     threads: 1
     resources:
         **calibration_resources(),

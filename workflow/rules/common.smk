@@ -814,6 +814,13 @@ CALIBRATION_TRANSFORMS = [
     "none",
     *dict.fromkeys(r.transform for r in MITIGATION_RUNS if r.mitigation.kind == "transform"),
 ]
+# The variance store it is drawn like: the seeds estimator's where the mitigation rows (or an
+# audit) have one, else the run's own estimator's (a moments run renders no seeds for it).
+CALIBRATION_ESTIMATOR = (
+    MITIGATION_ESTIMATOR if (AUDIT or MITIGATION_RUNS) else get_estimator()
+)
+# The frames per view of every replicate: N seeds, or the moments estimator's samples.
+CALIBRATION_DRAWS = N_SEEDS if CALIBRATION_ESTIMATOR == "seeds" else MAIN_SPP
 CALIBRATION_TABLES = layout.calibration_tables(MITIGATION_SOURCE)
 CALIBRATION_NULLS = layout.calibration_nulls(MITIGATION_SOURCE)
 CALIBRATION_FIGURE = layout.calibration_figure(MITIGATION_SOURCE)
@@ -830,8 +837,8 @@ def calibration_options():
 
 def calibration_resources():
     """Memory (every frame of both views, the transformed stacks and the renders: 4N + 16
-    images) and runtime (:func:`stereovar.resources.calibration_runtime`) of one scene's
-    calibration."""
+    images, N the frames drawn per view) and runtime
+    (:func:`stereovar.resources.calibration_runtime`) of one scene's calibration."""
     cal = config["calibration"]
     denoisers = [
         t for t in CALIBRATION_TRANSFORMS[1:] if get_transform(t).expensive
@@ -839,7 +846,7 @@ def calibration_resources():
     runtime = lambda wildcards, attempt: sizing.calibration_runtime(
         WIDTH,
         HEIGHT,
-        N_SEEDS,
+        CALIBRATION_DRAWS,
         replicates=int(cal["replicates"]),
         designs=2 + len(cal["strengths"]),
         transforms=len(CALIBRATION_TRANSFORMS) - len(denoisers),
@@ -847,7 +854,10 @@ def calibration_resources():
         denoisers=len(denoisers),
         attempt=attempt,
     )
-    return {**analysis_resources(images=4 * N_SEEDS + 16, n_reads=2 * N_SEEDS), "runtime": runtime}
+    return {
+        **analysis_resources(images=4 * CALIBRATION_DRAWS + 16, n_reads=2 * CALIBRATION_DRAWS),
+        "runtime": runtime,
+    }
 
 
 def calibration_scene_inputs(wildcards):
@@ -855,7 +865,9 @@ def calibration_scene_inputs(wildcards):
     when a calibrated transform reads them and the source renders them."""
     source = wildcards.renderer
     inputs = {
-        "variance": layout.variance_store(source, "seeds", wildcards.scene, wildcards.spp),
+        "variance": layout.variance_store(
+            source, wildcards.estimator, wildcards.scene, wildcards.spp
+        ),
         "ground_truth": ground_truth_input(wildcards),
     }
     wants = set()
@@ -865,7 +877,7 @@ def calibration_scene_inputs(wildcards):
     if wants and wants <= set(source_aux_passes(source)):
         for view in VIEWS:
             inputs[f"aux_{view}"] = layout.aux_store(source, wildcards.scene, view)
-    if any(reads_seed_mean(t) for t in CALIBRATION_TRANSFORMS):
+    if wildcards.estimator == "seeds" and any(reads_seed_mean(t) for t in CALIBRATION_TRANSFORMS):
         stores = seed_stores(run_config(source), wildcards.scene, wildcards.spp)
         inputs.update({f"renders_{view}": paths for view, paths in stores.items()})
     return inputs
@@ -873,7 +885,10 @@ def calibration_scene_inputs(wildcards):
 
 def calibration_table_inputs():
     """Every scene's calibration replicates."""
-    return [layout.calibration_rows(MITIGATION_SOURCE, s, MAIN_SPP) for s in SCENES]
+    return [
+        layout.calibration_rows(MITIGATION_SOURCE, CALIBRATION_ESTIMATOR, s, MAIN_SPP)
+        for s in SCENES
+    ]
 
 
 def calibration_targets():

@@ -57,7 +57,8 @@ def scene_frames(variance, ground_truth, aux=None):
         ground_truth=truth,
         glass=gt["glass"].sel(view="left").transpose("y", "x").values.astype(bool),
         sign=int(gt.attrs["disparity_sign"]),
-        n_seeds=int(v.attrs["n_seeds"]),
+        # the frames per view: N seeds, or the samples the moments estimator drew
+        n_seeds=int(v.attrs.get("n_draws", v.attrs["n_seeds"])),
         label=f"{v.attrs['scene']}|spp{int(v.attrs['spp'])}",
         aux=passes,
     )
