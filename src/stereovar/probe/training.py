@@ -23,6 +23,7 @@ Importing this module imports PyTorch (the ``probe`` extra).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -86,12 +87,15 @@ class TrainSettings:
 class TrainingFrame:
     """One training pair: network inputs ``left`` and ``right`` (H, W) float32
     (:func:`stereovar.probe.inputs.network_input`), the left view's ``disparity`` (H, W),
-    NaN outside the scored set, and the ground truth's ``sign``."""
+    NaN outside the scored set, the ground truth's ``sign``, and ``redraw``: for a cue-blind
+    twin, a function of a generator that returns a fresh right input (the right render's
+    residual drawn again), used at every draw in place of ``right``."""
 
     left: np.ndarray
     right: np.ndarray
     disparity: np.ndarray
     sign: int
+    redraw: Callable[[np.random.Generator], np.ndarray] | None = None
 
     def __post_init__(self):
         shapes = {np.shape(self.left), np.shape(self.right), np.shape(self.disparity)}
@@ -99,6 +103,21 @@ class TrainingFrame:
             raise ValueError(f"a training frame needs three (H, W) arrays, got {sorted(shapes)}")
         if int(self.sign) not in (1, -1):
             raise ValueError(f"sign must be 1 or -1, got {self.sign}")
+
+    def right_input(self, rng: np.random.Generator) -> np.ndarray:
+        """The right network input of one draw: ``redraw(rng)`` (a cue-blind twin's frame,
+        whose right residual is drawn again at every use), else the fixed ``right``.
+
+        Examples
+        --------
+        >>> z = np.zeros((2, 3), np.float32)
+        >>> TrainingFrame(z, z, z, 1).right_input(np.random.default_rng(0)) is z
+        True
+        >>> twin = TrainingFrame(z, z, z, 1, redraw=lambda rng: z + rng.integers(1, 2))
+        >>> float(twin.right_input(np.random.default_rng(0)).max())
+        1.0
+        """
+        return self.right if self.redraw is None else self.redraw(rng)
 
 
 def hinge_loss(s_pos: torch.Tensor, s_neg: torch.Tensor, margin: float) -> torch.Tensor:
