@@ -180,3 +180,19 @@ def test_stratified_shuffle_moves_every_residual_away():
     yy, xx = np.indices((h, w))
     assert np.maximum(abs(sy - yy), abs(sx - xx)).min() >= 8
     assert sorted(out.ravel()) == sorted(index.ravel())
+
+
+def test_tile_sums_count_predictions_at_zero():
+    from stereovar.probe.scoring import SUMS, tile_sums
+
+    rng = np.random.default_rng(0)
+    d_gt = rng.integers(0, 6, (20, 30)).astype(float)
+    d_hat = rng.choice([0.0, 0.3, -0.4, 0.5, 1.0, 2.0, np.nan], size=(20, 30))
+    mask = rng.random((20, 30)) < 0.8
+    labels = np.arange(20 * 30).reshape(20, 30) // 100
+    sums = tile_sums(d_hat, d_gt, mask, labels, conflict_shift=3)
+    assert "zero" in SUMS
+    for i, tile in enumerate(sums["tile"]):
+        sel = (labels == tile) & mask & np.isfinite(d_hat)
+        brute = sum(abs(v) < 0.5 for v in d_hat[sel])
+        assert sums["zero"][i] == brute

@@ -7,11 +7,14 @@ disparity :math:`d` and a prediction (the network's border has none):
 
     \\mathrm{hit} = [\\,|\\hat d - d| < 1\\,], \\qquad
     \\mathrm{EPE} = |\\hat d - d|, \\qquad
-    \\mathrm{pulled} = [\\,|\\hat d - (d + k)| < 1\\,],
+    \\mathrm{pulled} = [\\,|\\hat d - (d + k)| < 1\\,], \\qquad
+    \\mathrm{zero} = [\\,|\\hat d| < 0.5\\,],
 
-the last for the cue-conflict input, whose right residual lines up at :math:`d + k`. The
-sums are kept per bootstrap tile (:func:`stereovar.statistics.bootstrap.tile_labels`), so
-that intervals can resample tiles (:mod:`stereovar.probe.metrics`).
+``pulled`` for the cue-conflict input, whose right residual lines up at :math:`d + k`;
+``zero`` the predictions at :math:`\\hat d = 0` (disparities are integers or rounded to
+within half a pixel). The sums are kept per bootstrap tile
+(:func:`stereovar.statistics.bootstrap.tile_labels`), so that intervals can resample tiles
+(:mod:`stereovar.probe.metrics`).
 
 Importing this module pulls in only numpy.
 """
@@ -22,8 +25,9 @@ import numpy as np
 
 __all__ = ["SUMS", "tile_sums"]
 
-SUMS = ("n", "hits", "abs_error", "pulled")
-"""The per-tile sums: scored pixels, hits, summed end-point error, pixels pulled to d + k."""
+SUMS = ("n", "hits", "abs_error", "pulled", "zero")
+"""The per-tile sums: scored pixels, hits, summed end-point error, pixels pulled to d + k,
+pixels predicted at zero disparity."""
 
 
 def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
@@ -52,8 +56,8 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
     ...               np.array([[0, 0, 1, 1]]), conflict_shift=3)
     >>> s["tile"].tolist(), s["n"].tolist(), s["hits"].tolist(), s["pulled"].tolist()
     ([0, 1], [2, 1], [1, 1], [1, 0])
-    >>> s["abs_error"].tolist()
-    [3.0, 0.0]
+    >>> s["abs_error"].tolist(), s["zero"].tolist()
+    ([3.0, 0.0], [0, 0])
     """
     d_hat = np.asarray(d_hat, dtype=np.float64)
     d_gt = np.asarray(d_gt, dtype=np.float64)
@@ -68,6 +72,7 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
     tiles = labels[scored]
     err = np.abs(d_hat[scored] - d_gt[scored])
     pulled = np.abs(d_hat[scored] - d_gt[scored] - int(conflict_shift)) < 1
+    zero = np.abs(d_hat[scored]) < 0.5
     used, inverse = np.unique(tiles, return_inverse=True)
     k = used.size
     return {
@@ -76,4 +81,5 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
         "hits": np.bincount(inverse, weights=err < 1, minlength=k).astype(np.int64),
         "abs_error": np.bincount(inverse, weights=err, minlength=k),
         "pulled": np.bincount(inverse, weights=pulled, minlength=k).astype(np.int64),
+        "zero": np.bincount(inverse, weights=zero, minlength=k).astype(np.int64),
     }
