@@ -23,6 +23,7 @@ __all__ = [
     "MatchingNet",
     "border",
     "dense_features",
+    "predict_matcher",
     "score_volume",
     "wta_disparity",
     "wta_from_features",
@@ -83,6 +84,17 @@ class MatchingNet(nn.Module):
         self.features = int(features)
         self.layers = int(layers)
         self.kernel = int(kernel)
+
+    def config(self) -> dict:
+        """The constructor's keyword arguments: ``MatchingNet(**net.config())`` builds the
+        same architecture.
+
+        Examples
+        --------
+        >>> MatchingNet(features=8, layers=2).config()
+        {'features': 8, 'layers': 2, 'kernel': 3}
+        """
+        return {"features": self.features, "layers": self.layers, "kernel": self.kernel}
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """Unit features of a batch of grey images (B, 1, H, W) -> (B, F, H - 8, W - 8)."""
@@ -218,4 +230,127 @@ def wta_from_features(
     volume = score_volume(feat_left, feat_right, sign=sign, max_disparity=max_disparity)
     out = np.full((h + 2 * b, w + 2 * b), np.nan)
     out[b : b + h, b : b + w] = volume.argmax(0).cpu().numpy().astype(np.float64)
+    return out
+
+
+CHUNK_PIXELS = 2_000_000
+"""Image pixels per forward pass of :func:`predict_matcher` (bounds its memory: about
+``CHUNK_PIXELS * features * 4`` bytes per activation, 0.5 GB at the default 64 maps)."""
+
+
+@torch.no_grad()
+def batch_features(net: MatchingNet, images, *, chunk_pixels: int = CHUNK_PIXELS) -> torch.Tensor:
+    """Features of a stack of grey images of one shape, in forward passes of at most
+    ``chunk_pixels`` image pixels (at least one image each).
+
+    Parameters
+    ----------
+    net : MatchingNet
+    images : sequence of numpy.ndarray, shape (H, W)
+    chunk_pixels : int, keyword-only
+
+    Returns
+    -------
+    torch.Tensor, shape (B, F, H - 2b, W - 2b)
+        On the network's device.
+    """
+    device = next(net.parameters()).device
+    stack = torch.from_numpy(np.ascontiguousarray(np.stack(images), dtype=np.float32))[:, None]
+    per = max(1, int(chunk_pixels) // max(1, stack.shape[2] * stack.shape[3]))
+    net = net.eval()
+    return torch.cat([net(stack[i : i + per].to(device)) for i in range(0, len(stack), per)])
+
+
+@torch.no_grad()
+def _wta_batch(feat_left, feat_right, *, sign: int, max_disparity: int) -> torch.Tensor:
+    """Winner-take-all disparity index (B, h, w) of batched features (B, F, h, w): the first
+    :math:`d` of the highest score, as :func:`score_volume` then ``argmax`` gives it."""
+    _, _, h, w = feat_left.shape
+    best = (feat_left * feat_right).sum(1)
+    arg = torch.zeros(best.shape, dtype=torch.int64, device=best.device)
+    for d in range(1, min(int(max_disparity), w - 1) + 1):
+        score = torch.full_like(best, -torch.inf)
+        if sign > 0:
+            score[..., : w - d] = (feat_left[..., : w - d] * feat_right[..., d:]).sum(1)
+        else:
+            score[..., d:] = (feat_left[..., d:] * feat_right[..., : w - d]).sum(1)
+        better = score > best  # strict: ties keep the smaller d, as argmax does
+        best = torch.where(better, score, best)
+        arg = torch.where(better, torch.full_like(arg, d), arg)
+    return arg
+
+
+def predict_matcher(
+    net: MatchingNet, pairs, *, sign: int, max_disparity: int, chunk_pixels: int = CHUNK_PIXELS
+) -> list[np.ndarray]:
+    """:func:`wta_disparity` of many pairs at once: the features of every distinct image of
+    the pairs in batched forward passes, then the winner-take-all scan of all pairs together.
+
+    .. math::
+
+        \\hat d_k(x, y) = \\arg\\max_{0 \\le d \\le D}
+            \\langle f(L_k)(x, y),\\, f(R_k)(x + s d, y) \\rangle
+
+    An image passed in several pairs (the same array object, e.g. a left render shared by
+    several counterfactual inputs) goes through the network once.
+
+    Parameters
+    ----------
+    net : MatchingNet
+    pairs : sequence of (left, right)
+        Network inputs (H, W) float32 (:func:`stereovar.probe.inputs.network_input`); pairs of
+        one shape are batched together.
+    sign : {1, -1}, keyword-only
+        :math:`s` (right pixel at :math:`x + s d`).
+    max_disparity : int, keyword-only
+        :math:`D`.
+    chunk_pixels : int, keyword-only
+        Image pixels per forward pass (:data:`CHUNK_PIXELS`).
+
+    Returns
+    -------
+    list of numpy.ndarray, float64, shape (H, W)
+        :math:`\\hat d` of each pair, NaN in the :func:`border`; on the CPU.
+
+    Examples
+    --------
+    >>> net = MatchingNet(features=4, layers=1)
+    >>> x = np.random.default_rng(0).standard_normal((6, 12)).astype(np.float32)
+    >>> out = predict_matcher(net, [(x, x), (x, x)], sign=1, max_disparity=2)
+    >>> len(out), out[0].shape, bool((out[0][1:-1, 1:-1] == 0).all())
+    (2, (6, 12), True)
+    """
+    sign = int(sign)
+    if sign not in (1, -1):
+        raise ValueError(f"sign must be 1 or -1, got {sign}")
+    pairs = [(np.asarray(a), np.asarray(b)) for a, b in pairs]
+    for a, b in pairs:
+        if a.shape != b.shape or a.ndim != 2:
+            raise ValueError(
+                f"left and right must be grey images of one shape, got {a.shape} and {b.shape}"
+            )
+    b_px = border(net.layers, net.kernel)
+    out: list = [None] * len(pairs)
+    for shape in dict.fromkeys(a.shape for a, _ in pairs):
+        members = [k for k, (a, _) in enumerate(pairs) if a.shape == shape]
+        slot: dict = {}  # id of an image -> its row in the feature stack
+        images = []
+        for k in members:
+            for image in pairs[k]:
+                if id(image) not in slot:
+                    slot[id(image)] = len(images)
+                    images.append(image)
+        feats = batch_features(net, images, chunk_pixels=chunk_pixels)
+        per = max(1, int(chunk_pixels) // max(1, shape[0] * shape[1]))
+        for i in range(0, len(members), per):
+            chunk = members[i : i + per]
+            rows_l = torch.tensor([slot[id(pairs[k][0])] for k in chunk], device=feats.device)
+            rows_r = torch.tensor([slot[id(pairs[k][1])] for k in chunk], device=feats.device)
+            arg = _wta_batch(
+                feats[rows_l], feats[rows_r], sign=sign, max_disparity=max_disparity
+            ).cpu().numpy()
+            for k, a in zip(chunk, arg, strict=True):
+                d_hat = np.full(shape, np.nan)
+                d_hat[b_px : shape[0] - b_px, b_px : shape[1] - b_px] = a
+                out[k] = d_hat
     return out

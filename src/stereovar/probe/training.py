@@ -25,15 +25,19 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from functools import partial
+from importlib import import_module
 
 import numpy as np
 import torch
 
 from ..errors import ConfigError, MatcherFileError
 from ..io.images import file_kind, open_regular
-from .network import MatchingNet, border
+from .convergence import Plateau, StopRule, fixed_frames, validation_accuracy
+from .network import MatchingNet, border, predict_matcher
 
 __all__ = [
+    "NETWORK_KINDS",
     "OPTIMISERS",
     "MatcherFileError",
     "TrainSettings",
@@ -41,8 +45,11 @@ __all__ = [
     "draw_batch",
     "hinge_loss",
     "load_matcher",
+    "network_class",
+    "network_kind",
     "save_matcher",
     "train_matcher",
+    "validation_disparity",
 ]
 
 OPTIMISERS = ("adam", "sgd")
@@ -50,9 +57,12 @@ OPTIMISERS = ("adam", "sgd")
 
 @dataclass(frozen=True)
 class TrainSettings:
-    """``probe.training``: steps, crops per step, feature rows and columns per crop, the offsets
-    :math:`p, n_{lo}, n_{hi}`, the margin :math:`m`, the optimiser, its learning rate and
-    momentum (SGD), and the Torch threads of the job."""
+    """``probe.training``: the cap on steps, crops per step, feature rows and columns per crop,
+    the offsets :math:`p, n_{lo}, n_{hi}`, the margin :math:`m`, the optimiser, its learning
+    rate and momentum (SGD), the Torch threads of the job, and the stop rule on a plateau of
+    validation accuracy (:class:`~stereovar.probe.convergence.StopRule`: a check every
+    ``check_every`` steps, ``patience`` checks without a gain above ``min_delta``, not before
+    ``min_steps``), used when the training gets validation frames."""
 
     steps: int = 200
     crops: int = 4
@@ -66,6 +76,19 @@ class TrainSettings:
     learning_rate: float = 1e-3
     momentum: float = 0.9
     threads: int = 1
+    check_every: int = 25
+    patience: int = 4
+    min_delta: float = 0.002
+    min_steps: int = 100
+
+    def stop_rule(self) -> StopRule:
+        """The :class:`~stereovar.probe.convergence.StopRule` of these settings."""
+        return StopRule(
+            check_every=int(self.check_every),
+            patience=int(self.patience),
+            min_delta=float(self.min_delta),
+            min_steps=int(self.min_steps),
+        )
 
     def __post_init__(self):
         if self.optimiser not in OPTIMISERS:
@@ -81,6 +104,10 @@ class TrainSettings:
         for name in ("steps", "crops", "crop_rows", "crop_cols", "threads"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"probe.training.{name} must be >= 1")
+        try:
+            self.stop_rule()
+        except ValueError as err:
+            raise ValueError(f"probe.training: {err}") from None
 
 
 @dataclass(frozen=True)
@@ -138,10 +165,13 @@ def _reach(frames, settings: TrainSettings) -> int:
     return int(np.ceil(d_max + settings.neg_high)) + 1
 
 
-def _crop_batch(frames, settings: TrainSettings, b: int, reach: int, rng: np.random.Generator):
+def _crop_batch(
+    frames, settings: TrainSettings, b: int, reach: int, rng: np.random.Generator, redraw_rng
+):
     """Left crops (S, 1, rows + 2b, cols + 2b), right crops ``reach`` columns wider on the
     side of the disparity sign, the left crops' disparities (S, rows, cols), the column of
-    each left feature in its right crop's feature map (S, 1, cols) and the signs (S,)."""
+    each left feature in its right crop's feature map (S, 1, cols) and the signs (S,).
+    ``rng`` draws the frames and positions, ``redraw_rng`` a twin frame's right input."""
     rows, cols = int(settings.crop_rows), int(settings.crop_cols)
     lefts, rights, disps, starts, signs = [], [], [], [], []
     for _ in range(int(settings.crops)):
@@ -155,7 +185,8 @@ def _crop_batch(frames, settings: TrainSettings, b: int, reach: int, rng: np.ran
         xr0 = x0 - reach if sign < 0 else x0
         ys = slice(y0, y0 + rows + 2 * b)
         lefts.append(frame.left[ys, x0 : x0 + cols + 2 * b])
-        rights.append(frame.right[ys, xr0 : xr0 + cols + 2 * b + reach])
+        right = frame.right_input(redraw_rng)
+        rights.append(right[ys, xr0 : xr0 + cols + 2 * b + reach])
         disps.append(frame.disparity[y0 + b : y0 + b + rows, x0 + b : x0 + b + cols])
         starts.append(x0 - xr0 + np.arange(cols))
         signs.append(sign)
@@ -176,7 +207,9 @@ def _gather(features: torch.Tensor, cols: np.ndarray) -> torch.Tensor:
     return torch.gather(features, 3, idx)
 
 
-def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, reach=None):
+def draw_batch(
+    frames, settings: TrainSettings, rng: np.random.Generator, *, reach=None, redraw_rng=None
+):
     """One training batch: crops of both views and the right feature columns of each left
     pixel's positive and negative.
 
@@ -188,6 +221,10 @@ def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, rea
         The draws of crops and offsets.
     reach : int, optional
         Columns a right crop extends past its left crop (default: from the frames).
+    redraw_rng : numpy.random.Generator, optional
+        The draws of a twin frame's right input (:meth:`TrainingFrame.right_input`); default
+        ``rng``. A generator of its own keeps ``rng``'s crops and offsets the same whether
+        the frames redraw or not (common random numbers of a network and its twin).
 
     Returns
     -------
@@ -200,7 +237,8 @@ def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, rea
     """
     b = border()
     reach = _reach(frames, settings) if reach is None else int(reach)
-    left, right, d, starts, signs = _crop_batch(frames, settings, b, reach, rng)
+    redraw_rng = rng if redraw_rng is None else redraw_rng
+    left, right, d, starts, signs = _crop_batch(frames, settings, b, reach, rng, redraw_rng)
     width = int(right.shape[3]) - 2 * b
     o_pos = rng.uniform(-settings.pos, settings.pos, d.shape)
     o_neg = rng.uniform(settings.neg_low, settings.neg_high, d.shape)
@@ -210,27 +248,47 @@ def draw_batch(frames, settings: TrainSettings, rng: np.random.Generator, *, rea
     return left, right, c_pos, c_neg, torch.from_numpy(ok_pos & ok_neg)
 
 
-def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int, device="cpu"):
+def train_matcher(
+    frames, settings: TrainSettings | None = None, *, seed: int, device="cpu", validation=None
+):
     """Train one :class:`~stereovar.probe.network.MatchingNet` on ``frames``.
+
+    Without ``validation`` it takes ``settings.steps`` steps. With it, it checks the network's
+    accuracy on the validation frames every ``check_every`` steps
+    (:func:`~stereovar.probe.convergence.validation_accuracy`, winner-take-all over
+    :math:`0..D` with :math:`D = \\lceil d_{max} \\rceil + \\lceil n_{hi} \\rceil`, the
+    training's search range), stops on a plateau (:class:`~stereovar.probe.convergence.Plateau`)
+    or at ``settings.steps`` (the cap), and returns the weights of the best check.
 
     Parameters
     ----------
     frames : sequence of TrainingFrame
-        Of one width; each at least ``crop_rows + 8`` rows high.
+        Of one width; each at least ``crop_rows + 8`` rows high. A frame with a ``redraw``
+        (a cue-blind twin's) draws its right input again for every crop.
     settings : TrainSettings, optional
     seed : int, keyword-only
-        Seeds Torch's initialisation and the draws of crops and offsets; the same seed, data
-        and thread count give the same weights on one machine.
+        Seeds Torch's initialisation, the draws of crops and offsets (generator
+        ``[seed, 1]``) and the redraws of right inputs (generator ``[seed, 2]``), so a
+        network and its twin of one seed see the same crops and offsets; the same seed,
+        data and thread count give the same weights on one machine.
     device : str or torch.device, keyword-only, default "cpu"
         Where the network trains (``"cuda"`` for a GPU). The weights are initialised on the
         CPU and the crops are drawn there, so only the arithmetic moves.
+    validation : sequence of TrainingFrame, optional, keyword-only
+        Held-out frames (one seed index per scene) for the stop rule; a frame with a
+        ``redraw`` gets its right input drawn once
+        (:func:`~stereovar.probe.convergence.fixed_frames`).
 
     Returns
     -------
     net : MatchingNet
-        On the CPU, whatever ``device`` trained it.
+        On the CPU, whatever ``device`` trained it; the best check's weights with
+        ``validation``.
     history : dict
-        ``loss`` per step, ``triplets`` per step, ``seconds`` of the loop and ``step_seconds``.
+        ``loss`` and ``triplets`` per step, ``seconds`` of the loop (checks included),
+        ``step_seconds`` (per step taken), ``steps`` taken, ``best_step`` (the step whose
+        weights are returned), ``validation`` as ``(step, accuracy)`` per check and
+        ``validation_seconds``.
 
     Raises
     ------
@@ -267,33 +325,36 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int, d
             net.parameters(), lr=settings.learning_rate, momentum=settings.momentum
         )
     rng = np.random.default_rng([int(seed), 1])
+    redraw_rng = np.random.default_rng([int(seed), 2])
+    held = fixed_frames(validation) if validation is not None else []
+    plateau = Plateau(settings.stop_rule())
+    max_d = validation_disparity(frames + held, settings)
+    best_state = None
     losses, counts = [], []
+    check_seconds = 0.0
     start = time.perf_counter()
     net.train()
+    step = 0
     for step in range(1, int(settings.steps) + 1):
-        left, right, c_pos, c_neg, keep = draw_batch(frames, settings, rng, reach=reach)
-        left, right, keep = left.to(device), right.to(device), keep.to(device)
-        if not bool(keep.any()):  # no triplet in this batch: NaN marks the skipped step
-            losses.append(float("nan"))
-            counts.append(0)
-            continue
-        fl, fr = net(left), net(right)
-        s_pos = (fl * _gather(fr, c_pos)).sum(1)[keep]
-        s_neg = (fl * _gather(fr, c_neg)).sum(1)[keep]
-        loss = hinge_loss(s_pos, s_neg, settings.margin)
-        value = float(loss.detach())
-        if not np.isfinite(value):
-            raise ConfigError(
-                _diverged(f"probe training diverged: at step {step} the loss is {value}", settings)
+        _train_step(net, opt, frames, settings, rng, redraw_rng, reach, device, step,
+                    losses, counts)
+        if held and (step % int(settings.check_every) == 0 or step == int(settings.steps)):
+            t0 = time.perf_counter()
+            accuracy = validation_accuracy(
+                partial(predict_matcher, net), held, max_disparity=max_d
             )
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(value)
-        counts.append(int(keep.sum()))
+            net.train()
+            stop = plateau.update(step, accuracy)
+            if plateau.improved():
+                best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
+            check_seconds += time.perf_counter() - t0
+            if stop:
+                break
+    if best_state is not None:
+        net.load_state_dict(best_state)
     bad = nonfinite_weights(net)
     if bad:
-        what = f"after step {int(settings.steps)} the weights {bad} are NaN or Inf"
+        what = f"after step {step} the weights {bad} are NaN or Inf"
         raise ConfigError(_diverged(f"probe training diverged: {what}", settings))
     seconds = time.perf_counter() - start
     net.to("cpu").eval()
@@ -301,9 +362,55 @@ def train_matcher(frames, settings: TrainSettings | None = None, *, seed: int, d
         "loss": losses,
         "triplets": counts,
         "seconds": seconds,
-        "step_seconds": seconds / max(int(settings.steps), 1),
+        "step_seconds": (seconds - check_seconds) / max(step, 1),
+        "steps": int(step),
+        "best_step": int(plateau.best_step if plateau.best_step is not None else step),
+        "validation": list(plateau.history),
+        "validation_seconds": check_seconds,
     }
     return net, history
+
+
+def validation_disparity(frames, settings: TrainSettings) -> int:
+    """:math:`D` of the validation checks: :math:`\\lceil d_{max} \\rceil +
+    \\lceil n_{hi} \\rceil`, the largest disparity of the frames plus the farthest negative
+    the training scores.
+
+    Examples
+    --------
+    >>> z = np.zeros((2, 2), np.float32)
+    >>> validation_disparity([TrainingFrame(z, z, z + 4.2, 1)], TrainSettings())
+    11
+    """
+    d_max = max(float(np.nanmax(f.disparity, initial=0.0)) for f in frames)
+    return int(np.ceil(d_max)) + int(np.ceil(settings.neg_high))
+
+
+def _train_step(net, opt, frames, settings, rng, redraw_rng, reach, device, step, losses, counts):
+    """One optimiser step on one drawn batch; appends its loss and triplet count (NaN and 0
+    for a batch without a triplet, which is skipped)."""
+    left, right, c_pos, c_neg, keep = draw_batch(
+        frames, settings, rng, reach=reach, redraw_rng=redraw_rng
+    )
+    left, right, keep = left.to(device), right.to(device), keep.to(device)
+    if not bool(keep.any()):  # no triplet in this batch: NaN marks the skipped step
+        losses.append(float("nan"))
+        counts.append(0)
+        return
+    fl, fr = net(left), net(right)
+    s_pos = (fl * _gather(fr, c_pos)).sum(1)[keep]
+    s_neg = (fl * _gather(fr, c_neg)).sum(1)[keep]
+    loss = hinge_loss(s_pos, s_neg, settings.margin)
+    value = float(loss.detach())
+    if not np.isfinite(value):
+        raise ConfigError(
+            _diverged(f"probe training diverged: at step {step} the loss is {value}", settings)
+        )
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
+    losses.append(value)
+    counts.append(int(keep.sum()))
 
 
 def _seeded_net(seed: int) -> MatchingNet:
@@ -348,9 +455,62 @@ def nonfinite_weights(net: torch.nn.Module) -> str | None:
     return None
 
 
-def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, meta: dict):
-    """Write a trained network with its training settings, seed and ``meta`` (condition,
-    training scenes, ...) to ``path`` atomically (a ``torch.save`` file).
+NETWORK_KINDS = {
+    "mccnn": "stereovar.probe.network:MatchingNet",
+    "costvolume": "stereovar.probe.costvolume:CostVolumeNet",
+}
+"""The class of each probe network kind a file records (``architecture["kind"]``)."""
+
+
+def network_class(kind: str) -> type:
+    """The network class of ``kind`` (imported when asked: ``costvolume`` lives in its own
+    module).
+
+    Raises
+    ------
+    ValueError
+        An unknown kind, with the known ones.
+
+    Examples
+    --------
+    >>> network_class("mccnn").__name__
+    'MatchingNet'
+    """
+    if kind not in NETWORK_KINDS:
+        raise ValueError(
+            f"unknown probe network kind {kind!r}; known: {', '.join(NETWORK_KINDS)}"
+        )
+    module, _, name = NETWORK_KINDS[kind].partition(":")
+    return getattr(import_module(module), name)
+
+
+def network_kind(net: torch.nn.Module) -> str:
+    """The kind of ``net`` (a key of :data:`NETWORK_KINDS`).
+
+    Raises
+    ------
+    TypeError
+        ``net`` is none of the probe's networks.
+
+    Examples
+    --------
+    >>> network_kind(MatchingNet(features=2, layers=1))
+    'mccnn'
+    """
+    if isinstance(net, MatchingNet):
+        return "mccnn"
+    for kind in NETWORK_KINDS:
+        if kind != "mccnn" and type(net).__name__ == NETWORK_KINDS[kind].partition(":")[2]:
+            if isinstance(net, network_class(kind)):
+                return kind
+    raise TypeError(f"{type(net).__name__} is not a probe network ({', '.join(NETWORK_KINDS)})")
+
+
+def save_matcher(path, net, *, settings, seed: int, meta: dict):
+    """Write a trained network with its architecture (``{"kind": ..., **net.config()}``,
+    :data:`NETWORK_KINDS`), training settings (a dataclass, :class:`TrainSettings` or the
+    cost-volume network's), seed and ``meta`` (condition, training scenes, ...) to ``path``
+    atomically (a ``torch.save`` file).
 
     Raises
     ------
@@ -365,7 +525,7 @@ def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, 
         raise ConfigError(_diverged(what, settings))
     payload = {
         "state_dict": net.state_dict(),
-        "architecture": {"features": net.features, "layers": net.layers, "kernel": net.kernel},
+        "architecture": {"kind": network_kind(net), **net.config()},
         "settings": asdict(settings),
         "seed": int(seed),
         "meta": dict(meta),
@@ -375,8 +535,10 @@ def save_matcher(path, net: MatchingNet, *, settings: TrainSettings, seed: int, 
     return write_file(path, lambda tmp: torch.save(payload, tmp))
 
 
-def load_matcher(path) -> tuple[MatchingNet, dict]:
-    """A network written by :func:`save_matcher` and its record (settings, seed, meta).
+def load_matcher(path) -> tuple[torch.nn.Module, dict]:
+    """A network written by :func:`save_matcher` and its record (architecture, settings,
+    seed, meta): built by the recorded kind (a file without one holds a ``mccnn``), loaded
+    with ``weights_only=True``.
 
     Raises
     ------
@@ -389,7 +551,8 @@ def load_matcher(path) -> tuple[MatchingNet, dict]:
     with open_regular(path, unopenable=_unreadable, not_regular=_not_regular) as f:
         try:
             payload = torch.load(f, map_location="cpu", weights_only=True)
-            net = MatchingNet(**payload["architecture"])
+            config = dict(payload["architecture"])
+            net = network_class(config.pop("kind", "mccnn"))(**config)
             net.load_state_dict(payload["state_dict"])
         except Exception as err:  # torch.load raises many types (EOFError, UnpicklingError)
             detail = " ".join(str(err).split())[:160]  # torch's messages span several lines
