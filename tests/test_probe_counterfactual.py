@@ -196,3 +196,72 @@ def test_tile_sums_count_predictions_at_zero():
         sel = (labels == tile) & mask & np.isfinite(d_hat)
         brute = sum(abs(v) < 0.5 for v in d_hat[sel])
         assert sums["zero"][i] == brute
+
+
+def _flat_scene(h=96, w=128, d=4):
+    truth = {"disparity": np.full((h, w), float(d)), "valid": np.ones((h, w), bool)}
+    return np.full((h, w, 3), 0.5), truth
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_planted_views_carry_the_pattern_into_the_right_view(sign):
+    """With a constant disparity d the right pixel of left pixel x is x + sign*d. The
+    views' ln(sample variance) fields, aligned so, correlate as
+    s^2 / (s^2 + psi'(k/2)) with k = 3(N - 1) (ln of a chi^2_k / k has variance psi'(k/2)),
+    and do not correlate at s = 0, nor unaligned."""
+    from scipy.special import polygamma
+
+    from stereovar.estimators.seeds import variance_field
+    from stereovar.probe.planted import planted_views
+
+    mean, truth = _flat_scene()
+    n, d = 8, 4
+    xs = np.arange(8, mean.shape[1] - 8)
+    for s in (0.0, 0.5, 1.0):
+        left, right = planted_views(mean, mean, truth, truth, sign=sign, law=(0.02, 0.001),
+                                    strength=s, n=n, rng=np.random.default_rng(int(10 * s)))
+        assert left.shape == right.shape == (n, *mean.shape)
+        lv = np.log(variance_field(left)[1])[:, xs].ravel()
+        rv = np.log(variance_field(right)[1])
+        rho = np.corrcoef(lv, rv[:, xs + sign * d].ravel())[0, 1]
+        wrong = np.corrcoef(lv, rv[:, xs - sign * d].ravel())[0, 1]  # the other direction
+        expected = s * s / (s * s + polygamma(1, 3 * (n - 1) / 2))
+        # the correlation's standard error, widened 3x for the pattern's ~2-px smoothness
+        se = 3 * (1 - expected**2) / np.sqrt(lv.size)
+        assert abs(rho - expected) < 5 * se, (s, rho, expected)
+        assert abs(wrong) < 0.1 * expected + 5 / np.sqrt(lv.size)
+
+
+def test_planted_views_at_strength_zero_follow_the_camera_law():
+    from stereovar.probe.planted import planted_views
+
+    h, w = 64, 64
+    levels = np.repeat([0.0, 0.2, 0.8, 1.4], h * w // 4).reshape(h, w)
+    mean = np.repeat(levels[..., None], 3, axis=2)
+    truth = {"disparity": np.full((h, w), 3.0), "valid": np.ones((h, w), bool)}
+    a, b = 0.03, 0.002
+    left, right = planted_views(mean, mean, truth, truth, sign=1, law=(a, b), strength=0.0,
+                                n=6, rng=np.random.default_rng(0))
+    for frames in (left, right):
+        for mu in (0.0, 0.2, 0.8, 1.4):
+            x = (frames - mean)[:, levels == mu]
+            var = a * mu + b
+            assert abs(x.var() - var) < 5 * var * np.sqrt(2 / x.size), mu
+
+
+def test_renders_strength_recovers_the_planted_strength():
+    """The calibration's measure of the renders' strength, on frames planted with a known
+    strength, gives it back (to a few per cent), and about 0 on the camera null."""
+    from stereovar.probe.planted import planted_views, renders_law, renders_strength
+
+    h, w = 96, 128
+    base = np.linspace(0.05, 1.2, w)[None, :] * np.linspace(0.6, 1.0, h)[:, None]
+    mean = np.repeat(base[..., None], 3, axis=2)
+    truth = {"disparity": np.full((h, w), 4.0), "valid": np.ones((h, w), bool)}
+    for s, tol in ((0.0, 0.1), (0.6, 0.06)):
+        left, _ = planted_views(mean, mean, truth, truth, sign=1, law=(0.02, 0.001),
+                                strength=s, n=8, rng=np.random.default_rng(1))
+        est = renders_strength(left, truth, rng=np.random.default_rng(2))
+        assert abs(est - s) < tol, (s, est)
+    a, b = renders_law(left, truth)
+    assert a > 0 and b >= 0

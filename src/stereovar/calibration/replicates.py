@@ -317,6 +317,19 @@ def render_strength(scene: SceneFrames, settings, camera_rows_residual_var: floa
     return float(np.sqrt(max(residual_var - camera_rows_residual_var, 0.0)))
 
 
+def camera_residual_variance(scene: SceneFrames, law, rng: np.random.Generator) -> float:
+    """The estimation noise of :math:`\\ln\\sigma_L^2` at the scene's :math:`N`: the
+    variance of the intensity control's residual on ``camera`` null frames (the
+    :math:`\\operatorname{Var}(e_L^0)` of :func:`render_strength`), drawn with ``rng``."""
+    from ..estimators.seeds import variance_field
+
+    v = variance_fields(
+        "camera", 0.0, mean=scene.mean, law=law, render_variance=scene.variance, rng=rng
+    )
+    _, null_field = variance_field(draw_frames(scene.mean["left"], v["left"], scene.n_seeds, rng))
+    return _residual_variance(null_field, scene.mean["left"], scene)
+
+
 def _residual_variance(variance, mean, scene: SceneFrames) -> float:
     from ..controls.intensity import intensity_residuals
     from ..statistics.robust import log_floor
@@ -395,15 +408,7 @@ def scene_calibration(
         gt_r = scene.ground_truth["right"]
         pattern = planted_pattern(gt_r["disparity"], gt_r["valid"], sign=scene.sign, rng=rng)
         if render_s is None:
-            # the estimation noise of ln sigma^2 at this N: the camera null's residual
-            v = variance_fields(
-                "camera", 0.0, mean=scene.mean, law=law, render_variance=scene.variance, rng=rng
-            )
-            from ..estimators.seeds import variance_field
-
-            _, null_field = variance_field(draw_frames(scene.mean["left"], v["left"],
-                                                       scene.n_seeds, rng))
-            noise_var = _residual_variance(null_field, scene.mean["left"], scene)
+            noise_var = camera_residual_variance(scene, law, rng)
             render_s = max(render_strength(scene, settings, noise_var), min_strength)
         for kind, strength, factor in designs(strength_factors, render_s):
             cheap_only = r >= expensive_replicates or not (
