@@ -24,8 +24,10 @@ source key:
 ``{estimator}/...``
     everything computed from those renders by one estimator: ``variance``, ``warped``,
     ``correlation``, ``intervention``, ``mitigation``, ``tables``, ``figures``;
-``probe/spp{spp}/networks/fold{f}/seed{j}.pt`` and ``probe/spp{spp}/tiles/fold{f}.csv``
-    the learned probe's networks trained on these renders and their scores on them.
+``probe/{condition}/{arch}/{variant}/fold{f}/seed{j}.pt``, ``.../{arch}/tiles/fold{f}.csv``
+    the learned probe's networks (of each training condition, architecture and variant: the
+    network or its cue-blind twin) and their scores; ``probe/planted.json`` the planted
+    control's strength and camera laws (under the run's source only).
 
 Ground truth belongs to the scene, not to a transform: ``results/ground_truth/{scene}.zarr``
 (traced for every renderer) or ``results/audit/{name}/ground_truth/{frame}.zarr`` (imported).
@@ -77,8 +79,10 @@ __all__ = [
     "preview",
     "probe_figure",
     "probe_network",
+    "probe_planted",
     "probe_tables",
     "probe_tiles",
+    "probe_training_tables",
     "probe_verdict",
     "render_store",
     "results_page",
@@ -377,19 +381,24 @@ def mitigation_headline_tables(source: str | None = None) -> list[str]:
     return table_paths("mitigations_headline")
 
 
-def probe_network(source: str, spp, fold, seed, transform: str = NONE) -> str:
-    """One trained probe network of a training condition (its renders at ``spp``), fold and
-    training seed:
-    ``results/{source}[/{transform}]/probe/spp{spp}/networks/fold{fold}/seed{seed}.pt``."""
-    key = source_key(source, transform)
-    return f"{RESULTS}/{key}/probe/spp{spp}/networks/fold{fold}/seed{seed}.pt"
+def probe_network(source: str, condition: str, arch: str, variant: str, fold, seed) -> str:
+    """One trained probe network: architecture ``arch``, training ``condition``, ``variant``
+    (``main`` or its cue-blind ``twin``), fold and training seed:
+    ``results/{source}/probe/{condition}/{arch}/{variant}/fold{fold}/seed{seed}.pt``."""
+    return f"{RESULTS}/{source}/probe/{condition}/{arch}/{variant}/fold{fold}/seed{seed}.pt"
 
 
-def probe_tiles(source: str, spp, fold, transform: str = NONE) -> str:
-    """The per-tile scores of every network on one fold's held-out scenes, tested on the
-    renders of ``source`` after ``transform`` at ``spp``:
-    ``results/{source}[/{transform}]/probe/spp{spp}/tiles/fold{fold}.csv``."""
-    return f"{RESULTS}/{source_key(source, transform)}/probe/spp{spp}/tiles/fold{fold}.csv"
+def probe_tiles(source: str, condition: str, arch: str, fold) -> str:
+    """The per-tile scores of every network of ``arch`` tested on one fold's held-out scenes
+    under ``condition`` (its network, its twin and the control's):
+    ``results/{source}/probe/{condition}/{arch}/tiles/fold{fold}.csv``."""
+    return f"{RESULTS}/{source}/probe/{condition}/{arch}/tiles/fold{fold}.csv"
+
+
+def probe_planted(source: str) -> str:
+    """The planted positive control's settings measured on the renders (their strength and each
+    scene's camera law): ``results/{source}/probe/planted.json``."""
+    return f"{RESULTS}/{source}/probe/planted.json"
 
 
 def probe_tables(source: str | None = None) -> list[str]:
@@ -398,6 +407,14 @@ def probe_tables(source: str | None = None) -> list[str]:
     if source is not None and is_audit(source):
         return table_paths("probe", f"{RESULTS}/{source}/tables")
     return table_paths("probe")
+
+
+def probe_training_tables(source: str | None = None) -> list[str]:
+    """The probe's training table (steps to the plateau, validation accuracy):
+    ``results/tables/probe_training.*``, or an audit's under ``results/audit/{name}/tables``."""
+    if source is not None and is_audit(source):
+        return table_paths("probe_training", f"{RESULTS}/{source}/tables")
+    return table_paths("probe_training")
 
 
 def probe_figure(source: str | None = None) -> str:

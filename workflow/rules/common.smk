@@ -896,28 +896,32 @@ def calibration_targets():
     return [*CALIBRATION_TABLES, CALIBRATION_NULLS, CALIBRATION_FIGURE]
 
 
-# The learned probe (stereovar.probe): one network per training condition, fold and training
-# seed; one test job per condition and fold scores that condition's networks and the control's
-# on the fold's held-out scenes rendered under the condition.
-from stereovar.probe.conditions import probe_runs
-from stereovar.probe.metrics import CONTROL as PROBE_CONTROL
+# The learned probe (stereovar.probe): per architecture, one network per training condition,
+# variant (the network and its cue-blind twin), fold and training seed; one test job per
+# condition, architecture and fold scores the condition's networks, their twins and the
+# control's on the fold's held-out scenes under the condition. A planted condition reads the
+# renders of `none` with a planted cue of known strength (probe/planted.json).
+from stereovar.probe.conditions import CONTROL as PROBE_CONTROL
+from stereovar.probe.conditions import MAIN as PROBE_MAIN
+from stereovar.probe.architectures import architecture
+from stereovar.probe.conditions import probe_conditions
 
 PROBE = config["probe"]
 PROBE_WANTED = not AUDIT or bool(AUDIT.get("probe"))
 with exit_with_one_line():
-    PROBE_RUNS = {run.name: run for run in probe_runs(config)} if PROBE_WANTED else {}
+    PROBE_CONDITIONS = (
+        {c.name: c for c in probe_conditions(config)} if PROBE_WANTED else {}
+    )
+PROBE_ARCHS = list(dict.fromkeys(PROBE["architectures"]))
 PROBE_FOLDS = int(PROBE["folds"])
 PROBE_SEEDS = list(range(int(PROBE["train_seeds"])))
 PROBE_SOURCE = get_renderer()
 PROBE_TABLES = layout.probe_tables(PROBE_SOURCE)
+PROBE_TRAINING_TABLES = layout.probe_training_tables(PROBE_SOURCE)
 PROBE_FIGURE = layout.probe_figure(PROBE_SOURCE)
 PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
-# (source key, SPP) of each condition: spp_xK shares the source's key at K x SPP
-PROBE_KEYS = {
-    (layout.source_key(run.source, run.transform), str(run.spp)): run
-    for run in PROBE_RUNS.values()
-}
-PROBE_CONTROL_RUN = PROBE_RUNS.get(PROBE_CONTROL)
+PROBE_PLANTED = layout.probe_planted(PROBE_SOURCE)
+PROBE_ANY_PLANTED = any(c.planted for c in PROBE_CONDITIONS.values())
 
 
 def probe_folds():
@@ -943,41 +947,85 @@ def probe_stores(key, spp, scenes):
     return stores
 
 
+def probe_condition_stores(name, scenes):
+    """The stores condition ``name`` reads for ``scenes`` (a planted condition: ``none``'s
+    renders and the planted settings, ``planted``)."""
+    condition = PROBE_CONDITIONS[name]
+    run = condition.run
+    stores = probe_stores(layout.source_key(run.source, run.transform), run.spp, scenes)
+    if condition.planted:
+        stores["planted"] = PROBE_PLANTED
+    return stores
+
+
+def probe_planted_inputs(wildcards):
+    """`none`'s renders of every scene, whose strength and camera laws set the planted cue."""
+    return probe_condition_stores("none", SCENES)
+
+
 def probe_train_inputs(wildcards):
-    """The training scenes of the wildcards' fold, rendered under its condition."""
-    return probe_stores(
-        wildcards.renderer, wildcards.spp, probe_folds()[int(wildcards.fold)][0]
-    )
+    """The training scenes of the wildcards' fold under its condition."""
+    return probe_condition_stores(wildcards.condition, probe_folds()[int(wildcards.fold)][0])
+
+
+def probe_networks(condition, arch, fold):
+    """The networks one test job scores: the condition's, its twins' and the control's."""
+    variants = [(condition, v) for v in PROBE_CONDITIONS[condition].variants]
+    if condition != PROBE_CONTROL:
+        variants.append((PROBE_CONTROL, PROBE_MAIN))
+    return [
+        layout.probe_network(PROBE_SOURCE, c, arch, v, fold, j)
+        for c, v in variants
+        for j in PROBE_SEEDS
+    ]
 
 
 def probe_test_inputs(wildcards):
-    """The held-out scenes of the wildcards' fold under its condition, and every network of
-    that condition and of the control for this fold."""
-    source, _ = layout.split_source_key(wildcards.renderer)
+    """The held-out scenes of the wildcards' fold under its condition, and the networks."""
     fold = int(wildcards.fold)
-    control = (layout.source_key(source, PROBE_CONTROL), PROBE_CONTROL_RUN.spp)
-    keys = dict.fromkeys([(wildcards.renderer, wildcards.spp), control])
     return {
-        **probe_stores(wildcards.renderer, wildcards.spp, probe_folds()[fold][1]),
-        "networks": [
-            layout.probe_network(k, spp, fold, j) for k, spp in keys for j in PROBE_SEEDS
-        ],
+        **probe_condition_stores(wildcards.condition, probe_folds()[fold][1]),
+        "networks": probe_networks(wildcards.condition, wildcards.arch, fold),
     }
 
 
 def probe_tile_files():
     """Every test job's tile table."""
     return [
-        layout.probe_tiles(key, spp, f) for key, spp in PROBE_KEYS for f in range(PROBE_FOLDS)
+        layout.probe_tiles(PROBE_SOURCE, c, a, f)
+        for c in PROBE_CONDITIONS
+        for a in PROBE_ARCHS
+        for f in range(PROBE_FOLDS)
     ]
+
+
+def probe_network_files():
+    """Every network of the probe."""
+    return sorted(
+        {
+            path
+            for c in PROBE_CONDITIONS
+            for a in PROBE_ARCHS
+            for f in range(PROBE_FOLDS)
+            for path in probe_networks(c, a, f)
+        }
+    )
+
+
+def probe_table_inputs(wildcards):
+    """Every tile table and network, and the planted settings where a planted cue runs."""
+    inputs = {"tiles": probe_tile_files(), "networks": probe_network_files()}
+    if PROBE_ANY_PLANTED:
+        inputs["planted"] = PROBE_PLANTED
+    return inputs
 
 
 def probe_targets():
     """`snakemake probe`: the probe table, figure and verdict (nothing for an audit without
     ``audit.probe: true``)."""
-    if not PROBE_RUNS:
+    if not PROBE_CONDITIONS:
         return []
-    return [*PROBE_TABLES, PROBE_FIGURE, PROBE_VERDICT]
+    return [*PROBE_TABLES, *PROBE_TRAINING_TABLES, PROBE_FIGURE, PROBE_VERDICT]
 
 
 def probe_if_run():

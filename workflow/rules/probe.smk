@@ -1,24 +1,60 @@
-# The learned probe (stereovar.probe): MC-CNN fast trained on single renders of each training
-# condition, cross-validated over scenes, tested on counterfactual inputs; then
-# results/tables/probe.*, its figure and the verdict. Not part of `all`: `snakemake -j2 probe`.
+# The learned probe (stereovar.probe): per architecture (MC-CNN fast, a small cost-volume
+# network), every training condition's networks and their cue-blind twins, cross-validated over
+# scenes and tested on counterfactual inputs; a planted cue of known strength is the positive
+# control; then results/tables/probe.*, probe_training.*, its figure and the verdict.
+# Not part of `all`: `snakemake -j2 probe`.
 
 
-# One network: condition (the source key), fold and training seed.
+wildcard_constraints:
+    condition="|".join(map(re.escape, PROBE_CONDITIONS)) or "none",
+    arch="|".join(PROBE_ARCHS) or "mccnn",
+    variant="main|twin",
+
+
+# The renders' strength and each scene's camera law: the planted cue's settings.
+rule probe_planted:
+    input:
+        unpack(probe_planted_inputs),
+    output:
+        PROBE_PLANTED,
+    params:
+        scenes=SCENES,
+        factors=PROBE["planted"],
+    log:
+        f"logs/{PROBE_SOURCE}/probe/planted.log",
+    resources:
+        **analysis_resources(images=4 * N_SEEDS + 8, n_reads=2 * N_SEEDS),
+    conda:
+        ENV
+    script:
+        "../scripts/probe_planted.py"
+
+
+# One network: condition, architecture, variant (the network or its cue-blind twin), fold and
+# training seed, trained to a plateau of validation accuracy.
 rule probe_train:
     input:
         unpack(probe_train_inputs),
     output:
-        layout.probe_network("{renderer}", "{spp}", "{fold}", "{train_seed}"),
+        layout.probe_network(
+            PROBE_SOURCE, "{condition}", "{arch}", "{variant}", "{fold}", "{train_seed}"
+        ),
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
-        condition=lambda wc: PROBE_KEYS[(wc.renderer, wc.spp)].name,
+        condition=lambda wc: wc.condition,
+        arch=lambda wc: wc.arch,
+        variant=lambda wc: wc.variant,
         fold=lambda wc: int(wc.fold),
         seed=lambda wc: int(PROBE["seed"]) + int(wc.train_seed),
-        training=PROBE["training"],
+        training=lambda wc: PROBE[architecture(wc.arch).config_key],
+        factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
+        strata=PROBE["strata"],
+        planted_seed=PROBE["seed"],
+        device=PROBE["device"],
     log:
-        "logs/{renderer}/probe/spp{spp}/train/fold{fold}/seed{train_seed}.log",
+        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/fold{fold}/seed{train_seed}.log",
     benchmark:
-        "benchmarks/{renderer}/probe/spp{spp}/train/fold{fold}/seed{train_seed}.tsv"
+        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/fold{fold}/seed{train_seed}.tsv"
     threads: PROBE["training"]["threads"]
     resources:
         **analysis_resources(images=2 * N_SEEDS * len(SCENES) + 8, n_reads=2 * N_SEEDS),
@@ -28,33 +64,35 @@ rule probe_train:
         "../scripts/probe_train.py"
 
 
-# Every network of the condition and of the control for one fold, on the fold's held-out
-# scenes rendered under the condition, on every counterfactual input.
+# Every network of the condition, its twins and the control's for one architecture and fold,
+# on the fold's held-out scenes under the condition, on every counterfactual input.
 rule probe_test:
     input:
         unpack(probe_test_inputs),
     output:
-        layout.probe_tiles("{renderer}", "{spp}", "{fold}"),
+        layout.probe_tiles(PROBE_SOURCE, "{condition}", "{arch}", "{fold}"),
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][1],
-        tested=lambda wc: PROBE_KEYS[(wc.renderer, wc.spp)].name,
+        tested=lambda wc: wc.condition,
+        arch=lambda wc: wc.arch,
+        factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
+        planted_seed=PROBE["seed"],
         test={
             "test_frames": PROBE["test_frames"],
-            "block": config["intervention"]["block"],
+            "strata": PROBE["strata"],
             "shuffle_seed": config["intervention"]["seed"],
             "conflict_shift": PROBE["conflict_shift"],
             "tile": config["analysis"]["bootstrap"]["tile"],
-            "gain": config["controls"]["sensor"]["gain"],
-            "read_noise": config["controls"]["sensor"]["read_noise"],
             "seed": PROBE["seed"],
         },
         max_disparity_fixed=config["intervention"]["max_disparity"],
         disparity_margin=config["intervention"]["disparity_margin"],
         threads=1,
+        device=PROBE["device"],
     log:
-        "logs/{renderer}/probe/spp{spp}/test/fold{fold}.log",
+        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/test/fold{fold}.log",
     benchmark:
-        "benchmarks/{renderer}/probe/spp{spp}/test/fold{fold}.tsv"
+        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/test/fold{fold}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=4 * N_SEEDS * len(SCENES) + 16, n_reads=2 * N_SEEDS),
@@ -66,7 +104,7 @@ rule probe_test:
 
 rule probe_table:
     input:
-        probe_tile_files(),
+        unpack(probe_table_inputs),
     output:
         csv=PROBE_TABLES[0],
         md=PROBE_TABLES[1],
@@ -77,6 +115,10 @@ rule probe_table:
             category="Tables",
             labels={"table": "learned probe"},
         ),
+        training_csv=PROBE_TRAINING_TABLES[0],
+        training_md=PROBE_TRAINING_TABLES[1],
+        training_tex=PROBE_TRAINING_TABLES[2],
+        training_html=PROBE_TRAINING_TABLES[3],
         figure=report(
             PROBE_FIGURE,
             caption="../report/probe_figure.rst",
@@ -88,7 +130,10 @@ rule probe_table:
         reps=PROBE["reps"],
         seed=PROBE["seed"],
         source=PROBE_SOURCE,
-        runs=[{"condition": r.name, "spp": r.spp} for r in PROBE_RUNS.values()],
+        runs=[
+            {"condition": c.name, "spp": c.run.spp, "planted": c.factor}
+            for c in PROBE_CONDITIONS.values()
+        ],
     log:
         f"logs/{PROBE_SOURCE}/tables/probe.log",
     benchmark:

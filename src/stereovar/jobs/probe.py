@@ -16,60 +16,161 @@ PROBE_REGIONS = ("all", "non_glass", "glass")
 
 
 def _scene(stores: dict, scene: str):
-    """The renders (N, H, W, 3) of each view, the left ground truth and its sign."""
+    """The renders (N, H, W, 3) of each view, the ground truth of each view (``disparity``,
+    ``valid``, ``glass``) and the sign."""
     from ..io.store import load_store
 
     left = view_stack(stores[f"left_{scene}"])[0]
     right = view_stack(stores[f"right_{scene}"])[0]
-    gt = load_store(
-        stores[f"gt_{scene}"], "ground-truth store", ["disparity", "valid", "glass"]
-    ).sel(view="left")
+    gt = load_store(stores[f"gt_{scene}"], "ground-truth store", ["disparity", "valid", "glass"])
     sign = int(gt.attrs["disparity_sign"])
-    truth = {k: gt[k].transpose("y", "x").values for k in ("disparity", "valid", "glass")}
-    return left, right, truth, sign
+    truths = {
+        view: {
+            k: gt[k].sel(view=view).transpose("y", "x").values
+            for k in ("disparity", "valid", "glass")
+        }
+        for view in ("left", "right")
+    }
+    return left, right, truths, sign
 
 
-def train_job(stores: dict, out, *, scenes, condition, fold, seed, training: dict) -> dict:
-    """Train one network of ``condition`` on ``scenes`` (the fold's training scenes) with
-    training seed ``seed`` and save it with its settings
-    (:func:`stereovar.probe.training.save_matcher`).
+def planted_job(stores: dict, out, *, scenes, factors) -> dict:
+    """The planted control's settings measured on the renders (``none``): each scene's camera
+    law and strength (:func:`stereovar.probe.planted.renders_strength`), and the renders'
+    strength, the median over scenes, which the factors of ``probe.planted`` multiply."""
+    from ..io.store import write_file
+    from ..probe.experiment import scene_law
+    from ..probe.planted import renders_strength
+    from ..seeding import derive_seed
+
+    per_scene = {}
+    for scene in scenes:
+        left, _, truths, _ = _scene(stores, scene)
+        law = scene_law(left, truths["left"]["valid"])
+        rng = np.random.default_rng(derive_seed("probe-strength", scene))
+        strength = renders_strength(left, truths["left"], rng=rng)
+        per_scene[scene] = {"law": list(law), "strength": float(strength)}
+        log.info("probe planted control, %s: law a %.4g b %.4g, strength %.3f", scene, *law,
+                 strength)
+    strength = float(np.median([v["strength"] for v in per_scene.values()]))
+    record = {
+        "strength": strength,
+        "factors": [float(f) for f in factors],
+        "strengths": {f"{float(f):g}": float(f) * strength for f in factors},
+        "scenes": per_scene,
+    }
+    text = json.dumps(record, indent=2) + "\n"
+    write_file(Path(out), lambda tmp: Path(tmp).write_text(text))
+    log.info("the renders' strength (median over %d scenes): %.3f", len(per_scene), strength)
+    return record
+
+
+def _condition_data(stores, scene, *, factor, planted, seed_key):
+    """The renders of one scene under a condition: the stores' own, or for a planted cue the
+    planted frames around their seed means."""
+    from ..probe.experiment import planted_stacks
+    from ..seeding import derive_seed
+
+    left, right, truths, sign = _scene(stores, scene)
+    if factor is None:
+        return left, right, truths, sign, None
+    law = planted["scenes"][scene]["law"]
+    strength = float(factor) * float(planted["strength"])
+    seed = derive_seed("probe-planted", seed_key, scene, f"{float(factor):g}")
+    left, right = planted_stacks(
+        left, right, truths["left"], truths["right"], sign=sign, law=law, strength=strength,
+        seed=seed,
+    )
+    return left, right, truths, sign, law
+
+
+def _read_planted(path):
+    return json.loads(Path(path).read_text()) if path else None
+
+
+def train_job(
+    stores: dict,
+    out,
+    *,
+    scenes,
+    condition,
+    arch,
+    variant,
+    fold,
+    seed,
+    training: dict,
+    factor=None,
+    planted=None,
+    strata: int = 16,
+    planted_seed: int = 0,
+    device: str = "cpu",
+) -> dict:
+    """Train one network of ``arch`` for ``condition`` (its ``variant``: the network, or its
+    cue-blind ``twin``) on ``scenes`` (the fold's training scenes) with training seed ``seed``,
+    to a plateau of validation accuracy on each scene's last seed index, and save it with its
+    settings and history (:func:`stereovar.probe.training.save_matcher`).
 
     ``stores`` maps ``left_{scene}`` and ``right_{scene}`` to render-store paths and
-    ``gt_{scene}`` to the scene's ground-truth store."""
-    from ..probe.experiment import training_frames
-    from ..probe.training import TrainSettings, save_matcher, train_matcher
+    ``gt_{scene}`` to the scene's ground-truth store; a planted condition (``factor``) reads
+    ``none``'s renders and the planted settings ``planted`` (:func:`planted_job`)."""
+    from ..probe.architectures import architecture
+    from ..probe.conditions import TWIN
+    from ..probe.experiment import split_validation, training_frames
+    from ..probe.training import save_matcher
 
-    settings = TrainSettings(**training)
-    frames = []
+    entry = architecture(arch)
+    settings = entry.settings(training)
+    record = _read_planted(planted)
+    by_scene = []
     for scene in scenes:
-        left, right, truth, sign = _scene(stores, scene)
-        frames += training_frames(left, right, truth, sign=sign)
-    net, history = train_matcher(frames, settings, seed=int(seed))
+        left, right, truths, sign, _ = _condition_data(
+            stores, scene, factor=factor, planted=record, seed_key=planted_seed
+        )
+        by_scene.append(
+            training_frames(
+                left, right, truths["left"], sign=sign, twin=variant == TWIN, strata=strata
+            )
+        )
+    frames, validation = split_validation(by_scene)
+    net, history = entry.train(
+        frames, settings, seed=int(seed), device=device, validation=validation or None
+    )
     losses = [x for x in history["loss"] if math.isfinite(x)]
     tail = losses[-max(1, len(losses) // 10) :]
     meta = {
         "condition": condition,
+        "variant": variant,
+        "architecture": arch,
+        "factor": factor,
         "fold": int(fold),
         "scenes": list(scenes),
         "frames": len(frames),
+        "validation_frames": len(validation),
+        "steps": int(history.get("steps", len(history["loss"]))),
+        "best_step": history.get("best_step"),
+        "validation": history.get("validation", []),
         "seconds": history["seconds"],
         "step_seconds": history["step_seconds"],
         "loss_first": float(np.mean(losses[: len(tail)])) if losses else math.nan,
         "loss_last": float(np.mean(tail)) if losses else math.nan,
-        "triplets_per_step": float(np.mean(history["triplets"])),
     }
     save_matcher(out, net, settings=settings, seed=int(seed), meta=meta)
+    best = max((a for _, a in meta["validation"]), default=math.nan)
     log.info(
-        "probe %s fold %s seed %s: %d frames of %s, %d steps in %.1f s (%.0f ms/step), "
-        "loss %.4f -> %.4f",
+        "probe %s %s/%s fold %s seed %s: %d frames of %s, %d steps in %.1f s (%.0f ms/step), "
+        "best validation accuracy %.4f at step %s, loss %.4f -> %.4f",
+        arch,
         condition,
+        variant,
         fold,
         seed,
         len(frames),
         ", ".join(scenes),
-        settings.steps,
+        meta["steps"],
         history["seconds"],
         1000 * history["step_seconds"],
+        best,
+        meta["best_step"],
         meta["loss_first"],
         meta["loss_last"],
     )
@@ -91,45 +192,64 @@ def test_job(
     *,
     scenes,
     tested,
+    arch,
     test: dict,
+    factor=None,
+    planted=None,
+    planted_seed: int = 0,
     max_disparity_fixed=None,
     disparity_margin: int = 4,
     threads: int = 1,
+    device: str = "cpu",
 ) -> int:
-    """Score every network in ``networks`` (the tested condition's and the control's, of one
-    fold) on every test input of the fold's held-out ``scenes``, rendered under ``tested``;
-    the per-tile sums go to ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`). Torch
-    runs ``threads`` threads (one per job: more spin on a machine whose cores are busy)."""
+    """Score every network in ``networks`` (the tested condition's, its twins and the
+    control's, of one architecture and fold) on every test input of the fold's held-out
+    ``scenes`` under ``tested``, a batch of inputs per network; the per-tile sums go to
+    ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`). Torch runs ``threads`` threads."""
     import torch
 
     from ..io.tables import write_tables
-    from ..probe.experiment import TestSettings, test_scene
+    from ..probe.architectures import architecture
+    from ..probe.experiment import TestSettings, scene_law, test_scene
     from ..probe.metrics import TILE_COLUMNS
     from ..probe.training import load_matcher
 
     torch.set_num_threads(int(threads))
+    entry = architecture(arch)
     nets = {}
     for path in networks:
         net, record = load_matcher(path)
-        nets[(record["meta"]["condition"], int(record["seed"]))] = net
-    data = {scene: _scene(stores, scene) for scene in scenes}
+        meta = record["meta"]
+        key = (meta["condition"], meta.get("variant", "main"), int(record["seed"]))
+        nets[key] = net.to(device)
+    record = _read_planted(planted)
+    data = {
+        scene: _condition_data(
+            stores, scene, factor=factor, planted=record, seed_key=int(planted_seed) + 1
+        )
+        for scene in scenes
+    }
     d_max = max_disparity(
-        [truth for _, _, truth, _ in data.values()],
+        [truths["left"] for _, _, truths, _, _ in data.values()],
         fixed=max_disparity_fixed,
         margin=disparity_margin,
     )
     settings = TestSettings(**{**test, "max_disparity": d_max})
     rows = []
-    for scene, (left, right, truth, sign) in data.items():
+    for scene, (left, right, truths, sign, law) in data.items():
+        truth = truths["left"]
+        law = law if law is not None else scene_law(left, truth["valid"])
         regions = PROBE_REGIONS if np.asarray(truth["glass"]).any() else ("all",)
         scene_rows = test_scene(
-            nets, left, right, truth, scene=scene, sign=sign, regions=regions, settings=settings
+            nets, entry.predict, left, right, truth, scene=scene, sign=sign, regions=regions,
+            law=law, settings=settings,
         )
-        rows += [{"tested": tested, **r} for r in scene_rows]
+        rows += [{"tested": tested, "architecture": arch, **r} for r in scene_rows]
         log.info(
-            "probe test of %s on %s: %d networks x %d inputs x %d frames, D = %d",
+            "probe test of %s on %s (%s): %d networks x %d inputs x %d frames, D = %d",
             tested,
             scene,
+            arch,
             len(nets),
             len(settings.inputs),
             min(settings.test_frames, left.shape[0]),
@@ -139,11 +259,46 @@ def test_job(
     return len(rows)
 
 
+def training_rows(networks) -> list[dict]:
+    """One row per (architecture, condition, variant): the networks trained, the optimiser
+    steps each took to its plateau (mean, min, max), the best step, the best validation
+    accuracy and the seconds of training, from each network's record."""
+    from ..probe.training import load_matcher
+
+    groups: dict = {}
+    for path in networks:
+        _, record = load_matcher(path)
+        meta = record["meta"]
+        key = (meta.get("architecture", "mccnn"), meta["condition"], meta.get("variant", "main"))
+        groups.setdefault(key, []).append(meta)
+    rows = []
+    for (arch, condition, variant), metas in groups.items():
+        steps = [int(m["steps"]) for m in metas]
+        best = [max((a for _, a in m.get("validation") or []), default=math.nan) for m in metas]
+        rows.append(
+            {
+                "architecture": arch,
+                "training": condition,
+                "variant": variant,
+                "networks": len(metas),
+                "steps_mean": float(np.mean(steps)),
+                "steps_min": min(steps),
+                "steps_max": max(steps),
+                "best_step_mean": float(np.mean([m.get("best_step") or 0 for m in metas])),
+                "validation_accuracy": float(np.nanmean(best)) if np.isfinite(best).any()
+                else math.nan,
+                "seconds_mean": float(np.mean([m["seconds"] for m in metas])),
+            }
+        )
+    return rows
+
+
 def probe_table_job(
-    tiles, outputs: dict, *, figure, verdict, reps: int = 1000, seed: int = 0, source="",
-    runs: list | None = None,
+    tiles, outputs: dict, *, figure, verdict, training_outputs: dict, networks=(),
+    planted=None, reps: int = 1000, seed: int = 0, source="", runs: list | None = None,
 ) -> list[dict]:
-    """The probe table, its figure and the verdict JSON from every test job's tiles."""
+    """The probe table, its training table, its figure and the verdict JSON from every test
+    job's tiles and every network's record."""
     import pandas as pd
 
     from ..io.store import write_file
@@ -154,23 +309,43 @@ def probe_table_job(
 
     frames = [pd.read_csv(p) for p in tiles]
     table = pd.concat(frames, ignore_index=True)
-    rows = probe_rows(table, reps=int(reps), seed=int(seed))
-    columns = list(rows[0]) if rows else []
+    record = _read_planted(planted)
+    strengths = (
+        {name: float(v) for name, v in record["strengths"].items()} if record else None
+    )
+    rows = probe_rows(table, strengths=strengths, reps=int(reps), seed=int(seed))
+    columns = list(dict.fromkeys(k for r in rows for k in r))
     write_tables(
         rows,
         columns,
         outputs,
         caption=(
-            "The learned probe (MC-CNN fast, WTA): accuracy (|d - d_GT| < 1 px), end-point "
+            "The learned probe, per architecture: accuracy (|d - d_GT| < 1 px), end-point "
             "error, the drop from the normal input, the difference in differences (DiD) of that "
-            "drop against the sensor_only network on the same inputs, and for the cue conflict "
-            f"the share of pixels at d + k; {INTERVAL_METHOD}"
+            "drop against the condition's cue-blind twin (did) and against the sensor_only "
+            "network (did_sensor) on the same inputs, the share of predictions at d = 0, and "
+            f"for the cue conflict the share of pixels at d + k; {INTERVAL_METHOD}"
+        ),
+        constants={"source": source} if source else None,
+    )
+    trained = training_rows(networks)
+    write_tables(
+        trained,
+        list(trained[0]) if trained else [],
+        training_outputs,
+        caption=(
+            "Training of the probe's networks to a plateau of validation accuracy on held-out "
+            "frames: steps taken, best step, best validation accuracy and seconds, per "
+            "architecture, condition and variant (mean over folds and training seeds)"
         ),
         constants={"source": source} if source else None,
     )
     result = probe_verdict(rows)
     result["source"] = source
     result["runs"] = list(runs or [])
+    result["training"] = trained
+    if record:
+        result["renders_strength"] = record["strength"]
     text = json.dumps(_clean(result), indent=2) + "\n"
     write_file(Path(verdict), lambda tmp: Path(tmp).write_text(text))
     from ..figures.probe import probe_figure

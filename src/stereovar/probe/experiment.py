@@ -18,19 +18,33 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..calibration.synthesis import camera_law
 from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import region_masks, valid_set
-from ..transforms.sensor import DEFAULT_GAIN, DEFAULT_READ_NOISE, camera_noise
-from .inputs import LEFT_KEPT, TEST_INPUTS, counterfactual_pair, network_input
-from .network import border, dense_features, wta_from_features
+from .inputs import (
+    STRATA,
+    TEST_INPUTS,
+    camera_residual,
+    counterfactual_pair,
+    network_input,
+    noise_scale,
+    reference_mean,
+    stratified_shuffle,
+)
+from .planted import planted_views
 from .scoring import SUMS, tile_sums
 from .training import TrainingFrame
 
 __all__ = [
     "TestSettings",
     "fold_scenes",
+    "grey_stack",
+    "planted_stacks",
+    "scene_law",
     "scored_disparity",
+    "split_validation",
+    "test_pairs",
     "test_scene",
     "training_frames",
 ]
@@ -39,17 +53,15 @@ __all__ = [
 @dataclass(frozen=True)
 class TestSettings:
     """``probe`` test options: seed indices tested per scene, disparities scored
-    (:math:`0..D`), the residual block and seed of :math:`\\Pi`, the conflict shift :math:`k`,
-    the bootstrap tile, the camera of the ``camera`` input and the seed of its draws."""
+    (:math:`0..D`), the intensity strata and seed of the residual shuffle, the conflict shift
+    :math:`k`, the bootstrap tile and the seed of the camera-law draws."""
 
     test_frames: int = 2
     max_disparity: int = 20
-    block: int = 16
+    strata: int = STRATA
     shuffle_seed: int = 0
     conflict_shift: int = 3
     tile: int = 16
-    gain: float = DEFAULT_GAIN
-    read_noise: float = DEFAULT_READ_NOISE
     seed: int = 0
     inputs: tuple = TEST_INPUTS
 
@@ -85,8 +97,29 @@ def scored_disparity(ground_truth_left, *, sign: int) -> np.ndarray:
     return np.where(omega, d, np.nan)
 
 
-def training_frames(left, right, ground_truth_left, *, sign: int) -> list[TrainingFrame]:
+def grey_stack(stack) -> np.ndarray:
+    """The RGB mean of a stack of renders (N, H, W, 3) -> (N, H, W), float64."""
+    a = np.asarray(stack, dtype=np.float64)
+    return a.mean(axis=-1) if a.ndim == 4 else a
+
+
+def training_frames(
+    left, right, ground_truth_left, *, sign: int, twin: bool = False, strata: int = STRATA
+) -> list[TrainingFrame]:
     """One :class:`~stereovar.probe.training.TrainingFrame` per seed index of a scene.
+
+    A twin's frame (``twin=True``) redraws its right view at every use: the seed-``n``
+    render's residual against the other renders' mean, shuffled within intensity strata
+    (:func:`~stereovar.probe.inputs.stratified_shuffle`),
+
+    .. math::
+
+        I_R' = \\bar I_R^{(-n)}
+            + c\\,\\Pi_{\\text{strata}}\\bigl(I_R^{(n)} - \\bar I_R^{(-n)}\\bigr),
+
+    with :math:`c` the :func:`~stereovar.probe.inputs.noise_scale` of a reference of
+    :math:`N - 1` renders (the input keeps one render's noise variance), so the twin sees the
+    same images and the same noise law with no cross-view alignment.
 
     Parameters
     ----------
@@ -95,74 +128,118 @@ def training_frames(left, right, ground_truth_left, *, sign: int) -> list[Traini
     ground_truth_left : mapping
         ``disparity`` and ``valid`` of the left view.
     sign : int, keyword-only
+    twin : bool, keyword-only
+    strata : int, keyword-only
+        Intensity strata of the shuffle.
     """
     if np.shape(left) != np.shape(right):
         raise ValueError(f"left and right renders differ: {np.shape(left)} vs {np.shape(right)}")
     d = scored_disparity(ground_truth_left, sign=sign).astype(np.float32)
-    return [
-        TrainingFrame(network_input(l_), network_input(r_), d, int(sign))
-        for l_, r_ in zip(left, right, strict=True)
-    ]
+    grey_right = grey_stack(right) if twin else None
+    frames = []
+    for n, (l_, r_) in enumerate(zip(left, right, strict=True)):
+        redraw = None
+        if twin:
+            redraw = _twin_redraw(grey_right, n, int(strata))
+        frames.append(
+            TrainingFrame(network_input(l_), network_input(r_), d, int(sign), redraw=redraw)
+        )
+    return frames
 
 
-def _camera_residual(mean, scene, view, frame, settings: TestSettings) -> np.ndarray:
-    seed = derive_seed("probe-camera", settings.seed, scene, view, frame)
-    noisy = camera_noise(mean, gain=settings.gain, read_noise=settings.read_noise, rng_seed=seed)
-    return noisy.astype(np.float64) - mean
+def _twin_redraw(grey_right: np.ndarray, n: int, strata: int):
+    mean = reference_mean(grey_right[..., None], n)[..., 0]
+    scale = noise_scale(grey_right.shape[0] - 1, residual=True)
+    residual = scale * (grey_right[n] - mean)
+
+    def redraw(rng: np.random.Generator) -> np.ndarray:
+        return network_input(mean + stratified_shuffle(residual, mean, rng=rng, strata=strata))
+
+    return redraw
 
 
-def test_scene(
-    networks: dict,
-    left,
-    right,
-    ground_truth_left,
-    *,
-    scene: str,
-    sign: int,
-    regions,
-    settings: TestSettings,
-) -> list[dict]:
-    """Tile sums of every network on every test input of one held-out scene.
+def split_validation(frames_by_scene) -> tuple[list, list]:
+    """Training and validation frames: the last seed index of every scene with at least two
+    is held out for the plateau of validation accuracy (:mod:`~stereovar.probe.convergence`).
 
-    Parameters
-    ----------
-    networks : dict
-        ``(training condition, training seed) -> MatchingNet``.
-    left, right : numpy.ndarray, shape (N, H, W, 3)
-        The scene's renders of each view (N >= 2: the seed mean is taken over all of them).
-    ground_truth_left : mapping
-        ``disparity``, ``valid`` and ``glass`` of the left view.
-    scene : str, keyword-only
-    sign : int, keyword-only
-    regions : sequence of str, keyword-only
-        Regions of :func:`stereovar.statistics.regions.region_masks`.
-    settings : TestSettings, keyword-only
-
-    Returns
-    -------
-    list of dict
-        One per (network, test input, region, tile): ``network``, ``train_seed``,
-        ``test_input``, ``region``, ``scene``, ``tile`` and the sums of
-        :func:`stereovar.probe.scoring.tile_sums` pooled over the test frames.
+    Examples
+    --------
+    >>> split_validation([[1, 2, 3], [4]])
+    ([1, 2, 4], [3])
     """
+    train, validation = [], []
+    for frames in frames_by_scene:
+        frames = list(frames)
+        if len(frames) >= 2:
+            train += frames[:-1]
+            validation.append(frames[-1])
+        else:
+            train += frames
+    return train, validation
+
+
+def scene_law(left, valid=None) -> tuple[float, float]:
+    """The camera law :math:`\\sigma^2 = a\\mu + b` of a scene's left renders: one
+    render's noise variance (:func:`stereovar.calibration.synthesis.camera_law` on the
+    unbiased sample variance over seeds, the Eq. 1 field times :math:`N/(N-1)`)."""
+    stack = np.asarray(left, dtype=np.float64)
+    n = stack.shape[0]
+    if n < 2:
+        raise ValueError(f"a camera law needs N >= 2 renders, got {n}")
+    mean = stack.mean(axis=0)
+    variance = ((stack - mean) ** 2).mean(axis=(0, 3)) * n / (n - 1)
+    a, b = camera_law(variance, mean.mean(axis=-1), valid)
+    return a, b
+
+
+def planted_stacks(left, right, truth_left, truth_right, *, sign, law, strength, seed) -> tuple:
+    """The planted positive control of one scene: N frames per view around the renders' seed
+    means with camera-law noise whose variance carries a cross-view pattern of ``strength``
+    (:func:`stereovar.probe.planted.planted_views`), drawn from ``seed``."""
+    left = np.asarray(left, dtype=np.float64)
+    right = np.asarray(right, dtype=np.float64)
+    return planted_views(
+        left.mean(axis=0),
+        right.mean(axis=0),
+        truth_left,
+        truth_right,
+        sign=int(sign),
+        law=tuple(law),
+        strength=float(strength),
+        n=left.shape[0],
+        rng=np.random.default_rng(int(seed)),
+    )
+
+
+def _camera_residual(mean, law, scene, view, frame, settings: TestSettings) -> np.ndarray:
+    seed = derive_seed("probe-camera", settings.seed, scene, view, frame)
+    return camera_residual(mean, law, np.random.default_rng(seed))
+
+
+def test_pairs(left, right, *, scene: str, sign: int, law, settings: TestSettings) -> dict:
+    """Every counterfactual input of the first ``test_frames`` seed indices, as network
+    inputs: ``(frame, test input) -> (left, right)``.
+
+    Each frame's clean image is the mean of the other renders (it excludes the frame,
+    :func:`~stereovar.probe.inputs.reference_mean`); the camera inputs draw camera-law noise
+    at the scene's law; the shuffles are drawn per frame from ``shuffle_seed``; the noise
+    each counterfactual adds is scaled so that every input holds one render's noise variance
+    (:func:`~stereovar.probe.inputs.noise_scale`). The reference keeps :math:`1/(N - 1)` of
+    the noise variance aligned across the views, so a shuffled input removes
+    :math:`(N - 2)/(N - 1)` of the aligned share."""
     left = np.asarray(left, dtype=np.float64)
     right = np.asarray(right, dtype=np.float64)
     if left.shape != right.shape or left.ndim != 4 or left.shape[0] < 2:
         raise ValueError(
             f"need (N >= 2, H, W, 3) renders of both views, got {left.shape} and {right.shape}"
         )
-    n_frames = min(int(settings.test_frames), left.shape[0])
-    mean_l, mean_r = left.mean(axis=0), right.mean(axis=0)
-    d_gt = scored_disparity(ground_truth_left, sign=sign)
-    masks = region_masks(ground_truth_left, np.isfinite(d_gt), regions=tuple(regions))
-    labels = tile_labels(d_gt.shape, settings.tile)
-    pooled: dict = {}
-    for frame in range(n_frames):
+    pairs = {}
+    for frame in range(min(int(settings.test_frames), left.shape[0])):
+        mean_l, mean_r = reference_mean(left, frame), reference_mean(right, frame)
         camera = (
-            _camera_residual(mean_l, scene, "left", frame, settings),
-            _camera_residual(mean_r, scene, "right", frame, settings),
+            _camera_residual(mean_l, law, scene, "left", frame, settings),
+            _camera_residual(mean_r, law, scene, "right", frame, settings),
         )
-        pairs = {}
         for test_input in settings.inputs:
             a, b = counterfactual_pair(
                 test_input,
@@ -171,39 +248,79 @@ def test_scene(
                 mean_l,
                 mean_r,
                 sign=sign,
-                block=settings.block,
-                shuffle_seed=settings.shuffle_seed,
+                shuffle_seed=derive_seed("probe-shuffle", settings.shuffle_seed, scene, frame),
+                strata=settings.strata,
                 conflict_shift=settings.conflict_shift,
                 camera=camera,
+                reference_renders=left.shape[0] - 1,
             )
-            pairs[test_input] = (network_input(a), network_input(b))
-        for (network, train_seed), net in networks.items():
-            kept = None  # the left features shared by the inputs that keep the left render
-            for test_input, (xa, xb) in pairs.items():
-                if test_input in LEFT_KEPT:
-                    kept = dense_features(net, xa) if kept is None else kept
-                    fl = kept
-                else:
-                    fl = dense_features(net, xa)
-                d_hat = wta_from_features(
-                    fl,
-                    dense_features(net, xb),
-                    sign=sign,
-                    max_disparity=settings.max_disparity,
-                    border_px=border(net.layers, net.kernel),
-                )
-                for region, mask in masks.items():
-                    sums = tile_sums(
-                        d_hat, d_gt, mask, labels, conflict_shift=settings.conflict_shift
-                    )
-                    for i, tile in enumerate(sums["tile"]):
-                        key = (network, train_seed, test_input, region, int(tile))
-                        acc = pooled.setdefault(key, dict.fromkeys(SUMS, 0))
-                        for s in SUMS:
-                            acc[s] += sums[s][i].item()
+            pairs[(frame, test_input)] = (network_input(a), network_input(b))
+    return pairs
+
+
+def test_scene(
+    networks: dict,
+    predict,
+    left,
+    right,
+    ground_truth_left,
+    *,
+    scene: str,
+    sign: int,
+    regions,
+    law,
+    settings: TestSettings,
+) -> list[dict]:
+    """Tile sums of every network on every test input of one held-out scene.
+
+    Parameters
+    ----------
+    networks : dict
+        ``(training condition, variant, training seed) -> network``.
+    predict : callable
+        ``predict(net, pairs, sign=, max_disparity=) -> list of d̂``: the architecture's
+        batched prediction (:class:`~stereovar.probe.architectures.Architecture`).
+    left, right : numpy.ndarray, shape (N, H, W, 3)
+        The scene's renders of each view (N >= 2).
+    ground_truth_left : mapping
+        ``disparity``, ``valid`` and ``glass`` of the left view.
+    scene : str, keyword-only
+    sign : int, keyword-only
+    regions : sequence of str, keyword-only
+        Regions of :func:`stereovar.statistics.regions.region_masks`.
+    law : (a, b), keyword-only
+        The scene's camera law, for the ``camera`` inputs.
+    settings : TestSettings, keyword-only
+
+    Returns
+    -------
+    list of dict
+        One per (network, variant, training seed, test input, region, tile): ``network``,
+        ``variant``, ``train_seed``, ``test_input``, ``region``, ``scene``, ``tile`` and the
+        sums of :func:`stereovar.probe.scoring.tile_sums` pooled over the test frames.
+    """
+    pairs = test_pairs(left, right, scene=scene, sign=sign, law=law, settings=settings)
+    d_gt = scored_disparity(ground_truth_left, sign=sign)
+    masks = region_masks(ground_truth_left, np.isfinite(d_gt), regions=tuple(regions))
+    labels = tile_labels(d_gt.shape, settings.tile)
+    keys = list(pairs)
+    pooled: dict = {}
+    for (network, variant, train_seed), net in networks.items():
+        d_hats = predict(
+            net, [pairs[k] for k in keys], sign=sign, max_disparity=settings.max_disparity
+        )
+        for (_, test_input), d_hat in zip(keys, d_hats, strict=True):
+            for region, mask in masks.items():
+                sums = tile_sums(d_hat, d_gt, mask, labels, conflict_shift=settings.conflict_shift)
+                for i, tile in enumerate(sums["tile"]):
+                    key = (network, variant, train_seed, test_input, region, int(tile))
+                    acc = pooled.setdefault(key, dict.fromkeys(SUMS, 0))
+                    for s in SUMS:
+                        acc[s] += sums[s][i].item()
     return [
         {
             "network": network,
+            "variant": variant,
             "train_seed": int(train_seed),
             "test_input": test_input,
             "region": region,
@@ -211,5 +328,5 @@ def test_scene(
             "tile": tile,
             **sums,
         }
-        for (network, train_seed, test_input, region, tile), sums in pooled.items()
+        for (network, variant, train_seed, test_input, region, tile), sums in pooled.items()
     ]

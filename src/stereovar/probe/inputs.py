@@ -52,6 +52,7 @@ __all__ = [
     "counterfactual_pair",
     "grey",
     "network_input",
+    "noise_scale",
     "reference_mean",
     "shift_columns",
     "stratified_shuffle",
@@ -298,6 +299,35 @@ def camera_residual(mean, law, rng) -> np.ndarray:
     return sd * np.random.default_rng(rng).standard_normal(m.shape)
 
 
+def noise_scale(reference_renders: int | None, *, residual: bool) -> float:
+    """The factor :math:`c` on the noise a counterfactual adds to a reference mean of
+    :math:`m` renders, so that the input holds one render's noise variance :math:`\\sigma^2`.
+
+    .. math::
+
+        c_{\\text{residual}} = \\sqrt{\\frac{m - 1}{m + 1}}, \\qquad
+        c_{\\text{camera}} = \\sqrt{\\frac{m - 1}{m}},
+
+    from :math:`c^2 \\operatorname{Var}(\\text{noise}) + \\sigma^2/m = \\sigma^2`, with a
+    residual against the reference of variance :math:`\\sigma^2 (1 + 1/m)` and camera noise
+    of variance :math:`\\sigma^2`. The reference's own noise (:math:`1/m` of the variance)
+    keeps its alignment with the other view.
+
+    Examples
+    --------
+    >>> round(noise_scale(7, residual=True) ** 2, 4), round(noise_scale(7, residual=False) ** 2, 4)
+    (0.75, 0.8571)
+    >>> noise_scale(None, residual=True)
+    1.0
+    """
+    if reference_renders is None:
+        return 1.0
+    m = int(reference_renders)
+    if m < 1:
+        raise ValueError(f"a reference mean averages at least 1 render, got {m}")
+    return float(np.sqrt((m - 1) / (m + 1) if residual else (m - 1) / m))
+
+
 def counterfactual_pair(
     kind: str,
     left,
@@ -310,6 +340,7 @@ def counterfactual_pair(
     strata: int = STRATA,
     conflict_shift: int = 3,
     camera=None,
+    reference_renders: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One test pair of linear renders (see the module docstring for each ``kind``).
 
@@ -333,6 +364,13 @@ def counterfactual_pair(
     camera : tuple of numpy.ndarray, optional, keyword-only
         ``(eta_left, eta_right)``: the camera's noise of each view
         (:func:`camera_residual`), needed for ``camera`` and ``camera_shuffled``.
+    reference_renders : int, optional, keyword-only
+        :math:`m`, the renders averaged in the reference means (:math:`N - 1` for
+        :func:`reference_mean`). The reference then holds noise of variance
+        :math:`\\sigma^2/m`, so the noise a counterfactual adds is scaled by
+        :func:`noise_scale` to give every input one render's noise variance :math:`\\sigma^2`
+        (the residual against the reference has :math:`\\sigma^2 (1 + 1/m)`). None: no
+        scaling (a noiseless reference).
 
     Returns
     -------
@@ -365,11 +403,12 @@ def counterfactual_pair(
     if kind in ("camera", "camera_shuffled"):
         if camera is None:
             raise ValueError(f"the {kind} test input needs camera=(eta_left, eta_right)")
-        eta_l, eta_r = (np.asarray(e, dtype=np.float64) for e in camera)
+        c = noise_scale(reference_renders, residual=False)
+        eta_l, eta_r = (c * np.asarray(e, dtype=np.float64) for e in camera)
         if kind == "camera_shuffled":
             eta_r = stratified_shuffle(eta_r, mean_right, rng=shuffle_seed, strata=strata)
         return mean_left + eta_l, mean_right + eta_r
-    residual = right - mean_right
+    residual = noise_scale(reference_renders, residual=True) * (right - mean_right)
     if kind == "shuffled":
         shuffled = stratified_shuffle(residual, mean_right, rng=shuffle_seed, strata=strata)
         return left, mean_right + shuffled
