@@ -30,31 +30,32 @@ rule probe_planted:
         "../scripts/probe_planted.py"
 
 
-# One network: condition, architecture, variant (the network or its cue-blind twin), fold and
-# training seed, trained to a plateau of validation accuracy.
+# The networks of one condition, architecture, variant (the network or its cue-blind twin)
+# and fold, one per training seed, each trained to a plateau of validation accuracy.
 rule probe_train:
     input:
         unpack(probe_train_inputs),
     output:
-        layout.probe_network(
-            PROBE_SOURCE, "{condition}", "{arch}", "{variant}", "{fold}", "{train_seed}"
-        ),
+        [
+            layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", "{variant}", "{fold}", j)
+            for j in PROBE_SEEDS
+        ],
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
         condition=lambda wc: wc.condition,
         arch=lambda wc: wc.arch,
         variant=lambda wc: wc.variant,
         fold=lambda wc: int(wc.fold),
-        seed=lambda wc: int(PROBE["seed"]) + int(wc.train_seed),
+        seeds=[int(PROBE["seed"]) + j for j in PROBE_SEEDS],
         training=lambda wc: PROBE[architecture(wc.arch).config_key],
         factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
         strata=PROBE["strata"],
         planted_seed=PROBE["seed"],
         device=PROBE["device"],
     log:
-        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/fold{fold}/seed{train_seed}.log",
+        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/train/fold{fold}.log",
     benchmark:
-        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/fold{fold}/seed{train_seed}.tsv"
+        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/train/fold{fold}.tsv"
     threads: PROBE["training"]["threads"]
     resources:
         **analysis_resources(images=2 * N_SEEDS * len(SCENES) + 8, n_reads=2 * N_SEEDS),

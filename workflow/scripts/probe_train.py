@@ -1,4 +1,5 @@
-"""Snakemake adapter: train one probe network."""
+"""Snakemake adapter: train the probe networks of one condition, architecture, variant and
+fold, one per training seed."""
 
 from stereovar.jobs.common import run_job
 from stereovar.jobs.probe import train_job
@@ -9,6 +10,6 @@ run_job(
     train_job,
     stores=stores,
     planted=snakemake.input.get("planted"),
-    out=snakemake.output[0],
+    outs=list(snakemake.output),
     **snakemake.params,
 )

@@ -90,25 +90,26 @@ def _read_planted(path):
 
 def train_job(
     stores: dict,
-    out,
+    outs,
     *,
     scenes,
     condition,
     arch,
     variant,
     fold,
-    seed,
+    seeds,
     training: dict,
     factor=None,
     planted=None,
     strata: int = 16,
     planted_seed: int = 0,
     device: str = "cpu",
-) -> dict:
-    """Train one network of ``arch`` for ``condition`` (its ``variant``: the network, or its
-    cue-blind ``twin``) on ``scenes`` (the fold's training scenes) with training seed ``seed``,
-    to a plateau of validation accuracy on each scene's last seed index, and save it with its
-    settings and history (:func:`stereovar.probe.training.save_matcher`).
+) -> list[dict]:
+    """Train the networks of ``arch`` for ``condition`` (its ``variant``: the network, or its
+    cue-blind ``twin``) on ``scenes`` (the fold's training scenes), one per training seed of
+    ``seeds`` written to the matching path of ``outs``, each to a plateau of validation
+    accuracy on each scene's last seed index, and save each with its settings and history
+    (:func:`stereovar.probe.training.save_matcher`). The frames are read and built once.
 
     ``stores`` maps ``left_{scene}`` and ``right_{scene}`` to render-store paths and
     ``gt_{scene}`` to the scene's ground-truth store; a planted condition (``factor``) reads
@@ -118,6 +119,10 @@ def train_job(
     from ..probe.experiment import split_validation, training_frames
     from ..probe.training import save_matcher
 
+    outs, seeds = list(outs), [int(s) for s in seeds]
+    if len(outs) != len(seeds):
+        raise ValueError(f"{len(outs)} network paths for {len(seeds)} training seeds")
+    _check_device(device)
     entry = architecture(arch)
     settings = entry.settings(training)
     record = _read_planted(planted)
@@ -132,49 +137,66 @@ def train_job(
             )
         )
     frames, validation = split_validation(by_scene)
-    net, history = entry.train(
-        frames, settings, seed=int(seed), device=device, validation=validation or None
-    )
-    losses = [x for x in history["loss"] if math.isfinite(x)]
-    tail = losses[-max(1, len(losses) // 10) :]
-    meta = {
-        "condition": condition,
-        "variant": variant,
-        "architecture": arch,
-        "factor": factor,
-        "fold": int(fold),
-        "scenes": list(scenes),
-        "frames": len(frames),
-        "validation_frames": len(validation),
-        "steps": int(history.get("steps", len(history["loss"]))),
-        "best_step": history.get("best_step"),
-        "validation": history.get("validation", []),
-        "seconds": history["seconds"],
-        "step_seconds": history["step_seconds"],
-        "loss_first": float(np.mean(losses[: len(tail)])) if losses else math.nan,
-        "loss_last": float(np.mean(tail)) if losses else math.nan,
-    }
-    save_matcher(out, net, settings=settings, seed=int(seed), meta=meta)
-    best = max((a for _, a in meta["validation"]), default=math.nan)
-    log.info(
-        "probe %s %s/%s fold %s seed %s: %d frames of %s, %d steps in %.1f s (%.0f ms/step), "
-        "best validation accuracy %.4f at step %s, loss %.4f -> %.4f",
-        arch,
-        condition,
-        variant,
-        fold,
-        seed,
-        len(frames),
-        ", ".join(scenes),
-        meta["steps"],
-        history["seconds"],
-        1000 * history["step_seconds"],
-        best,
-        meta["best_step"],
-        meta["loss_first"],
-        meta["loss_last"],
-    )
-    return meta
+    metas = []
+    for out, seed in zip(outs, seeds, strict=True):
+        net, history = entry.train(
+            frames, settings, seed=seed, device=device, validation=validation or None
+        )
+        losses = [x for x in history["loss"] if math.isfinite(x)]
+        tail = losses[-max(1, len(losses) // 10) :]
+        meta = {
+            "condition": condition,
+            "variant": variant,
+            "architecture": arch,
+            "factor": factor,
+            "fold": int(fold),
+            "scenes": list(scenes),
+            "frames": len(frames),
+            "validation_frames": len(validation),
+            "steps": int(history.get("steps", len(history["loss"]))),
+            "best_step": history.get("best_step"),
+            "validation": [list(v) for v in history.get("validation", [])],
+            "seconds": history["seconds"],
+            "step_seconds": history["step_seconds"],
+            "loss_first": float(np.mean(losses[: len(tail)])) if losses else math.nan,
+            "loss_last": float(np.mean(tail)) if losses else math.nan,
+        }
+        save_matcher(out, net, settings=settings, seed=seed, meta=meta)
+        best = max((a for _, a in meta["validation"]), default=math.nan)
+        log.info(
+            "probe %s %s/%s fold %s seed %s: %d frames of %s, %d steps in %.1f s "
+            "(%.0f ms/step), best validation accuracy %.4f at step %s, loss %.4f -> %.4f",
+            arch,
+            condition,
+            variant,
+            fold,
+            seed,
+            len(frames),
+            ", ".join(scenes),
+            meta["steps"],
+            history["seconds"],
+            1000 * history["step_seconds"],
+            best,
+            meta["best_step"],
+            meta["loss_first"],
+            meta["loss_last"],
+        )
+        metas.append(meta)
+    return metas
+
+
+def _check_device(device: str) -> None:
+    """One line when ``probe.device`` names a GPU that PyTorch cannot use."""
+    import torch
+
+    from ..errors import ConfigError
+
+    if str(device).startswith("cuda") and not torch.cuda.is_available():
+        raise ConfigError(
+            f"config key 'probe.device' is {device!r}, but PyTorch sees no CUDA GPU here "
+            f"(torch {torch.__version__}); set probe.device: cpu, or install a CUDA build of "
+            "PyTorch on a machine with a GPU"
+        )
 
 
 def max_disparity(truths, *, fixed=None, margin: int = 4) -> int:
@@ -215,6 +237,7 @@ def test_job(
     from ..probe.training import load_matcher
 
     torch.set_num_threads(int(threads))
+    _check_device(device)
     entry = architecture(arch)
     nets = {}
     for path in networks:

@@ -180,16 +180,33 @@ def split_validation(frames_by_scene) -> tuple[list, list]:
 
 def scene_law(left, valid=None) -> tuple[float, float]:
     """The camera law :math:`\\sigma^2 = a\\mu + b` of a scene's left renders: one
-    render's noise variance (:func:`stereovar.calibration.synthesis.camera_law` on the
-    unbiased sample variance over seeds, the Eq. 1 field times :math:`N/(N-1)`)."""
+    render's noise variance.
+
+    .. math::
+
+        (a, b) = k\\,(\\hat a, \\hat b), \\qquad
+        k = \\operatorname{mean}_{r_p \\le q_{0.999}} r_p, \\quad
+        r_p = \\frac{s^2_p}{\\hat a \\mu_p + \\hat b},
+
+    with :math:`(\\hat a, \\hat b)` the calibration's law
+    (:func:`stereovar.calibration.synthesis.camera_law`, fitted to bin medians) on the
+    unbiased sample variance over seeds :math:`s^2_p` (the Eq. 1 field times
+    :math:`N/(N-1)`): a median of a sample variance lies below its mean, so :math:`k` puts
+    the law back at the mean, without the top 0.1% of ratios (fireflies).
+    """
     stack = np.asarray(left, dtype=np.float64)
     n = stack.shape[0]
     if n < 2:
         raise ValueError(f"a camera law needs N >= 2 renders, got {n}")
     mean = stack.mean(axis=0)
+    mu = mean.mean(axis=-1)
     variance = ((stack - mean) ** 2).mean(axis=(0, 3)) * n / (n - 1)
-    a, b = camera_law(variance, mean.mean(axis=-1), valid)
-    return a, b
+    a, b = camera_law(variance, mu, valid)
+    ratio = variance / (a * np.maximum(mu, 0.0) + b)
+    ok = np.isfinite(ratio) & (True if valid is None else np.asarray(valid, dtype=bool))
+    r = ratio[ok]
+    k = float(r[r <= np.quantile(r, 0.999)].mean()) if r.size else 1.0
+    return a * k, b * k
 
 
 def planted_stacks(left, right, truth_left, truth_right, *, sign, law, strength, seed) -> tuple:

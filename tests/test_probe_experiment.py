@@ -1,0 +1,108 @@
+"""The probe experiment's data: counterfactual inputs that keep one render's noise variance,
+cue-blind twin frames, the validation split, the camera law and the planted conditions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from stereovar.errors import ConfigError
+from stereovar.probe import experiment
+from stereovar.probe.conditions import planted_factor, probe_conditions
+from stereovar.probe.experiment import scene_law, split_validation, training_frames
+from stereovar.probe.inputs import network_input, noise_scale
+
+
+def _stack(rng, n, shape=(24, 40), law=(0.02, 1e-4)):
+    """N renders of a smooth clean image with noise of variance a*mu + b per channel."""
+    yy, xx = np.indices(shape)
+    mean = 0.2 + 0.15 * np.sin(xx / 5.0)[..., None] * np.ones(3) + 0.05 * (yy / shape[0])[
+        ..., None
+    ]
+    sd = np.sqrt(law[0] * mean + law[1])
+    return mean, mean + sd * rng.standard_normal((n, *mean.shape))
+
+
+@pytest.mark.parametrize("n", [3, 6])
+def test_every_counterfactual_input_holds_one_renders_noise_variance(n):
+    rng = np.random.default_rng(1)
+    mean, left = _stack(rng, n)
+    _, right = _stack(rng, n)
+    law = (0.02, 1e-4)
+    settings = experiment.TestSettings(
+        test_frames=n, inputs=("normal", "shuffled", "camera", "conflict")
+    )
+    # network_input standardises: compare the linear noise instead, through a spy on its input
+    seen = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(experiment, "network_input", lambda x: x)
+        pairs = experiment.test_pairs(left, right, scene="s", sign=-1, law=law, settings=settings)
+    for (_, kind), (_, r) in pairs.items():
+        seen.setdefault(kind, []).append(r - mean)
+    expected = law[0] * mean + law[1]
+    for kind, noise in seen.items():
+        ratio = np.mean(np.stack(noise) ** 2) / expected.mean()
+        # n frames x 24 x 40 x 3 values: the ratio's standard error is under 3%
+        assert ratio == pytest.approx(1.0, abs=0.1), kind
+
+
+def test_noise_scale_balances_a_leave_one_out_reference():
+    for m in (2, 5, 29):
+        c = noise_scale(m, residual=True)
+        assert c**2 * (1 + 1 / m) + 1 / m == pytest.approx(1.0)
+        c = noise_scale(m, residual=False)
+        assert c**2 + 1 / m == pytest.approx(1.0)
+    with pytest.raises(ValueError):
+        noise_scale(0, residual=True)
+
+
+def test_twin_frames_keep_the_left_and_redraw_the_right():
+    rng = np.random.default_rng(2)
+    _, left = _stack(rng, 4)
+    _, right = _stack(rng, 4)
+    truth = {"disparity": np.full(left.shape[1:3], 2.0), "valid": np.ones(left.shape[1:3], bool)}
+    plain = training_frames(left, right, truth, sign=-1)
+    twin = training_frames(left, right, truth, sign=-1, twin=True, strata=4)
+    g = np.random.default_rng(0)
+    for p, t in zip(plain, twin, strict=True):
+        assert np.array_equal(p.left, t.left)
+        assert p.redraw is None
+        a, b = t.right_input(g), t.right_input(g)
+        assert a.shape == p.right.shape and not np.array_equal(a, b)
+        # the redraw is a shuffle of the same residual: the same pixel values, moved
+        assert not np.allclose(a, p.right)
+    np.testing.assert_allclose(
+        plain[0].right, network_input(right[0]), rtol=0, atol=0
+    )
+
+
+def test_split_validation_holds_out_the_last_frame_of_each_scene():
+    train, validation = split_validation([["a0", "a1", "a2"], ["b0", "b1"], ["c0"]])
+    assert validation == ["a2", "b1"]
+    assert train == ["a0", "a1", "b0", "c0"]
+
+
+def test_scene_law_is_one_renders_variance():
+    rng = np.random.default_rng(3)
+    truth = (0.03, 2e-4)
+    _, stack = _stack(rng, 4, shape=(60, 80), law=truth)
+    a, b = scene_law(stack)
+    # the biased Eq. 1 field alone would give (N-1)/N = 0.75 of the slope
+    assert a == pytest.approx(truth[0], rel=0.1)
+    with pytest.raises(ValueError, match="N >= 2"):
+        scene_law(stack[:1])
+
+
+def test_planted_conditions_and_their_names():
+    cfg = {
+        "render": {"renderer": "mitsuba", "spp": 4},
+        "scenes": ["a", "b"],
+        "mitigations": {"names": []},
+        "probe": {"conditions": ["none", "sensor_only"], "planted": [0.5, 2]},
+    }
+    names = [c.name for c in probe_conditions(cfg)]
+    assert names == ["none", "sensor_only", "planted_x0.5", "planted_x2"]
+    assert [planted_factor(n) for n in names] == [None, None, 0.5, 2.0]
+    cfg["probe"]["planted"] = [0]
+    with pytest.raises(ConfigError, match="probe.planted"):
+        probe_conditions(cfg)
