@@ -52,6 +52,7 @@ include: "workflow/rules/audit.smk"
 include: "workflow/rules/mitigations.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/probe.smk"
+include: "workflow/rules/probe_model.smk"
 
 
 onstart:

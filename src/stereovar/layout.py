@@ -78,6 +78,7 @@ __all__ = [
     "moment_store",
     "preview",
     "probe_figure",
+    "probe_model_tables",
     "probe_network",
     "probe_planted",
     "probe_tables",
@@ -415,6 +416,15 @@ def probe_training_tables(source: str | None = None) -> list[str]:
     if source is not None and is_audit(source):
         return table_paths("probe_training", f"{RESULTS}/{source}/tables")
     return table_paths("probe_training")
+
+
+def probe_model_tables(source: str | None = None) -> list[str]:
+    """The user's own network on the counterfactual inputs (``stereovar probe``,
+    ``audit.probe_model``): ``results/tables/probe_model.*``, or
+    ``results/audit/{name}/tables/probe_model.*`` for an audit."""
+    if source is not None and is_audit(source):
+        return table_paths("probe_model", f"{RESULTS}/{source}/tables")
+    return table_paths("probe_model")
 
 
 def probe_figure(source: str | None = None) -> str:

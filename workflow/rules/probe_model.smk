@@ -1,0 +1,55 @@
+# The user's own stereo network on the counterfactual inputs (stereovar.probe.user_model):
+# `stereovar probe --model package.module:factory --weights FILE` builds the frames'
+# stores with `probe_model_frames` and runs the model itself; an audit with
+# `audit.probe_model: {factory, weights}` gets results/audit/{name}/tables/probe_model.*.
+
+from stereovar.jobs.probe_model import frames_manifest
+
+PROBE_MODEL_SOURCE = get_renderer()  # the renderer, or the audit's source
+PROBE_MODEL = (AUDIT or {}).get("probe_model")
+
+
+def probe_model_stores(wildcards=None):
+    """Every frame's render stores of each view and its ground truth (``left_{scene}``,
+    ``right_{scene}``, ``gt_{scene}``): the audit's imported frames, or the run's scenes."""
+    return probe_stores(PROBE_MODEL_SOURCE, MAIN_SPP, SCENES)
+
+
+# The frames `stereovar probe` runs the model on, made if missing, and listed.
+rule probe_model_frames:
+    input:
+        unpack(probe_model_stores),
+    output:
+        frames_manifest(PROBE_MODEL_SOURCE),
+    localrule: True
+    run:
+        from stereovar.jobs.probe_model import write_manifest
+
+        write_manifest(dict(input.items()), SCENES, output[0])
+
+
+if PROBE_MODEL:
+
+    rule probe_model:
+        input:
+            unpack(probe_model_stores),
+            weights=PROBE_MODEL["weights"],
+        output:
+            csv=layout.probe_model_tables(PROBE_MODEL_SOURCE)[0],
+            md=layout.probe_model_tables(PROBE_MODEL_SOURCE)[1],
+            tex=layout.probe_model_tables(PROBE_MODEL_SOURCE)[2],
+            html=layout.probe_model_tables(PROBE_MODEL_SOURCE)[3],
+        params:
+            scenes=SCENES,
+            factory=PROBE_MODEL["factory"],
+            device=PROBE_MODEL["device"],
+            source=PROBE_MODEL_SOURCE,
+        log:
+            f"logs/{PROBE_MODEL_SOURCE}/tables/probe_model.log",
+        benchmark:
+            f"benchmarks/{PROBE_MODEL_SOURCE}/tables/probe_model.tsv"
+        threads: 2
+        conda:
+            ENV
+        script:
+            "../scripts/probe_model.py"
