@@ -233,21 +233,30 @@ def wta_from_features(
     return out
 
 
-CHUNK_PIXELS = 2_000_000
-"""Image pixels per forward pass of :func:`predict_matcher` (bounds its memory: about
-``CHUNK_PIXELS * features * 4`` bytes per activation, 0.5 GB at the default 64 maps)."""
+CHUNK_PIXELS = {"cpu": 65_536, "cuda": 8_000_000}
+"""Image pixels per pass of :func:`predict_matcher` by device type (at least one image a
+pass). On the CPU one image at a time is fastest (a batch's activations leave the cache:
+4 images of 320x180 took twice as long per image on one thread); a GPU wants large batches,
+about ``CHUNK_PIXELS * features * 4`` bytes per activation (2 GB at 64 maps)."""
+
+
+def _chunk_pixels(device: torch.device, chunk_pixels) -> int:
+    if chunk_pixels is not None:
+        return max(1, int(chunk_pixels))
+    return CHUNK_PIXELS.get(device.type, CHUNK_PIXELS["cuda"])
 
 
 @torch.no_grad()
-def batch_features(net: MatchingNet, images, *, chunk_pixels: int = CHUNK_PIXELS) -> torch.Tensor:
+def batch_features(net: MatchingNet, images, *, chunk_pixels: int | None = None) -> torch.Tensor:
     """Features of a stack of grey images of one shape, in forward passes of at most
-    ``chunk_pixels`` image pixels (at least one image each).
+    ``chunk_pixels`` image pixels (at least one image each; default :data:`CHUNK_PIXELS` of
+    the network's device), in channels-last layout (1.6x faster on one CPU thread).
 
     Parameters
     ----------
     net : MatchingNet
     images : sequence of numpy.ndarray, shape (H, W)
-    chunk_pixels : int, keyword-only
+    chunk_pixels : int, optional, keyword-only
 
     Returns
     -------
@@ -256,9 +265,16 @@ def batch_features(net: MatchingNet, images, *, chunk_pixels: int = CHUNK_PIXELS
     """
     device = next(net.parameters()).device
     stack = torch.from_numpy(np.ascontiguousarray(np.stack(images), dtype=np.float32))[:, None]
-    per = max(1, int(chunk_pixels) // max(1, stack.shape[2] * stack.shape[3]))
+    pixels = max(1, stack.shape[2] * stack.shape[3])
+    per = max(1, _chunk_pixels(device, chunk_pixels) // pixels)
     net = net.eval()
-    return torch.cat([net(stack[i : i + per].to(device)) for i in range(0, len(stack), per)])
+    layout = torch.channels_last
+    return torch.cat(
+        [
+            net(stack[i : i + per].to(device).contiguous(memory_format=layout)).contiguous()
+            for i in range(0, len(stack), per)
+        ]
+    )
 
 
 @torch.no_grad()
@@ -281,7 +297,7 @@ def _wta_batch(feat_left, feat_right, *, sign: int, max_disparity: int) -> torch
 
 
 def predict_matcher(
-    net: MatchingNet, pairs, *, sign: int, max_disparity: int, chunk_pixels: int = CHUNK_PIXELS
+    net: MatchingNet, pairs, *, sign: int, max_disparity: int, chunk_pixels: int | None = None
 ) -> list[np.ndarray]:
     """:func:`wta_disparity` of many pairs at once: the features of every distinct image of
     the pairs in batched forward passes, then the winner-take-all scan of all pairs together.
@@ -304,8 +320,9 @@ def predict_matcher(
         :math:`s` (right pixel at :math:`x + s d`).
     max_disparity : int, keyword-only
         :math:`D`.
-    chunk_pixels : int, keyword-only
-        Image pixels per forward pass (:data:`CHUNK_PIXELS`).
+    chunk_pixels : int, optional, keyword-only
+        Image pixels per forward pass and per scan (default :data:`CHUNK_PIXELS` of the
+        network's device).
 
     Returns
     -------
@@ -341,7 +358,7 @@ def predict_matcher(
                     slot[id(image)] = len(images)
                     images.append(image)
         feats = batch_features(net, images, chunk_pixels=chunk_pixels)
-        per = max(1, int(chunk_pixels) // max(1, shape[0] * shape[1]))
+        per = max(1, _chunk_pixels(feats.device, chunk_pixels) // max(1, shape[0] * shape[1]))
         for i in range(0, len(members), per):
             chunk = members[i : i + per]
             rows_l = torch.tensor([slot[id(pairs[k][0])] for k in chunk], device=feats.device)
