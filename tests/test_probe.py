@@ -21,11 +21,11 @@ import torch  # the probe extra, which the set-up installs
 from scipy.ndimage import gaussian_filter
 from torch.nn import functional as F
 
-from stereovar.intervention.shuffle import block_permutation
 from stereovar.io.images import linear_to_srgb
 
 # imported as a module: pytest would collect test_scene and TestSettings by their names
 from stereovar.probe import experiment
+from stereovar.probe.conditions import CONTROL
 from stereovar.probe.experiment import fold_scenes
 from stereovar.probe.inputs import (
     TEST_INPUTS,
@@ -33,8 +33,13 @@ from stereovar.probe.inputs import (
     network_input,
     shift_columns,
 )
-from stereovar.probe.metrics import CONTROL, TILE_COLUMNS, probe_rows
-from stereovar.probe.network import MatchingNet, border, score_volume, wta_disparity
+from stereovar.probe.network import (
+    MatchingNet,
+    border,
+    predict_matcher,
+    score_volume,
+    wta_disparity,
+)
 from stereovar.probe.scoring import SUMS, tile_sums
 from stereovar.probe.training import (
     TrainingFrame,
@@ -45,8 +50,6 @@ from stereovar.probe.training import (
 )
 from stereovar.statistics.correlation import pearson_over_mask
 from stereovar.statistics.warp import warp_right_to_left
-
-from .reference.shuffle import decorrelate_right
 
 H, W = 48, 96  # the synthetic pairs of the training tests
 B = 4  # the network's border: four unpadded 3x3 convolutions
@@ -310,267 +313,18 @@ def test_tile_sums_match_brute_force():
             s["hits"] += int(err < 1)
             s["abs_error"] += err
             s["pulled"] += int(abs(d_hat[y, x] - (d_gt[y, x] + k)) < 1)
+            s["zero"] += int(abs(d_hat[y, x]) < 0.5)
 
     got = tile_sums(d_hat, d_gt, mask, labels, conflict_shift=k)
     assert got["tile"].tolist() == sorted(brute)
     for name in SUMS:
         expected = [brute[t][name] for t in sorted(brute)]
         np.testing.assert_allclose(got[name], expected, rtol=1e-12)
-    for name in ("n", "hits", "pulled"):
+    for name in ("n", "hits", "pulled", "zero"):
         assert np.issubdtype(got[name].dtype, np.integer)
     assert sum(brute[t]["pulled"] for t in brute) > 0 and sum(brute[t]["hits"] for t in brute) > 0
     with pytest.raises(ValueError, match="differ in shape"):
         tile_sums(d_hat, d_gt, mask[:, :-1], labels, conflict_shift=k)
-
-
-INPUTS3 = ("normal", "shuffled", "conflict")
-
-
-def tile_table(
-    rng,
-    *,
-    seeds=None,
-    scenes=("a", "b"),
-    tiles_per_scene=6,
-    regions=("all", "glass"),
-    same_across_seeds=False,
-    same_across_tiles=False,
-    seed_rates=None,
-):
-    """A synthetic probe tile table: networks ``none`` and the control tested on ``none``'s
-    renders, the control alone on its own; one pixel count per (condition, region, scene,
-    tile) shared by every network, seed and input (as in a real test job)."""
-    seeds = seeds or {"none": (0, 1, 2), CONTROL: (7, 9)}
-    rows = []
-    for tested in ("none", CONTROL):
-        networks = ("none", CONTROL) if tested == "none" else (CONTROL,)
-        for region in regions:
-            fixed_n = int(rng.integers(40, 200))
-            for scene in scenes:
-                for tile in range(tiles_per_scene):
-                    n = fixed_n if same_across_tiles else int(rng.integers(20, 200))
-                    tile_id = 3 * tile + 1  # tile numbers need not be contiguous
-                    for network in networks:
-                        first = None
-                        for j, train_seed in enumerate(seeds[network]):
-                            if same_across_seeds and first is not None:
-                                sums = first
-                            else:
-                                sums = {}
-                                for t in INPUTS3:
-                                    if seed_rates is not None:
-                                        p = seed_rates[network][j][t]
-                                        hits = int(round(p * n))
-                                    else:
-                                        hits = int(rng.binomial(n, rng.uniform(0.3, 0.95)))
-                                    pulled = int(rng.binomial(n - hits, 0.4))
-                                    sums[t] = (hits, float(rng.uniform(0.1, 4.0) * n), pulled)
-                                first = sums
-                            for t in INPUTS3:
-                                hits, abs_error, pulled = sums[t]
-                                rows.append(
-                                    {
-                                        "tested": tested,
-                                        "network": network,
-                                        "train_seed": train_seed,
-                                        "test_input": t,
-                                        "region": region,
-                                        "scene": scene,
-                                        "tile": tile_id,
-                                        "n": n,
-                                        "hits": hits,
-                                        "abs_error": abs_error,
-                                        "pulled": pulled,
-                                    }
-                                )
-    return pd.DataFrame(rows, columns=list(TILE_COLUMNS))
-
-
-def brute_ratio(df, tested, region, network, test_input, numerator):
-    """Mean over training seeds of the seed's pooled ``numerator / n``, by explicit loops."""
-    pooled: dict = {}
-    for r in df.itertuples(index=False):
-        if (r.tested, r.region, r.network, r.test_input) == (tested, region, network, test_input):
-            acc = pooled.setdefault(r.train_seed, [0.0, 0.0])
-            acc[0] += getattr(r, numerator)
-            acc[1] += r.n
-    return float(np.mean([num / den for num, den in pooled.values()]))
-
-
-def test_probe_rows_point_estimates_match_brute_force():
-    df = tile_table(np.random.default_rng(21))
-    rows = probe_rows(df, reps=200, seed=3)
-    keys = [(r["training"], r["region"], r["test_input"]) for r in rows]
-    assert keys == [
-        (tested, region, t)
-        for tested in ("none", CONTROL)
-        for region in ("all", "glass")
-        for t in INPUTS3
-    ]
-    for row in rows:
-        own, region, t = row["training"], row["region"], row["test_input"]
-        part = df[(df["tested"] == own) & (df["region"] == region)]
-
-        def ratio(network, test_input, numerator, own=own, region=region):
-            return brute_ratio(df, own, region, network, test_input, numerator)
-
-        acc = ratio(own, t, "hits")
-        drop = ratio(own, "normal", "hits") - acc
-        assert row["accuracy"] == pytest.approx(acc, rel=1e-12)
-        assert row["epe"] == pytest.approx(ratio(own, t, "abs_error"), rel=1e-12)
-        assert row["drop"] == pytest.approx(drop, abs=1e-12)
-        assert row["control_accuracy"] == pytest.approx(ratio(CONTROL, t, "hits"), rel=1e-12)
-        if own == CONTROL:
-            assert np.isnan(row["did"]) and np.isnan(row["did_low"])
-        else:
-            c_drop = ratio(CONTROL, "normal", "hits") - ratio(CONTROL, t, "hits")
-            assert row["did"] == pytest.approx(drop - c_drop, abs=1e-12)
-        if t == "conflict":
-            pulled = ratio(own, t, "pulled")
-            assert row["pulled"] == pytest.approx(pulled, rel=1e-12)
-            if own == CONTROL:
-                assert np.isnan(row["pulled_vs_control"])
-            else:
-                expected = pulled - ratio(CONTROL, t, "pulled")
-                assert row["pulled_vs_control"] == pytest.approx(expected, abs=1e-12)
-        else:
-            assert np.isnan(row["pulled"]) and np.isnan(row["pulled_vs_control"])
-        first_seed = min(part.loc[part["network"] == own, "train_seed"])
-        one = part[
-            (part["network"] == own)
-            & (part["train_seed"] == first_seed)
-            & (part["test_input"] == t)
-        ]
-        assert row["n_pixels"] == int(one["n"].sum())
-        assert row["n_tiles"] == len(set(zip(part["scene"], part["tile"], strict=True))) == 12
-        assert row["train_seeds"] == (3 if own == "none" else 2)
-        assert row["control_seeds"] == 2
-
-
-def test_probe_rows_intervals_hold_the_point_and_pair_the_draws():
-    rows = probe_rows(tile_table(np.random.default_rng(22)), reps=500, seed=0)
-    for row in rows:
-        for name in ("accuracy", "epe", "drop", "did", "pulled", "pulled_vs_control"):
-            value, low, high = row[name], row[f"{name}_low"], row[f"{name}_high"]
-            if np.isnan(value):
-                assert np.isnan(low) and np.isnan(high)
-                continue
-            assert low - 1e-12 <= value <= high + 1e-12, (row["training"], name, low, value, high)
-        if row["test_input"] == "normal":
-            # the drop of the normal input from itself is 0 in every replicate: paired draws
-            assert row["drop"] == row["drop_low"] == row["drop_high"] == 0.0
-            if row["training"] != CONTROL:
-                assert row["did"] == row["did_low"] == row["did_high"] == 0.0
-        else:
-            assert row["accuracy_low"] < row["accuracy_high"]
-            assert row["drop_low"] < row["drop_high"]
-
-
-def test_probe_rows_zero_width_when_tiles_and_seeds_agree():
-    rng = np.random.default_rng(23)
-    df = tile_table(rng, same_across_seeds=True, same_across_tiles=True)
-    # identical tiles: every tile of a (condition, network, input, region) has the same sums
-    first = df.groupby(["tested", "network", "test_input", "region"]).transform("first")
-    for name in ("hits", "abs_error", "pulled"):
-        df[name] = first[name]
-    rows = probe_rows(df, reps=300, seed=1)
-    for row in rows:
-        for name in ("accuracy", "epe", "drop", "did", "pulled", "pulled_vs_control"):
-            if np.isnan(row[name]):
-                continue
-            assert row[f"{name}_low"] == pytest.approx(row[name], abs=1e-12), name
-            assert row[f"{name}_high"] == pytest.approx(row[name], abs=1e-12), name
-    assert sum(np.isfinite(r["pulled_vs_control"]) for r in rows) == 2  # none's conflict rows
-
-
-def test_probe_rows_seed_only_interval_is_the_range_of_the_seeds():
-    """Tiles identical within a seed: the interval comes from training seeds alone; with two
-    seeds drawn with replacement the mean is the lower seed's, the midpoint or the upper
-    seed's, each at least a quarter of the time, so the 95 % interval is [min, max]."""
-    rates = {
-        "none": [
-            {"normal": 0.8, "shuffled": 0.5, "conflict": 0.6},
-            {"normal": 0.7, "shuffled": 0.65, "conflict": 0.3},
-        ],
-        CONTROL: [
-            {"normal": 0.75, "shuffled": 0.7, "conflict": 0.7},
-            {"normal": 0.75, "shuffled": 0.7, "conflict": 0.7},
-        ],
-    }
-    df = tile_table(
-        np.random.default_rng(24),
-        seeds={"none": (0, 1), CONTROL: (0, 1)},
-        regions=("all",),
-        same_across_tiles=True,
-        seed_rates=rates,
-    )
-    n = int(df["n"].iloc[0])
-    rows = {(r["training"], r["test_input"]): r for r in probe_rows(df, reps=2000, seed=5)}
-    for t in INPUTS3:
-        row = rows["none", t]
-        per_seed = [round(rates["none"][j][t] * n) / n for j in range(2)]
-        assert row["accuracy"] == pytest.approx(np.mean(per_seed), abs=1e-12)
-        assert row["accuracy_low"] == pytest.approx(min(per_seed), abs=1e-12)
-        assert row["accuracy_high"] == pytest.approx(max(per_seed), abs=1e-12)
-        drops = [round(rates["none"][j]["normal"] * n) / n - per_seed[j] for j in range(2)]
-        assert row["drop_low"] == pytest.approx(min(drops), abs=1e-12)
-        assert row["drop_high"] == pytest.approx(max(drops), abs=1e-12)
-        # the control's two seeds agree: its drop is a constant, so DiD spans the drop's range
-        c_drop = round(0.75 * n) / n - round(rates[CONTROL][0][t] * n) / n
-        assert row["did_low"] == pytest.approx(min(drops) - c_drop, abs=1e-12)
-        assert row["did_high"] == pytest.approx(max(drops) - c_drop, abs=1e-12)
-
-
-def test_probe_rows_tile_interval_matches_a_brute_force_tile_bootstrap():
-    """Seeds identical (no training spread), 80 tiles: the interval is the tile bootstrap's
-    alone; compared with an independent bootstrap within Monte Carlo tolerance."""
-    rng = np.random.default_rng(25)
-    df = tile_table(
-        rng, scenes=("a", "b"), tiles_per_scene=40, regions=("all",), same_across_seeds=True
-    )
-    rows = {(r["training"], r["test_input"]): r for r in probe_rows(df, reps=2000, seed=2)}
-
-    def per_tile(network, test_input, numerator):
-        sel = df[
-            (df["tested"] == "none")
-            & (df["network"] == network)
-            & (df["test_input"] == test_input)
-            & (df["train_seed"] == df.loc[df["network"] == network, "train_seed"].min())
-        ].sort_values(["scene", "tile"])
-        return sel[numerator].to_numpy(dtype=float), sel["n"].to_numpy(dtype=float)
-
-    reps, n_tiles = 4000, 80
-    boot = np.random.default_rng(99)
-    replicates = {"acc": [], "drop": [], "did": []}
-    tiles = {(net, t): per_tile(net, t, "hits") for net in ("none", CONTROL) for t in INPUTS3}
-    for _ in range(reps):
-        draw = boot.integers(0, n_tiles, n_tiles)
-        acc = {key: h[draw].sum() / n[draw].sum() for key, (h, n) in tiles.items()}
-        replicates["acc"].append(acc["none", "shuffled"])
-        drop = acc["none", "normal"] - acc["none", "shuffled"]
-        replicates["drop"].append(drop)
-        replicates["did"].append(drop - (acc[CONTROL, "normal"] - acc[CONTROL, "shuffled"]))
-    row = rows["none", "shuffled"]
-    wide = probe_rows(tile_table(np.random.default_rng(26)), reps=500, seed=0)
-    wide = next(r for r in wide if (r["training"], r["test_input"]) == ("none", "shuffled"))
-    for name, key in (("accuracy", "acc"), ("drop", "drop"), ("did", "did")):
-        r = np.asarray(replicates[key])
-        low, high = np.quantile(r, [0.025, 0.975])
-        tol = 0.3 * r.std()  # ~4 Monte Carlo standard errors of the two quantile estimates
-        assert row[f"{name}_low"] == pytest.approx(low, abs=tol), name
-        assert row[f"{name}_high"] == pytest.approx(high, abs=tol), name
-        # 80 tiles and no seed spread: narrower than 12 tiles with three different seeds
-        assert high - low < wide[f"{name}_high"] - wide[f"{name}_low"]
-
-
-def test_probe_rows_rejects_incomplete_tables():
-    df = tile_table(np.random.default_rng(27))
-    with pytest.raises(ValueError, match="lacks columns"):
-        probe_rows(df.drop(columns=["pulled"]))
-    with pytest.raises(ValueError, match="normal"):
-        probe_rows(df[df["test_input"] != "normal"])
-    with pytest.raises(ValueError, match="sensor_only"):
-        probe_rows(df[df["network"] != CONTROL])
 
 
 # --------------------------------------------------------------------------------------------
@@ -631,42 +385,6 @@ def test_conflict_moves_the_right_variance_to_d_plus_k(sign):
     assert abs(rho(var_normal, d + k)) < 0.2
 
 
-def test_shuffled_permutes_residual_blocks_and_keeps_the_seed_mean():
-    rng = np.random.default_rng(32)
-    n_draws, h, w, block, seed = 6, 40, 56, 8, 2
-    left = rng.uniform(0.0, 1.0, (n_draws, h, w, 3))
-    right = rng.uniform(0.0, 1.0, (n_draws, h, w, 3))
-    bar_left, bar_right = left.mean(axis=0), right.mean(axis=0)
-    perm = block_permutation(h, w, block=block, seed=seed)
-    nx = w // block
-    out = np.empty_like(right)
-    for n in range(n_draws):
-        a, b = counterfactual_pair(
-            "shuffled",
-            left[n],
-            right[n],
-            bar_left,
-            bar_right,
-            sign=1,
-            block=block,
-            shuffle_seed=seed,
-        )
-        np.testing.assert_array_equal(a, left[n])
-        out[n] = b
-        # tile k of the new residual is tile perm[k] of the old one, pixel by pixel
-        eps, new_eps = right[n] - bar_right, b - bar_right
-        for tile, src in enumerate(perm):
-            (di, dj), (si, sj) = divmod(tile, nx), divmod(int(src), nx)
-            np.testing.assert_allclose(
-                new_eps[di * block : (di + 1) * block, dj * block : (dj + 1) * block],
-                eps[si * block : (si + 1) * block, sj * block : (sj + 1) * block],
-                atol=1e-12,
-            )
-    assert not np.allclose(out, right)
-    np.testing.assert_allclose(out.mean(axis=0), bar_right, atol=1e-12)
-    np.testing.assert_allclose(out, decorrelate_right(right, block=block, seed=seed), atol=1e-12)
-
-
 def test_clean_camera_and_normal_inputs():
     rng = np.random.default_rng(33)
     shape = (8, 12, 3)
@@ -680,7 +398,9 @@ def test_clean_camera_and_normal_inputs():
     a, b = counterfactual_pair("camera", left, right, bar_l, bar_r, sign=1, camera=(eta_l, eta_r))
     np.testing.assert_allclose(a, bar_l + eta_l, rtol=0, atol=0)
     np.testing.assert_allclose(b, bar_r + eta_r, rtol=0, atol=0)
-    assert set(TEST_INPUTS) == {"normal", "shuffled", "camera", "clean", "conflict"}
+    assert set(TEST_INPUTS) == {
+        "normal", "shuffled", "camera", "camera_shuffled", "clean", "conflict"
+    }
     with pytest.raises(ValueError, match="camera="):
         counterfactual_pair("camera", left, right, bar_l, bar_r, sign=1)
     with pytest.raises(ValueError, match="unknown test input"):
@@ -778,7 +498,7 @@ def test_save_and_load_round_trip(trained, tmp_path):
     assert record["settings"] == asdict(settings)
     assert TrainSettings(**record["settings"]) == settings
     assert record["seed"] == 1 and record["meta"] == meta
-    assert record["architecture"] == {"features": 64, "layers": 4, "kernel": 3}
+    assert record["architecture"] == {"kind": "mccnn", "features": 64, "layers": 4, "kernel": 3}
     assert "state_dict" not in record
     left, right, _ = shifted_pair(np.random.default_rng(51), 5, 1, noise=NOISE)
     xl, xr = network_input(left), network_input(right)
@@ -853,11 +573,20 @@ def test_test_scene_scores_every_valid_pixel_of_each_frame(sign):
     glass = np.zeros((h, w), dtype=bool)
     glass[5:20, 10:30] = True
     gt = {"disparity": disparity, "valid": valid, "glass": glass}
-    networks = {("none", 0): seeded_net(0), (CONTROL, 4): seeded_net(1)}
+    networks = {("none", "main", 0): seeded_net(0), (CONTROL, "main", 4): seeded_net(1)}
     settings = experiment.TestSettings(test_frames=2, max_disparity=6, tile=tile, conflict_shift=2)
     regions = ("all", "glass", "non_glass")
     rows = experiment.test_scene(
-        networks, left, right, gt, scene="s1", sign=sign, regions=regions, settings=settings
+        networks,
+        predict_matcher,
+        left,
+        right,
+        gt,
+        scene="s1",
+        sign=sign,
+        regions=regions,
+        law=(0.01, 1e-4),
+        settings=settings,
     )
 
     # independent count: d finite and > 0, x + s d inside the image, valid, not in the border
@@ -877,8 +606,9 @@ def test_test_scene_scores_every_valid_pixel_of_each_frame(sign):
     assert set(df["scene"]) == {"s1"}
     combos = set(zip(df["network"], df["train_seed"], df["test_input"], df["region"], strict=True))
     assert combos == {
-        (net, seed, t, r) for net, seed in networks for t in TEST_INPUTS for r in regions
+        (net, seed, t, r) for net, _, seed in networks for t in TEST_INPUTS for r in regions
     }
+    assert set(df["variant"]) == {"main"}
     for (*_, region), part in df.groupby(["network", "train_seed", "test_input", "region"]):
         assert dict(zip(part["tile"], part["n"], strict=True)) == expected[region]
         assert (part["hits"] <= part["n"]).all() and (part["pulled"] <= part["n"]).all()
@@ -886,7 +616,7 @@ def test_test_scene_scores_every_valid_pixel_of_each_frame(sign):
 
     # the normal input's hits, recomputed from the network's own prediction of each frame
     d_gt = np.where(np.isfinite(disparity) & (disparity > 0), disparity, np.nan)
-    for (net_name, _), net in networks.items():
+    for (net_name, _, _), net in networks.items():
         hits: dict = {}
         for frame in range(2):
             d_hat = wta_disparity(

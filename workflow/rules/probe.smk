@@ -128,8 +128,6 @@ rule probe_table:
         ),
         verdict=PROBE_VERDICT,
     params:
-        reps=PROBE["reps"],
-        seed=PROBE["seed"],
         source=PROBE_SOURCE,
         runs=[
             {"condition": c.name, "spp": c.run.spp, "planted": c.factor}

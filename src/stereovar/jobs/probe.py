@@ -318,7 +318,7 @@ def training_rows(networks) -> list[dict]:
 
 def probe_table_job(
     tiles, outputs: dict, *, figure, verdict, training_outputs: dict, networks=(),
-    planted=None, reps: int = 1000, seed: int = 0, source="", runs: list | None = None,
+    planted=None, source="", runs: list | None = None,
 ) -> list[dict]:
     """The probe table, its training table, its figure and the verdict JSON from every test
     job's tiles and every network's record."""
@@ -336,7 +336,7 @@ def probe_table_job(
     strengths = (
         {name: float(v) for name, v in record["strengths"].items()} if record else None
     )
-    rows = probe_rows(table, strengths=strengths, reps=int(reps), seed=int(seed))
+    rows = probe_rows(table, strengths=strengths)
     columns = list(dict.fromkeys(k for r in rows for k in r))
     write_tables(
         rows,

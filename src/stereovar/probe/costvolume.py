@@ -301,8 +301,9 @@ class CostVolumeSettings:
     pixels per step, Adam with ``learning_rate``, at most ``steps`` steps, the plateau rule
     (validation accuracy checked every ``check_every`` steps; stop after ``patience`` checks
     without a gain of ``min_delta``, never before ``min_steps``), the smooth L1 loss's
-    ``beta`` (pixels), the Torch ``threads``, and ``max_disparity`` of the network (None: the
-    largest ground-truth disparity of the frames plus ``disparity_margin``)."""
+    ``beta`` (pixels), the Torch ``threads``, ``max_disparity`` of the network (None: the
+    largest ground-truth disparity of the frames plus ``disparity_margin``), and the network's
+    ``scale`` (the cost volume's downsampling, 2 or 4) and 2-D ``features``."""
 
     crops: int = 4
     crop_rows: int = 48
@@ -317,6 +318,13 @@ class CostVolumeSettings:
     threads: int = 1
     max_disparity: int | None = None
     disparity_margin: int = 4
+    scale: int = 2
+    features: int = 16
+
+    def network_config(self) -> dict:
+        """The network's size from these settings (:class:`CostVolumeNet`'s ``scale`` and
+        ``features``)."""
+        return {"scale": int(self.scale), "features": int(self.features)}
 
     def stop_rule(self) -> StopRule:
         """The :class:`~stereovar.probe.convergence.StopRule` of these settings."""
@@ -524,7 +532,7 @@ def train_costvolume(
     d_max = _frames_max_disparity(frames + held, settings)
     device = torch.device(device)
     torch.set_num_threads(int(settings.threads))
-    net = _seeded_net(seed, d_max, config).to(device)
+    net = _seeded_net(seed, d_max, config or settings.network_config()).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=settings.learning_rate)
     rng = np.random.default_rng([int(seed), 1])
     redraw_rng = np.random.default_rng([int(seed), 2])
