@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
+from stereovar import layout
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.io.images import write_field
 from stereovar.io.store import open_dataset
@@ -99,7 +100,8 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     settings["disparity"] = "data/disparity/{frame}.pfm"
     settings["mitigations"] = ["denoise"]  # from colour alone: an audit has no albedo/normal
     settings["probe"] = True  # the learned probe on the audit's frames, briefly trained
-    probe = {"train_seeds": 1, "test_frames": 1, "reps": 200,
+    probe = {"train_seeds": 2, "test_frames": 1, "conditions": ["none", "sensor_only", "denoise"],
+             "planted": [], "architectures": ["mccnn"],
              "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24}}
     (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe}))
     proc = subprocess.run(
@@ -143,11 +145,12 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     # audit.probe: networks trained on one frame and tested on the other, for the baseline,
     # the control and the audit's mitigation; the page's section states the verdict
     probe_rows = read_rows(base / "tables/probe.csv")
-    assert {r["training"] for r in probe_rows} == {"none", "sensor_only", "denoise"}
+    assert {r["tested"] for r in probe_rows} == {"none", "sensor_only", "denoise"}
     assert {r["region"] for r in probe_rows} == {"all"}  # no glass mask
     for fold, other in ((0, "f01"), (1, "f00")):
-        for key in ("", "sensor_only", "denoise"):  # the source key's transform segment
-            _, record = load_matcher(base / key / f"probe/spp0/networks/fold{fold}/seed0.pt")
+        for condition in ("none", "sensor_only", "denoise"):
+            path = layout.probe_network("audit/synthetic", condition, "mccnn", "main", fold, 0)
+            _, record = load_matcher(root / path)
             assert record["meta"]["scenes"] == [other]
     assert "## Learned probe" in page and summary["probe"]["paragraph"] in page
     assert "figures/probe.png" in page and (base / "figures/probe.png").is_file()

@@ -12,9 +12,9 @@ from stereovar import layout
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
 from stereovar.jobs.common import view_stack
+from stereovar.probe.architectures import architecture
 from stereovar.probe.experiment import scored_disparity
 from stereovar.probe.inputs import network_input
-from stereovar.probe.network import wta_disparity
 from stereovar.probe.training import load_matcher
 from stereovar.statistics.bootstrap import tile_labels
 
@@ -34,15 +34,20 @@ TINY_PROBE = {
     "analysis": {"bootstrap": {"tile": 8}},
     "mitigations": {"names": []},
     "probe": {
+        "planted": [2],
         "folds": 2,
         "train_seeds": 2,
         "test_frames": 1,
-        "reps": 200,
-        "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24},
+        "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24, "check_every": 4,
+                     "min_steps": 0, "patience": 1},
+        "costvolume": {"steps": 6, "crops": 2, "crop_rows": 16, "crop_cols": 40,
+                       "check_every": 3, "min_steps": 0, "patience": 1},
     },
 }
-CONDITIONS = ("none", "sensor_only")
-INPUTS = ("normal", "shuffled", "camera", "clean", "conflict")
+CONDITIONS = ("none", "sensor_only", "planted_x2")
+VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main",), "planted_x2": ("main", "twin")}
+ARCHS = ("mccnn", "costvolume")
+INPUTS = ("normal", "shuffled", "camera", "camera_shuffled", "clean", "conflict")
 
 
 @pytest.fixture(scope="module")
@@ -64,18 +69,28 @@ def test_probe_is_not_part_of_all_until_it_has_run(probe_run):
 
 def test_every_network_is_saved_with_its_config_and_reloads(probe_run):
     root, _ = probe_run
-    for condition in CONDITIONS:
-        for fold in (0, 1):
-            for j in (0, 1):
-                path = root / layout.probe_network("mitsuba", 2, fold, j, condition)
-                net, record = load_matcher(path)
-                assert record["seed"] == j  # probe.seed 0 + training seed j
-                assert record["meta"]["condition"] == condition
-                assert record["meta"]["fold"] == fold
-                held_out = TINY_PROBE["scenes"][fold]
-                assert held_out not in record["meta"]["scenes"]
-                assert record["settings"]["steps"] == 8
-                assert sum(p.numel() for p in net.parameters()) == 111424
+    for arch in ARCHS:
+        for condition in CONDITIONS:
+            for variant in VARIANTS[condition]:
+                for fold in (0, 1):
+                    for j in (0, 1):
+                        path = layout.probe_network("mitsuba", condition, arch, variant, fold, j)
+                        _, record = load_matcher(root / path)
+                        meta = record["meta"]
+                        assert record["seed"] == j  # probe.seed 0 + training seed j
+                        assert record["architecture"]["kind"] == arch
+                        assert (meta["condition"], meta["variant"]) == (condition, variant)
+                        assert meta["fold"] == fold
+                        assert meta["factor"] == (2.0 if condition == "planted_x2" else None)
+                        held_out = TINY_PROBE["scenes"][fold]
+                        assert held_out not in meta["scenes"]
+                        # one validation frame (the last seed) of the one training scene
+                        assert (meta["frames"], meta["validation_frames"]) == (2, 1)
+                        cap = TINY_PROBE["probe"]["training" if arch == "mccnn" else arch]
+                        assert 1 <= meta["steps"] <= cap["steps"]
+    planted = json.loads((root / layout.probe_planted("mitsuba")).read_text())
+    assert planted["strengths"]["2"] == pytest.approx(2 * planted["strength"])
+    assert set(planted["scenes"]) == set(TINY_PROBE["scenes"])
 
 
 def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
@@ -88,45 +103,52 @@ def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
     gt = open_dataset(root / layout.traced_ground_truth(scene)).sel(view="left").load()
     sign = int(gt.attrs["disparity_sign"])
     d_gt = scored_disparity(gt, sign=sign)
-    tiles = pd.read_csv(root / layout.probe_tiles("mitsuba", 2, fold))
     d_max = int(math.ceil(np.nanmax(np.where(gt["valid"], gt["disparity"], np.nan)))) + 4
-    net, _ = load_matcher(root / layout.probe_network("mitsuba", 2, fold, 1))
-    d_hat = wta_disparity(
-        net, network_input(left[0]), network_input(right[0]), sign=sign, max_disparity=d_max
-    )
     labels = tile_labels(d_gt.shape, 8)
-    rows = tiles[
-        (tiles.network == "none")
-        & (tiles.train_seed == 1)
-        & (tiles.test_input == "normal")
-        & (tiles.region == "all")
-    ]
-    assert set(rows.scene) == {scene}
-    scored = np.isfinite(d_gt) & np.isfinite(d_hat)
-    for _, row in rows.iterrows():
-        in_tile = scored & (labels == row.tile)
-        err = np.abs(d_hat[in_tile] - d_gt[in_tile])
-        assert row.n == in_tile.sum()
-        assert row.hits == (err < 1).sum()
-        assert row.abs_error == pytest.approx(err.sum(), rel=1e-9)
-    assert rows.n.sum() == scored.sum()
+    for arch in ARCHS:
+        tiles = pd.read_csv(root / layout.probe_tiles("mitsuba", "none", arch, fold))
+        net, _ = load_matcher(root / layout.probe_network("mitsuba", "none", arch, "twin", fold, 1))
+        d_hat = architecture(arch).predict(
+            net, [(network_input(left[0]), network_input(right[0]))], sign=sign,
+            max_disparity=d_max,
+        )[0]
+        rows = tiles[
+            (tiles.network == "none")
+            & (tiles.variant == "twin")
+            & (tiles.train_seed == 1)
+            & (tiles.test_input == "normal")
+            & (tiles.region == "all")
+        ]
+        assert set(rows.scene) == {scene} and set(rows.architecture) == {arch}
+        scored = np.isfinite(d_gt) & np.isfinite(d_hat)
+        for _, row in rows.iterrows():
+            in_tile = scored & (labels == row.tile)
+            err = np.abs(d_hat[in_tile] - d_gt[in_tile])
+            assert row.n == in_tile.sum()
+            assert row.hits == (err < 1).sum()
+            assert row.zero == (np.abs(d_hat[in_tile]) < 0.5).sum()
+            assert row.abs_error == pytest.approx(err.sum(), rel=1e-6, abs=1e-6)
+        assert rows.n.sum() == scored.sum()
 
 
 def test_the_table_pools_the_tiles_of_every_fold(probe_run):
     root, _ = probe_run
     tiles = pd.concat(
-        pd.read_csv(root / layout.probe_tiles("mitsuba", 2, f, c))
+        pd.read_csv(root / layout.probe_tiles("mitsuba", c, a, f))
         for c in CONDITIONS
+        for a in ARCHS
         for f in (0, 1)
     )
     table = read_rows(root / layout.probe_tables()[0])
-    assert {(r["training"], r["test_input"]) for r in table} == {
-        (c, t) for c in CONDITIONS for t in INPUTS
+    assert {(r["architecture"], r["tested"], r["test_input"]) for r in table} == {
+        (a, c, t) for a in ARCHS for c in CONDITIONS for t in INPUTS
     }
     for row in table:
         own = tiles[
-            (tiles.tested == row["training"])
-            & (tiles.network == row["training"])
+            (tiles.architecture == row["architecture"])
+            & (tiles.tested == row["tested"])
+            & (tiles.network == row["tested"])
+            & (tiles.variant == "main")
             & (tiles.region == row["region"])
         ]
         per_seed = []
@@ -134,12 +156,17 @@ def test_the_table_pools_the_tiles_of_every_fold(probe_run):
             part = own[(own.train_seed == seed) & (own.test_input == row["test_input"])]
             per_seed.append(part.hits.sum() / part.n.sum())
         assert row["accuracy"] == pytest.approx(np.mean(per_seed), abs=1e-12)
-        assert row["accuracy_low"] <= row["accuracy"] + 1e-12
-        assert row["accuracy_high"] >= row["accuracy"] - 1e-12
-        if row["training"] == "sensor_only":
+        if row["tested"] == "sensor_only":
             assert math.isnan(row["did"])
+        elif row["test_input"] == "shuffled":
+            assert row["did_low"] <= row["did"] <= row["did_high"]
         # both scenes' held-out tiles pooled
         assert set(own.scene) == set(TINY_PROBE["scenes"])
+    trained = read_rows(root / layout.probe_training_tables()[0])
+    assert {(r["architecture"], r["training"], r["variant"]) for r in trained} == {
+        (a, c, v) for a in ARCHS for c in CONDITIONS for v in VARIANTS[c]
+    }
+    assert all(r["networks"] == 4 for r in trained)  # 2 folds x 2 training seeds
 
 
 def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
@@ -149,13 +176,13 @@ def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
     shuffle = next(
         r
         for r in table
-        if (r["training"], r["test_input"], r["region"])
-        == ("none", "shuffled", verdict["region"])
+        if (r["architecture"], r["tested"], r["test_input"], r["region"])
+        == ("mccnn", "none", "shuffled", verdict["region"])
     )
     assert verdict["did"] == pytest.approx(shuffle["did"])
     assert verdict["uses_cue"] == (shuffle["did_low"] > 0)
     assert verdict["claim"]["answer"] == ("yes" if verdict["uses_cue"] else "no")
-    assert f"{shuffle['did']:+.3f}" in verdict["paragraph"]
+    assert set(verdict["architectures"]) == set(ARCHS)
     assert (root / layout.probe_figure()).stat().st_size > 0
 
 
@@ -163,4 +190,3 @@ def test_claims_take_the_probe_once_it_has_run(probe_run):
     root, _ = probe_run
     out = snakemake(root, "-n", "--forceall", "-p", "claims").stdout
     assert layout.probe_verdict() in out
-

@@ -968,6 +968,16 @@ def probe_train_inputs(wildcards):
     return probe_condition_stores(wildcards.condition, probe_folds()[int(wildcards.fold)][0])
 
 
+def probe_train_outputs(wildcards):
+    """The networks one training job writes: per variant of the condition, one per seed."""
+    condition = PROBE_CONDITIONS[wildcards.condition]
+    return [
+        layout.probe_network(PROBE_SOURCE, condition.name, wildcards.arch, v, wildcards.fold, j)
+        for v in condition.variants
+        for j in PROBE_SEEDS
+    ]
+
+
 def probe_networks(condition, arch, fold):
     """The networks one test job scores: the condition's, its twins' and the control's."""
     variants = [(condition, v) for v in PROBE_CONDITIONS[condition].variants]

@@ -30,32 +30,30 @@ rule probe_planted:
         "../scripts/probe_planted.py"
 
 
-# The networks of one condition, architecture, variant (the network or its cue-blind twin)
-# and fold, one per training seed, each trained to a plateau of validation accuracy.
+# The networks of one condition, architecture and fold: per variant (the network and its
+# cue-blind twin), one per training seed, each trained to a plateau of validation accuracy.
 rule probe_train:
     input:
         unpack(probe_train_inputs),
     output:
-        [
-            layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", "{variant}", "{fold}", j)
-            for j in PROBE_SEEDS
-        ],
+        probe_train_outputs,
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
         condition=lambda wc: wc.condition,
         arch=lambda wc: wc.arch,
-        variant=lambda wc: wc.variant,
+        variants=lambda wc: PROBE_CONDITIONS[wc.condition].variants,
         fold=lambda wc: int(wc.fold),
         seeds=[int(PROBE["seed"]) + j for j in PROBE_SEEDS],
         training=lambda wc: PROBE[architecture(wc.arch).config_key],
         factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
         strata=PROBE["strata"],
         planted_seed=PROBE["seed"],
+        validation_rows=PROBE["validation_rows"],
         device=PROBE["device"],
     log:
-        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/train/fold{fold}.log",
+        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/train/fold{fold}.log",
     benchmark:
-        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/{variant}/train/fold{fold}.tsv"
+        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/train/fold{fold}.tsv"
     threads: PROBE["training"]["threads"]
     resources:
         **analysis_resources(images=2 * N_SEEDS * len(SCENES) + 8, n_reads=2 * N_SEEDS),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -95,7 +96,7 @@ def train_job(
     scenes,
     condition,
     arch,
-    variant,
+    variants,
     fold,
     seeds,
     training: dict,
@@ -103,45 +104,65 @@ def train_job(
     planted=None,
     strata: int = 16,
     planted_seed: int = 0,
+    validation_rows: int | None = 64,
     device: str = "cpu",
 ) -> list[dict]:
-    """Train the networks of ``arch`` for ``condition`` (its ``variant``: the network, or its
-    cue-blind ``twin``) on ``scenes`` (the fold's training scenes), one per training seed of
-    ``seeds`` written to the matching path of ``outs``, each to a plateau of validation
-    accuracy on each scene's last seed index, and save each with its settings and history
-    (:func:`stereovar.probe.training.save_matcher`). The frames are read and built once.
+    """Train the networks of ``arch`` for ``condition`` on ``scenes`` (the fold's training
+    scenes): for each of ``variants`` (the network, ``main``, and its cue-blind ``twin``) one
+    per training seed of ``seeds``, written to ``outs`` in that order (variant-major), each to
+    a plateau of validation accuracy on each scene's last seed index, and save each with its
+    settings and history (:func:`stereovar.probe.training.save_matcher`). The renders are
+    read once. Validation reads a band of ``validation_rows`` rows of each held-out frame; a
+    twin trains exactly as many steps as its network (same seed) took to its best check, so
+    the two differ only in the twin's shuffled right residual.
 
     ``stores`` maps ``left_{scene}`` and ``right_{scene}`` to render-store paths and
     ``gt_{scene}`` to the scene's ground-truth store; a planted condition (``factor``) reads
     ``none``'s renders and the planted settings ``planted`` (:func:`planted_job`)."""
     from ..probe.architectures import architecture
     from ..probe.conditions import TWIN
-    from ..probe.experiment import split_validation, training_frames
+    from ..probe.experiment import split_validation, training_frames, validation_band
     from ..probe.training import save_matcher
 
-    outs, seeds = list(outs), [int(s) for s in seeds]
-    if len(outs) != len(seeds):
-        raise ValueError(f"{len(outs)} network paths for {len(seeds)} training seeds")
+    outs, seeds, variants = list(outs), [int(s) for s in seeds], list(variants)
+    if len(outs) != len(seeds) * len(variants):
+        raise ValueError(
+            f"{len(outs)} network paths for {len(variants)} variants x {len(seeds)} seeds"
+        )
     _check_device(device)
     entry = architecture(arch)
     settings = entry.settings(training)
     record = _read_planted(planted)
-    by_scene = []
-    for scene in scenes:
-        left, right, truths, sign, _ = _condition_data(
-            stores, scene, factor=factor, planted=record, seed_key=planted_seed
-        )
-        by_scene.append(
-            training_frames(
-                left, right, truths["left"], sign=sign, twin=variant == TWIN, strata=strata
-            )
-        )
-    frames, validation = split_validation(by_scene)
+    data = [
+        _condition_data(stores, scene, factor=factor, planted=record, seed_key=planted_seed)
+        for scene in scenes
+    ]
+    jobs = [(variant, seed) for variant in variants for seed in seeds]
+    best_steps: dict = {}
     metas = []
-    for out, seed in zip(outs, seeds, strict=True):
-        net, history = entry.train(
-            frames, settings, seed=seed, device=device, validation=validation or None
-        )
+    frames_of = {}
+    for out, (variant, seed) in zip(outs, jobs, strict=True):
+        if variant not in frames_of:
+            frames_of[variant] = split_validation(
+                [
+                    training_frames(
+                        left, right, truths["left"], sign=sign, twin=variant == TWIN,
+                        strata=strata,
+                    )
+                    for left, right, truths, sign, _ in data
+                ]
+            )
+        frames, validation = frames_of[variant]
+        matched = variant == TWIN and seed in best_steps
+        if matched:  # the twin trains as long as its network did: no plateau of its own
+            own = replace(settings, steps=max(int(best_steps[seed]), 1))
+            net, history = entry.train(frames, own, seed=seed, device=device, validation=None)
+        else:
+            net, history = entry.train(
+                frames, settings, seed=seed, device=device,
+                validation=validation_band(validation, rows=validation_rows) or None,
+            )
+            best_steps[seed] = history.get("best_step") or history.get("steps")
         losses = [x for x in history["loss"] if math.isfinite(x)]
         tail = losses[-max(1, len(losses) // 10) :]
         meta = {
@@ -155,6 +176,7 @@ def train_job(
             "validation_frames": len(validation),
             "steps": int(history.get("steps", len(history["loss"]))),
             "best_step": history.get("best_step"),
+            "matched_steps": matched,
             "validation": [list(v) for v in history.get("validation", [])],
             "seconds": history["seconds"],
             "step_seconds": history["step_seconds"],
