@@ -190,3 +190,66 @@ def test_claims_take_the_probe_once_it_has_run(probe_run):
     root, _ = probe_run
     out = snakemake(root, "-n", "--forceall", "-p", "claims").stdout
     assert layout.probe_verdict() in out
+
+
+USER_MODEL = '''
+import torch
+from torch import nn
+
+
+class Wta(nn.Module):
+    """(left, right) sRGB (B, 3, H, W) -> disparity (B, 1, H, W), right pixel at x - d."""
+
+    def __init__(self, max_disparity=8):
+        super().__init__()
+        self.features = nn.Conv2d(3, 8, 5, padding=2)
+        self.max_disparity = max_disparity
+
+    def forward(self, left, right):
+        fl, fr = self.features(left), self.features(right)
+        width = fr.shape[-1]
+        costs = [
+            (fl * nn.functional.pad(fr, (d, 0))[..., :width]).sum(1)
+            for d in range(self.max_disparity + 1)
+        ]
+        return torch.stack(costs, 1).argmax(1, keepdim=True).float()
+
+
+def factory():
+    return Wta()
+'''
+
+
+def test_stereovar_probe_runs_the_users_model_on_the_runs_frames(probe_run):
+    """`stereovar probe --model module:factory --weights FILE`, end to end on the run's
+    renders: the loading, the frames' stores, the counterfactual inputs, the table and the
+    one-line reading (whether a network uses the cue is tests/test_probe_user_model.py's)."""
+    import subprocess
+    import sys
+
+    import torch
+
+    root, _ = probe_run
+    (root / "user_models.py").write_text(USER_MODEL)
+    sys.path.insert(0, str(root))
+    try:
+        from user_models import factory
+    finally:
+        sys.path.remove(str(root))
+    torch.manual_seed(0)
+    torch.save(factory().state_dict(), root / "weights.pt")
+    command = [sys.executable, "-m", "stereovar.cli", "probe", "--model", "user_models:factory"]
+    proc = subprocess.run(
+        [*command, "--weights", "weights.pt", "--test-frames", "2"],
+        cwd=root, capture_output=True, text=True,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    rows = read_rows(root / layout.probe_model_tables("mitsuba")[0])
+    names = {r["row"] for r in rows}
+    assert {"mc_shuffle", "camera_shuffle", "mc_minus_camera"} <= names, names
+    assert "shuffle" in proc.stdout and "probe_model.md" in proc.stdout
+    missing = subprocess.run(
+        [*command, "--weights", "nowhere.pt"], cwd=root, capture_output=True, text=True
+    )
+    assert missing.returncode != 0
+    assert len(missing.stderr.strip().splitlines()) == 1 and "nowhere.pt" in missing.stderr

@@ -428,6 +428,7 @@ def all_targets():
             *mitigation_targets(),
             *calibration_targets(),
             *probe_targets(),
+            *(layout.probe_model_tables(get_renderer()) if AUDIT.get("probe_model") else []),
         ]
     shared = [
         *[layout.traced_ground_truth(s) for s in SCENES],
@@ -922,6 +923,7 @@ PROBE_FIGURE = layout.probe_figure(PROBE_SOURCE)
 PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
 PROBE_PLANTED = layout.probe_planted(PROBE_SOURCE)
 PROBE_ANY_PLANTED = any(c.planted for c in PROBE_CONDITIONS.values())
+PROBE_TWINNED = [name for name, c in PROBE_CONDITIONS.items() if c.twin]
 
 
 def probe_folds():
@@ -966,16 +968,6 @@ def probe_planted_inputs(wildcards):
 def probe_train_inputs(wildcards):
     """The training scenes of the wildcards' fold under its condition."""
     return probe_condition_stores(wildcards.condition, probe_folds()[int(wildcards.fold)][0])
-
-
-def probe_train_outputs(wildcards):
-    """The networks one training job writes: per variant of the condition, one per seed."""
-    condition = PROBE_CONDITIONS[wildcards.condition]
-    return [
-        layout.probe_network(PROBE_SOURCE, condition.name, wildcards.arch, v, wildcards.fold, j)
-        for v in condition.variants
-        for j in PROBE_SEEDS
-    ]
 
 
 def probe_networks(condition, arch, fold):

@@ -31,12 +31,19 @@ rule probe_planted:
 
 
 # The networks of one condition, architecture and fold: per variant (the network and its
-# cue-blind twin), one per training seed, each trained to a plateau of validation accuracy.
+# cue-blind twin), one per training seed, each trained to a plateau of validation accuracy
+# (the twin as many steps as its network); the control sensor_only has no twin.
 rule probe_train:
     input:
         unpack(probe_train_inputs),
     output:
-        probe_train_outputs,
+        [
+            layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", v, "{fold}", j)
+            for v in ("main", "twin")
+            for j in PROBE_SEEDS
+        ],
+    wildcard_constraints:
+        condition="|".join(map(re.escape, PROBE_TWINNED)) or "none",
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
         condition=lambda wc: wc.condition,
@@ -61,6 +68,17 @@ rule probe_train:
         ENV
     script:
         "../scripts/probe_train.py"
+
+
+# The control's networks of one architecture and fold: no twin.
+use rule probe_train as probe_train_control with:
+    output:
+        [
+            layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", "main", "{fold}", j)
+            for j in PROBE_SEEDS
+        ],
+    wildcard_constraints:
+        condition=re.escape(PROBE_CONTROL),
 
 
 # Every network of the condition, its twins and the control's for one architecture and fold,
