@@ -24,15 +24,32 @@
    ``--cpu-seeds`` shorten the CPU variants (a render's rate hardly depends on its SPP; the
    default SPP is the preset's only for GPU variants).
 
-2. **Probe** (PyTorch; ``workflow/presets/probe.yaml``). On synthetic textured pairs with a
-   known disparity of 1-13 px at the preset's 320x180 (``bench/probe.py``'s generator), the
-   training of one network (:func:`stereovar.probe.training.train_matcher`, the preset's
-   training settings, 24 frames: 4 training scenes x N = 6) and one held-out scene's test
-   (:func:`stereovar.probe.experiment.test_scene`: the 6 networks of a test job, both test
-   frames, every test input, D = 17), plus one 1280x720 pair's
-   :func:`~stereovar.probe.network.wta_disparity`, on ``cuda`` against the named baseline,
-   the same on that machine's CPU with the job's Torch threads (1), and with every core. GPU
-   results are checked against the CPU's (first losses, equal disparities).
+2. **Probe** (PyTorch; the full-power ``workflow/presets/probe.yaml``). On synthetic textured
+   scenes with a known disparity of 1-13 px at the preset's 320x180 (``bench/probe.py``'s
+   generator; N renders per view with 2 % noise), shaped as one fold of the preset (its
+   training scenes x N, the last seed index of each held out; the validation bands of
+   ``probe.validation_rows`` rows), for each architecture
+   (:func:`stereovar.probe.architectures.architecture`, its settings the schema's defaults):
+
+   * one network trained to its plateau of validation accuracy (steps taken, best step,
+     seconds, seconds per check) and its cue-blind twin
+     (:func:`~stereovar.probe.experiment.training_frames` with ``twin=True``) trained for the
+     network's best step, as :func:`stereovar.jobs.probe.train_job` trains them;
+   * ``--fixed-steps`` steps (200) without checks, so the per-step ratio is clean;
+   * one test job (:func:`stereovar.probe.experiment.test_scene`: the tested condition's
+     networks, their twins and the control's, ``--test-seeds`` each, on ``--test-scenes``
+     held-out scenes, ``probe.test_frames`` frames, every test input, D = 20), the test inputs
+     alone, and one network's prediction of one scene;
+
+   each on ``cuda`` against the named baseline, the CPU with a job's Torch threads (1). Where a
+   GPU runs, the CPU takes the GPU's steps and checks at its own rates (``--twin-steps`` of
+   a twin, a check timed alone; ``--cpu-plateau`` trains to the plateau there too) and
+   tests ``--cpu-test-seeds`` networks per group with the GPU's weights (tiles with equal
+   hits show that both devices predict alike). Last, the probe stage of the preset and of
+   the default ``config.yaml`` (networks and test jobs counted from the configs: conditions,
+   variants, planted factors, architectures, seeds and folds) projected from these rates, on
+   each device with the jobs one after another and on 2 CPU cores (the baseline's jobs two
+   at a time), with their ratios.
 
 ``--json PATH`` writes every number. ``--tiny`` runs everything at a small size (a check that
 it works on any machine; its rates mean nothing).
@@ -40,7 +57,8 @@ it works on any machine; its rates mean nothing).
 Usage::
 
     python bench/gpu.py --json gpu.json          # on a machine with an NVIDIA GPU
-    .venv/bin/python bench/gpu.py --tiny         # quick check, CPU only
+    python bench/gpu.py --no-render --json gpu.json   # the probe alone (about 4 min)
+    .venv/bin/python bench/gpu.py --tiny --no-render  # quick check of the probe, CPU only
 """
 
 from __future__ import annotations
@@ -295,101 +313,475 @@ def synthetic_scene(height: int, width: int, n: int, seed: int):
     return noisy(left), noisy(right), truth
 
 
-def probe_part(args, report: dict) -> None:
-    import numpy as np
-    import torch
-    from probe import SIGN, synthetic_frame
+PROBE_CONFIGS = {
+    "preset": ("config.yaml", "workflow/presets/probe.yaml"),
+    "default": ("config.yaml",),
+}
+"""The configs whose probe stage is projected: the full-power preset and the default."""
 
+TEST_GROUPS = (("none", "main"), ("none", "twin"), ("sensor_only", "main"))
+"""The networks of one test job: the tested condition's, its twins and the control's."""
+
+
+def probe_config(name: str) -> dict:
+    """A merged config of :data:`PROBE_CONFIGS` with the schema's defaults."""
     from stereovar.config import load_config
-    from stereovar.probe.experiment import TestSettings, test_scene
-    from stereovar.probe.network import MatchingNet, wta_disparity
-    from stereovar.probe.training import TrainingFrame, TrainSettings, train_matcher
 
-    config = load_config(
-        [str(REPO / "config.yaml"), str(REPO / "workflow/presets/probe.yaml")], SCHEMA
+    return load_config([str(REPO / p) for p in PROBE_CONFIGS[name]], SCHEMA)
+
+
+def probe_workload(config: dict) -> dict:
+    """What a config's probe stage trains and tests, per architecture.
+
+    ``mains``: networks trained to a plateau, each with the validation frames of its fold
+    (one per training scene); ``twins``: cue-blind twins (every condition but
+    ``sensor_only``), each trained for its network's best step; ``tests``: one
+    ``(held-out scenes, networks)`` per test job (condition x fold), the networks being the
+    condition's and its twins' plus the control's, ``train_seeds`` each."""
+    from stereovar.probe.conditions import CONTROL, probe_conditions
+    from stereovar.probe.experiment import fold_scenes
+
+    probe = config["probe"]
+    seeds = int(probe["train_seeds"])
+    folds = fold_scenes(config["scenes"], int(probe["folds"]))
+    conditions = probe_conditions(config)
+    validating = int(config["render"]["n_seeds"]) >= 2
+    work = {}
+    for arch in dict.fromkeys(probe["architectures"]):
+        mains, twins, tests = [], 0, []
+        for c in conditions:
+            for train, held in folds:
+                mains += [len(train) if validating else 0] * seeds
+                twins += seeds if c.twin else 0
+                nets = seeds * len(c.variants) + (seeds if c.name != CONTROL else 0)
+                tests.append((len(held), nets))
+        work[arch] = {"mains": mains, "twins": twins, "tests": tests}
+    return {
+        "conditions": [c.name for c in conditions],
+        "architectures": list(work),
+        "folds": len(folds),
+        "train_seeds": seeds,
+        "per_architecture": work,
+    }
+
+
+def workload_seconds(work: dict, cost: dict) -> dict:
+    """Seconds of one architecture's training and test jobs at ``cost``: ``main`` (a network
+    to its plateau, checks excluded), ``check_frame`` (one validation frame of one check),
+    ``checks`` (checks per network), ``twin``, ``pairs`` (a held-out scene's test inputs)
+    and ``net_scene`` (one network's prediction and scoring of one held-out scene)."""
+    train = sum(cost["main"] + cost["checks"] * cost["check_frame"] * v for v in work["mains"])
+    train += work["twins"] * cost["twin"]
+    test = sum(h * (cost["pairs"] + n * cost["net_scene"]) for h, n in work["tests"])
+    return {"train_s": train, "test_s": test, "total_s": train + test}
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def probe_data(args, config: dict) -> dict:
+    """Synthetic scenes in the preset's shape: training frames of one fold (its training
+    scenes x N, the last seed index of each held out for validation), the twin's frames,
+    the validation bands, and held-out test scenes."""
+    from probe import SIGN
+
+    from stereovar.probe.experiment import (
+        fold_scenes,
+        split_validation,
+        training_frames,
+        validation_band,
     )
+
+    probe = config["probe"]
     height, width = config["resolution"]["height"], config["resolution"]["width"]
-    settings = TrainSettings(**config["probe"]["training"])
-    n_frames, big = 4 * config["render"]["n_seeds"], (720, 1280)
+    n = int(config["render"]["n_seeds"])
+    train_scenes = len(fold_scenes(config["scenes"], int(probe["folds"]))[0][0])
+    test_scenes = args.test_scenes
     if args.tiny:
-        settings = TrainSettings(**{**config["probe"]["training"], "steps": 4})
-        height, width, n_frames, big = 60, 120, 2, (90, 160)
-    frames = [
-        TrainingFrame(*synthetic_frame(height, width, 1.0, 13.0, seed=k), SIGN)
-        for k in range(n_frames)
-    ]
-    left, right, truth = synthetic_scene(height, width, config["render"]["n_seeds"], seed=99)
-    test = TestSettings(test_frames=config["probe"]["test_frames"], max_disparity=17)
-    pair = synthetic_frame(*big, 1.0, 13.0, seed=123)
-    cpus = os.cpu_count() or 1
-    runs = [("cpu", settings.threads)] + ([("cpu", cpus)] if cpus > settings.threads else [])
-    if torch.cuda.is_available():
-        runs = [("cuda", settings.threads)] + runs
-    else:
-        print("probe: no CUDA device visible to PyTorch; CPU only")
-    print(
-        f"probe: {settings.steps} training steps on {n_frames} synthetic {width}x{height} frames "
-        f"({settings.crops} crops of {settings.crop_rows}x{settings.crop_cols} features); test "
-        f"of one scene by 6 networks ({test.test_frames} frames x {len(test.inputs)} inputs, "
-        f"D = {test.max_disparity}); wta_disparity on one {big[1]}x{big[0]} pair"
-    )
-    results, d_hats = {}, {}
-    print(f"  {'':18s} {'training':>20s} {'test of one scene':>18s} {'wta 1 pair':>12s}")
-    for device, threads in runs:
-        name = f"{device} ({threads} thread{'s' if threads > 1 else ''})"
-        torch.set_num_threads(threads)
-        step = TrainSettings(**{**vars(settings), "steps": 3, "threads": threads})
-        train_matcher(frames, step, seed=0, device=device)  # warm-up: context, kernels
-        timed = TrainSettings(**{**vars(settings), "threads": threads})
-        net, history = train_matcher(frames, timed, seed=0, device=device)
-        nets = {}
-        for k in range(6):
-            torch.manual_seed(k)
-            nets["net", k] = MatchingNet().to(device)
-        regions = ("all", "non_glass", "glass")
-        kwargs = {"scene": "synthetic", "sign": SIGN, "regions": regions, "settings": test}
-        torch.set_num_threads(threads)
-        small = {k: v[:48, :96] for k, v in truth.items()}
-        test_scene(nets, left[:2, :48, :96], right[:2, :48, :96], small, **kwargs)  # warm-up
-        t0 = time.perf_counter()
-        test_scene(nets, left, right, truth, **kwargs)
-        test_s = time.perf_counter() - t0
-        warm = pair[0][:90, :160], pair[1][:90, :160]
-        wta_disparity(nets["net", 0], *warm, sign=SIGN, max_disparity=17)  # warm-up
-        t0 = time.perf_counter()
-        d_hats[name] = wta_disparity(nets["net", 0], pair[0], pair[1], sign=SIGN, max_disparity=17)
-        wta_s = time.perf_counter() - t0
-        results[name] = {
-            "device": device,
-            "threads": threads,
-            "train_s": history["seconds"],
-            "step_ms": 1e3 * history["step_seconds"],
-            "first_losses": history["loss"][:3],
-            "test_scene_s": test_s,
-            "wta_big_s": wta_s,
+        height, width, n, train_scenes = 64, 160, 3, 2
+    scenes = [synthetic_scene(height, width, n, seed=s) for s in range(train_scenes)]
+    variants = {}
+    for twin in (False, True):
+        variants[twin] = split_validation(
+            [
+                training_frames(left, right, truth, sign=SIGN, twin=twin, strata=probe["strata"])
+                for left, right, truth in scenes
+            ]
+        )
+    frames, validation = variants[False]
+    return {
+        "height": height,
+        "width": width,
+        "n": n,
+        "train_scenes": train_scenes,
+        "frames": frames,
+        "twin_frames": variants[True][0],
+        "band": validation_band(validation, rows=probe["validation_rows"]),
+        "validation_rows": probe["validation_rows"],
+        "test": [synthetic_scene(height, width, n, seed=100 + s) for s in range(test_scenes)],
+    }
+
+
+def train_measure(entry, settings, data, device: str, args, *, plateau: bool) -> dict:
+    """One architecture's training on ``device``: a network to its plateau on the validation
+    bands and its twin for the network's best step (``plateau``), ``--fixed-steps`` steps
+    without checks, a twin's steps without checks (``--twin-steps``, where no plateau runs),
+    and the seconds of one validation check."""
+    from dataclasses import replace
+
+    frames, twins, band = data["frames"], data["twin_frames"], data["band"]
+    out = {}
+    entry.train(frames, replace(settings, steps=3), seed=0, device=device)  # warm-up
+    if plateau:
+        net, h = entry.train(frames, settings, seed=0, device=device, validation=band)
+        checks = max(len(h["validation"]), 1)
+        out["plateau"] = {
+            "steps": h["steps"],
+            "best_step": h["best_step"],
+            "seconds": h["seconds"],
+            "step_s": h["step_seconds"],
+            "checks": len(h["validation"]),
+            "check_s": h["validation_seconds"] / checks,
+            "best_accuracy": max((a for _, a in h["validation"]), default=float("nan")),
         }
-        print(
-            f"  {name:18s} {history['seconds']:8.2f} s {1e3 * history['step_seconds']:7.2f} "
-            f"ms/step {test_s:16.2f} s {wta_s:10.3f} s"
+        out["net"] = net
+        _, t = entry.train(
+            twins, replace(settings, steps=max(int(h["best_step"]), 1)), seed=0, device=device
         )
-    base_name = f"cpu ({settings.threads} thread{'s' if settings.threads > 1 else ''})"
-    base = results[base_name]
-    for name, r in results.items():
-        if r is base:
+        out["twin"] = {"steps": t["steps"], "seconds": t["seconds"], "step_s": t["step_seconds"]}
+    else:
+        _, t = entry.train(twins, replace(settings, steps=args.twin_steps), seed=0, device=device)
+        out["twin_fixed"] = {
+            "steps": t["steps"],
+            "seconds": t["seconds"],
+            "step_s": t["step_seconds"],
+        }
+        two = replace(settings, steps=2, check_every=1, min_steps=0)
+        _, c = entry.train(frames, two, seed=0, device=device, validation=band)
+        out["check_s"] = c["validation_seconds"] / max(len(c["validation"]), 1)
+    _, f = entry.train(frames, replace(settings, steps=args.fixed_steps), seed=0, device=device)
+    out["fixed"] = {
+        "steps": f["steps"],
+        "seconds": f["seconds"],
+        "step_s": f["step_seconds"],
+        "first_losses": f["loss"][:3],
+    }
+    return out
+
+
+def test_measure(entry, net, data, device: str, per_group: int, test) -> dict:
+    """One test job on ``device``: ``per_group`` copies of ``net`` for each of
+    :data:`TEST_GROUPS` on every held-out scene (:func:`~stereovar.probe.experiment.test_scene`),
+    the seconds of the test inputs alone per scene, and of one network's prediction of one
+    scene's inputs."""
+    import copy
+
+    import numpy as np
+    from probe import SIGN
+
+    from stereovar.probe.experiment import scene_law, test_pairs, test_scene
+
+    nets = {
+        (c, v, j): copy.deepcopy(net).to(device) for c, v in TEST_GROUPS for j in range(per_group)
+    }
+    scenes = [
+        (left, right, truth, scene_law(left, truth["valid"])) for left, right, truth in data["test"]
+    ]
+    regions = ("all", "non_glass", "glass")
+    left, right, truth, law = scenes[0]
+    small = {k: v[:40, :120] for k, v in truth.items()}
+    one = dict(list(nets.items())[:1])
+    test_scene(
+        one,
+        entry.predict,
+        left[:2, :40, :120],
+        right[:2, :40, :120],
+        small,
+        scene="warm",
+        sign=SIGN,
+        regions=regions,
+        law=law,
+        settings=test,
+    )  # warm-up
+    t0 = time.perf_counter()
+    pairs = [
+        test_pairs(lf, rt, scene=f"s{i}", sign=SIGN, law=lw, settings=test)
+        for i, (lf, rt, _, lw) in enumerate(scenes)
+    ]
+    pairs_s = (time.perf_counter() - t0) / len(scenes)
+    t0 = time.perf_counter()
+    entry.predict(
+        next(iter(nets.values())),
+        list(pairs[0].values()),
+        sign=SIGN,
+        max_disparity=test.max_disparity,
+    )
+    predict_s = time.perf_counter() - t0
+    rows = []
+    t0 = time.perf_counter()
+    for i, (lf, rt, tr, lw) in enumerate(scenes):
+        rows += test_scene(
+            nets,
+            entry.predict,
+            lf,
+            rt,
+            tr,
+            scene=f"s{i}",
+            sign=SIGN,
+            regions=regions,
+            law=lw,
+            settings=test,
+        )
+    seconds = time.perf_counter() - t0
+    hits = {}
+    for r in rows:
+        key = (
+            r["network"],
+            r["variant"],
+            r["train_seed"],
+            r["test_input"],
+            r["region"],
+            r["scene"],
+            r["tile"],
+        )
+        hits[key] = r["hits"]
+    net_scene = max(seconds - pairs_s * len(scenes), 0.0) / (len(nets) * len(scenes))
+    return {
+        "networks": len(nets),
+        "scenes": len(scenes),
+        "pairs_per_scene": len(pairs[0]),
+        "seconds": seconds,
+        "pairs_s": pairs_s,
+        "predict_s": predict_s,
+        "net_scene_s": net_scene,
+        "scoring_share": float(np.clip(1 - predict_s / net_scene, 0, 1)) if net_scene else None,
+        "hits": hits,
+    }
+
+
+def _cost(run: dict, plateau_of: dict, validation_frames: int) -> dict:
+    """The per-unit seconds of :func:`workload_seconds` from one device's measurements;
+    ``plateau_of`` gives the steps, checks and best step (this device's plateau where it ran
+    one, else the GPU's)."""
+    p = plateau_of
+    if "plateau" in run:
+        main = run["plateau"]["seconds"] - run["plateau"]["checks"] * run["plateau"]["check_s"]
+        check = run["plateau"]["check_s"]
+        twin = run["twin"]["seconds"]
+    else:  # steps and checks of the GPU's plateau at this device's rates
+        main = p["steps"] * run["fixed"]["step_s"]
+        check = run["check_s"]
+        twin = p["best_step"] * run["twin_fixed"]["step_s"]
+    test = run["test"]
+    return {
+        "main": main,
+        "checks": run["plateau"]["checks"] if "plateau" in run else p["checks"],
+        "check_frame": check / max(validation_frames, 1),
+        "twin": twin,
+        "pairs": test["pairs_s"],
+        "net_scene": test["net_scene_s"],
+    }
+
+
+def _agreement(a: dict, b: dict) -> float | None:
+    common = set(a) & set(b)
+    return sum(a[k] == b[k] for k in common) / len(common) if common else None
+
+
+def probe_part(args, report: dict) -> None:
+    """Section 2 of the module docstring."""
+    from dataclasses import replace
+
+    import torch
+
+    from stereovar.probe.architectures import architecture
+    from stereovar.probe.experiment import TestSettings
+
+    config = probe_config("preset")
+    probe = config["probe"]
+    data = probe_data(args, config)
+    test = TestSettings(
+        test_frames=probe["test_frames"],
+        max_disparity=args.max_disparity,
+        strata=probe["strata"],
+        conflict_shift=probe["conflict_shift"],
+        tile=config["analysis"]["bootstrap"]["tile"],
+    )
+    cuda = torch.cuda.is_available()
+    base = "cpu (1 thread)"
+    devices = (["cuda"] if cuda else []) + [base]
+    if not cuda:
+        print("probe: no CUDA device visible to PyTorch; the CPU only (networks to a plateau)")
+    else:
+        print(f"probe: {torch.cuda.get_device_name(0)}, torch {torch.__version__}")
+    print(
+        f"probe: synthetic {data['width']}x{data['height']} scenes (disparity 1-13 px), "
+        f"{data['train_scenes']} training scenes x N = {data['n']}: {len(data['frames'])} "
+        f"training frames, {len(data['band'])} validation bands of {data['validation_rows']} "
+        f"rows; test job: {len(data['test'])} held-out scenes x {test.test_frames} frames x "
+        f"{len(test.inputs)} inputs, D = {test.max_disparity}; the named baseline: {base} "
+        f"(a job's Torch threads)"
+    )
+    results = {}
+    for arch in dict.fromkeys(probe["architectures"]):
+        entry = architecture(arch)
+        settings = entry.settings(probe[entry.config_key])
+        if args.tiny:
+            settings = replace(settings, steps=12, check_every=4, patience=1, min_steps=4)
+        runs = {}
+        for device in devices:
+            name = "cuda" if device == "cuda" else base
+            dev = "cuda" if device == "cuda" else "cpu"
+            torch.set_num_threads(1)
+            plateau = dev == "cuda" or not cuda or args.cpu_plateau
+            run = train_measure(entry, settings, data, dev, args, plateau=plateau)
+            net = run.pop("net", None)
+            if "cuda" in runs:  # the GPU's network: both devices test the same weights
+                net = runs["cuda"]["_net"]
+            per_group = args.test_seeds if dev == "cuda" or not cuda else args.cpu_test_seeds
+            torch.set_num_threads(1)
+            run["test"] = test_measure(entry, net, data, dev, per_group, test)
+            run["_net"] = net
+            runs[name] = run
+        ref = runs[devices[0] if devices[0] == "cuda" else base]["plateau"]
+        for run in runs.values():
+            run["cost"] = _cost(run, ref, len(data["band"]))
+            run.pop("_net")
+        results[arch] = {"label": entry.label, "settings": vars(settings), "runs": runs}
+        print_arch(arch, entry.label, settings, runs, base, len(data["band"]))
+    print(
+        "  projections: every network and test job of a config at the rates above, jobs one "
+        "after another on one device (their CPU parts included); 2 CPU cores: the baseline's "
+        "1-thread jobs two at a time; store reads, planting and job starts not included"
+    )
+    projections = {}
+    for key in PROBE_CONFIGS:
+        projections[key] = project(key, results, base, args)
+    for arch in results:
+        for run in results[arch]["runs"].values():
+            run["test"].pop("hits")
+    report["probe"] = {
+        "data": {k: data[k] for k in ("height", "width", "n", "train_scenes", "validation_rows")},
+        "test_settings": {k: v for k, v in vars(test).items()},
+        "baseline": base,
+        "architectures": results,
+        "projection": projections,
+    }
+
+
+def print_arch(arch, label, settings, runs, base, bands: int) -> None:
+    """One architecture's measurements on each device and the ratios to the baseline."""
+    print(
+        f"  {arch} ({label}): steps cap {settings.steps}, a check every {settings.check_every}, "
+        f"patience {settings.patience}, min_delta {settings.min_delta}, min_steps "
+        f"{settings.min_steps}, {settings.crops} crops of {settings.crop_rows}x"
+        f"{settings.crop_cols}"
+    )
+    for name, r in runs.items():
+        p, f, t = r.get("plateau"), r["fixed"], r["test"]
+        if p:
+            line = (
+                f"plateau {p['steps']} steps (best {p['best_step']}, accuracy "
+                f"{p['best_accuracy']:.3f}) {p['seconds']:.1f} s ({1e3 * p['step_s']:.1f} ms/step, "
+                f"{p['checks']} checks x {p['check_s']:.2f} s); twin {r['twin']['steps']} steps "
+                f"{r['twin']['seconds']:.1f} s ({1e3 * r['twin']['step_s']:.1f} ms/step)"
+            )
+        else:
+            c = r["cost"]
+            own = c["main"] + c["checks"] * r["check_s"]
+            line = (
+                f"no plateau run (--cpu-plateau runs one): the GPU's steps and {c['checks']} "
+                f"checks x {r['check_s']:.2f} s at this device's rates give {own:.1f} s; "
+                f"twin {r['twin_fixed']['steps']} steps {1e3 * r['twin_fixed']['step_s']:.1f} "
+                f"ms/step -> {c['twin']:.1f} s for the best step"
+            )
+        print(f"    {name:15s} {line}")
+        print(
+            f"    {'':15s} {f['steps']} fixed steps {f['seconds']:.1f} s = "
+            f"{1e3 * f['step_s']:.2f} ms/step (first loss {f['first_losses'][0]:.5f}); test of "
+            f"{t['networks']} networks x {t['scenes']} scenes {t['seconds']:.1f} s "
+            f"({t['pairs_s']:.2f} s inputs per scene, {t['net_scene_s']:.2f} s per "
+            f"network-scene, of which {t['predict_s']:.2f} s prediction)"
+        )
+    b = runs.get(base)
+    for name, r in runs.items():
+        if r is b or b is None:
             continue
-        r["speedup_train"] = base["train_s"] / r["train_s"]
-        r["speedup_test"] = base["test_scene_s"] / r["test_scene_s"]
-        r["speedup_wta_big"] = base["wta_big_s"] / r["wta_big_s"]
-        ref = d_hats[base_name]
-        ok = np.isfinite(ref)
-        r["wta_agreement"] = float((d_hats[name][ok] == ref[ok]).mean())
+        ratios = {
+            "fixed_step": b["fixed"]["step_s"] / r["fixed"]["step_s"],
+            "plateau_network": _network_s(b, bands) / _network_s(r, bands),
+            "twin": b["cost"]["twin"] / r["cost"]["twin"],
+            "test_job": _test_job_s(b) / _test_job_s(r),
+            "hits_agree": _agreement(r["test"]["hits"], b["test"]["hits"]),
+        }
+        r["ratios_to_baseline"] = ratios
+        agree = ratios["hits_agree"]
         print(
-            f"  {name} against the baseline cpu ({base['threads']} thread): training "
-            f"{r['speedup_train']:.2f}x, test {r['speedup_test']:.2f}x, wta "
-            f"{r['speedup_wta_big']:.2f}x faster; first losses {r['first_losses'][0]:.5f} vs "
-            f"{base['first_losses'][0]:.5f}; equal disparities {100 * r['wta_agreement']:.2f}%"
+            f"    {name} against {base}: {ratios['fixed_step']:.1f}x per fixed step, "
+            f"{ratios['plateau_network']:.1f}x a network to its plateau, {ratios['twin']:.1f}x "
+            f"a twin, {ratios['test_job']:.1f}x a test job of 9 networks x 2 scenes; tiles "
+            f"with equal hits (same weights) "
+            f"{'n/a' if agree is None else f'{100 * agree:.2f}%'}"
         )
-    report["probe"] = results
+
+
+def _network_s(run: dict, bands: int) -> float:
+    """Seconds of one network to its plateau with ``bands`` validation frames."""
+    c = run["cost"]
+    return c["main"] + c["checks"] * c["check_frame"] * bands
+
+
+def _test_job_s(run: dict, scenes: int = 2, networks: int = 9) -> float:
+    """Seconds of a test job of ``networks`` networks on ``scenes`` held-out scenes."""
+    c = run["cost"]
+    return scenes * (c["pairs"] + networks * c["net_scene"])
+
+
+def project(key: str, results: dict, base: str, args) -> dict:
+    """The probe stage's training and test seconds of config ``key`` on each device measured
+    (jobs one after another) and on 2 CPU cores (1-thread jobs two at a time)."""
+    config = probe_config(key)
+    work = probe_workload(config)
+    paths = " + ".join(PROBE_CONFIGS[key])
+    per = work["per_architecture"]
+    print(
+        f"  projection, {paths}: {len(work['conditions'])} conditions "
+        f"({', '.join(work['conditions'])}) x {len(work['architectures'])} architectures x "
+        f"{work['folds']} folds x {work['train_seeds']} seeds; "
+        + "; ".join(
+            f"{arch}: {len(w['mains'])} networks to a plateau + {w['twins']} twins, "
+            f"{len(w['tests'])} test jobs ({sum(h for h, _ in w['tests'])} scene tests, "
+            f"{sum(h * n for h, n in w['tests'])} network-scenes)"
+            for arch, w in per.items()
+        )
+    )
+    out = {"configs": list(PROBE_CONFIGS[key]), "workload": work, "devices": {}}
+    devices = {}
+    for arch, w in per.items():
+        if arch not in results:
+            continue
+        for name, run in results[arch]["runs"].items():
+            seconds = workload_seconds(w, run["cost"])
+            d = devices.setdefault(name, {"train_s": 0.0, "test_s": 0.0, "total_s": 0.0})
+            for k in ("train_s", "test_s", "total_s"):
+                d[k] += seconds[k]
+            d.setdefault("per_architecture", {})[arch] = seconds
+    if base in devices:
+        cpu = devices[base]
+        devices["2 CPU cores"] = {k: cpu[k] / 2 for k in ("train_s", "test_s", "total_s")}
+    for name, d in devices.items():
+        extra = ""
+        if name not in ("2 CPU cores", base) and "2 CPU cores" in devices:
+            two = devices["2 CPU cores"]["total_s"]
+            d["speedup_vs_2_cores"] = two / d["total_s"]
+            extra = f"; {d['speedup_vs_2_cores']:.1f}x the speed of 2 CPU cores"
+        print(
+            f"    {name:15s} training {d['train_s'] / 60:8.1f} min + test "
+            f"{d['test_s'] / 60:8.1f} min = {d['total_s'] / 3600:6.2f} h{extra}"
+        )
+    out["devices"] = devices
+    return out
 
 
 def main(argv=None) -> int:
@@ -401,12 +793,44 @@ def main(argv=None) -> int:
     parser.add_argument("--cpu-spp", type=int, default=64, help="SPP of CPU variants")
     parser.add_argument("--cpu-seeds", type=int, default=1, help="seed indices of CPU variants")
     parser.add_argument("--tiny", action="store_true", help="small sizes: a check that it runs")
-    parser.add_argument("--no-render", action="store_true")
-    parser.add_argument("--no-probe", action="store_true")
+    parser.add_argument("--no-render", action="store_true", help="skip the renders (part 1)")
+    parser.add_argument("--no-probe", action="store_true", help="skip the probe (part 2)")
+    parser.add_argument(
+        "--fixed-steps",
+        type=int,
+        default=200,
+        help="probe: steps of the fixed-step training on each device",
+    )
+    parser.add_argument(
+        "--twin-steps",
+        type=int,
+        default=100,
+        help="probe: steps of the CPU's twin rate (without --cpu-plateau)",
+    )
+    parser.add_argument(
+        "--cpu-plateau",
+        action="store_true",
+        help="probe: train to the plateau and the twin on the CPU as well",
+    )
+    parser.add_argument("--test-scenes", type=int, default=2, help="probe: held-out scenes")
+    parser.add_argument(
+        "--test-seeds",
+        type=int,
+        default=3,
+        help="probe: networks per group (condition, twin, control) of the test",
+    )
+    parser.add_argument(
+        "--cpu-test-seeds",
+        type=int,
+        default=1,
+        help="probe: the same on the CPU where a GPU runs the full test",
+    )
+    parser.add_argument("--max-disparity", type=int, default=20, help="probe: D of the test")
     parser.add_argument("--json", help="write every number to this file")
     args = parser.parse_args(argv)
     if args.tiny:
         args.spp, args.seeds, args.cpu_spp, args.cpu_seeds = 8, 2, 8, 1
+        args.fixed_steps, args.twin_steps, args.test_seeds, args.cpu_test_seeds = 4, 4, 1, 1
     report = {"argv": sys.argv[1:], "cpus": os.cpu_count()}
     parts = [] if args.no_render else [("render", render_part)]
     if not args.no_probe:
