@@ -37,6 +37,7 @@ from .scoring import SUMS, tile_sums
 from .training import TrainingFrame
 
 __all__ = [
+    "TWIN_POOL",
     "TestSettings",
     "fold_scenes",
     "grey_stack",
@@ -49,6 +50,10 @@ __all__ = [
     "training_frames",
     "validation_band",
 ]
+
+
+TWIN_POOL = 16
+"""Stratified shuffles of each training frame's right residual that a twin picks from."""
 
 
 @dataclass(frozen=True)
@@ -105,7 +110,14 @@ def grey_stack(stack) -> np.ndarray:
 
 
 def training_frames(
-    left, right, ground_truth_left, *, sign: int, twin: bool = False, strata: int = STRATA
+    left,
+    right,
+    ground_truth_left,
+    *,
+    sign: int,
+    twin: bool = False,
+    strata: int = STRATA,
+    pool: int = TWIN_POOL,
 ) -> list[TrainingFrame]:
     """One :class:`~stereovar.probe.training.TrainingFrame` per seed index of a scene.
 
@@ -132,6 +144,8 @@ def training_frames(
     twin : bool, keyword-only
     strata : int, keyword-only
         Intensity strata of the shuffle.
+    pool : int, keyword-only
+        Shuffles drawn per frame for the twin (:data:`TWIN_POOL`).
     """
     if np.shape(left) != np.shape(right):
         raise ValueError(f"left and right renders differ: {np.shape(left)} vs {np.shape(right)}")
@@ -141,20 +155,30 @@ def training_frames(
     for n, (l_, r_) in enumerate(zip(left, right, strict=True)):
         redraw = None
         if twin:
-            redraw = _twin_redraw(grey_right, n, int(strata))
+            redraw = _twin_redraw(grey_right, n, int(strata), int(pool))
         frames.append(
             TrainingFrame(network_input(l_), network_input(r_), d, int(sign), redraw=redraw)
         )
     return frames
 
 
-def _twin_redraw(grey_right: np.ndarray, n: int, strata: int):
+def _twin_redraw(grey_right: np.ndarray, n: int, strata: int, pool: int):
+    """The redraw of frame ``n``'s right input: one of ``pool`` stratified shuffles of its
+    residual, drawn once (from a generator of the frame's own) and picked at random at each
+    use, so a step pays an index, not a shuffle of the whole frame."""
     mean = reference_mean(grey_right[..., None], n)[..., 0]
     scale = noise_scale(grey_right.shape[0] - 1, residual=True)
     residual = scale * (grey_right[n] - mean)
+    rng = np.random.default_rng([int(n), int(strata), 35])
+    inputs = np.stack(
+        [
+            network_input(mean + stratified_shuffle(residual, mean, rng=rng, strata=strata))
+            for _ in range(int(pool))
+        ]
+    )
 
     def redraw(rng: np.random.Generator) -> np.ndarray:
-        return network_input(mean + stratified_shuffle(residual, mean, rng=rng, strata=strata))
+        return inputs[int(rng.integers(len(inputs)))]
 
     return redraw
 
