@@ -924,6 +924,10 @@ PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
 PROBE_PLANTED = layout.probe_planted(PROBE_SOURCE)
 PROBE_ANY_PLANTED = any(c.planted for c in PROBE_CONDITIONS.values())
 PROBE_TWINNED = [name for name, c in PROBE_CONDITIONS.items() if c.twin]
+# wildcard patterns: the conditions, those with a twin, the architectures
+PROBE_CONDITION_PATTERN = "|".join(map(re.escape, PROBE_CONDITIONS)) or "none"
+PROBE_TWINNED_PATTERN = "|".join(map(re.escape, PROBE_TWINNED)) or "none"
+PROBE_ARCH_PATTERN = "|".join(PROBE_ARCHS) or "mccnn"
 
 
 def probe_folds():
@@ -1020,6 +1024,12 @@ def probe_table_inputs(wildcards):
     if PROBE_ANY_PLANTED:
         inputs["planted"] = PROBE_PLANTED
     return inputs
+
+
+def probe_model_stores(wildcards=None):
+    """Every frame's render stores of each view and its ground truth (``left_{scene}``,
+    ``right_{scene}``, ``gt_{scene}``): the audit's imported frames, or the run's scenes."""
+    return probe_stores(get_renderer(), MAIN_SPP, SCENES)
 
 
 def probe_targets():

@@ -6,8 +6,8 @@
 
 
 wildcard_constraints:
-    condition="|".join(map(re.escape, PROBE_CONDITIONS)) or "none",
-    arch="|".join(PROBE_ARCHS) or "mccnn",
+    condition=PROBE_CONDITION_PATTERN,
+    arch=PROBE_ARCH_PATTERN,
     variant="main|twin",
 
 
@@ -43,7 +43,7 @@ rule probe_train:
             for j in PROBE_SEEDS
         ],
     wildcard_constraints:
-        condition="|".join(map(re.escape, PROBE_TWINNED)) or "none",
+        condition=PROBE_TWINNED_PATTERN,
     params:
         scenes=lambda wc: probe_folds()[int(wc.fold)][0],
         condition=lambda wc: wc.condition,
@@ -58,9 +58,9 @@ rule probe_train:
         validation_rows=PROBE["validation_rows"],
         device=PROBE["device"],
     log:
-        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/train/fold{fold}.log",
+        f"logs/{PROBE_SOURCE}/probe/{{condition}}/{{arch}}/train/fold{{fold}}.log",
     benchmark:
-        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/train/fold{fold}.tsv"
+        f"benchmarks/{PROBE_SOURCE}/probe/{{condition}}/{{arch}}/train/fold{{fold}}.tsv"
     threads: PROBE["training"]["threads"]
     resources:
         **analysis_resources(images=2 * N_SEEDS * len(SCENES) + 8, n_reads=2 * N_SEEDS),
@@ -107,9 +107,9 @@ rule probe_test:
         threads=1,
         device=PROBE["device"],
     log:
-        "logs/" + PROBE_SOURCE + "/probe/{condition}/{arch}/test/fold{fold}.log",
+        f"logs/{PROBE_SOURCE}/probe/{{condition}}/{{arch}}/test/fold{{fold}}.log",
     benchmark:
-        "benchmarks/" + PROBE_SOURCE + "/probe/{condition}/{arch}/test/fold{fold}.tsv"
+        f"benchmarks/{PROBE_SOURCE}/probe/{{condition}}/{{arch}}/test/fold{{fold}}.tsv"
     threads: 1
     resources:
         **analysis_resources(images=4 * N_SEEDS * len(SCENES) + 16, n_reads=2 * N_SEEDS),

@@ -9,23 +9,21 @@ PROBE_MODEL_SOURCE = get_renderer()  # the renderer, or the audit's source
 PROBE_MODEL = (AUDIT or {}).get("probe_model")
 
 
-def probe_model_stores(wildcards=None):
-    """Every frame's render stores of each view and its ground truth (``left_{scene}``,
-    ``right_{scene}``, ``gt_{scene}``): the audit's imported frames, or the run's scenes."""
-    return probe_stores(PROBE_MODEL_SOURCE, MAIN_SPP, SCENES)
-
-
 # The frames `stereovar probe` runs the model on, made if missing, and listed.
 rule probe_model_frames:
     input:
         unpack(probe_model_stores),
     output:
         frames_manifest(PROBE_MODEL_SOURCE),
+    log:
+        f"logs/{PROBE_MODEL_SOURCE}/probe_model/frames.log",
+    params:
+        scenes=SCENES,
     localrule: True
-    run:
-        from stereovar.jobs.probe_model import write_manifest
-
-        write_manifest(dict(input.items()), SCENES, output[0])
+    conda:
+        ENV
+    script:
+        "../scripts/probe_model_frames.py"
 
 
 if PROBE_MODEL:
