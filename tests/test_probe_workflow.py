@@ -35,6 +35,7 @@ TINY_PROBE = {
     "mitigations": {"names": []},
     "probe": {
         "planted": [2],
+        "architectures": ["costvolume"],  # MC-CNN: the audit's probe, test_audit_workflow.py
         "folds": 2,
         "train_seeds": 2,
         "test_frames": 1,
@@ -46,7 +47,7 @@ TINY_PROBE = {
 }
 CONDITIONS = ("none", "sensor_only", "planted_x2")
 VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main",), "planted_x2": ("main", "twin")}
-ARCHS = ("mccnn", "costvolume")
+ARCHS = ("costvolume",)
 INPUTS = ("normal", "shuffled", "camera", "camera_shuffled", "clean", "conflict")
 
 
@@ -177,12 +178,13 @@ def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
         r
         for r in table
         if (r["architecture"], r["tested"], r["test_input"], r["region"])
-        == ("mccnn", "none", "shuffled", verdict["region"])
+        == ("costvolume", "none", "shuffled", verdict["region"])
     )
     assert verdict["did"] == pytest.approx(shuffle["did"])
     assert verdict["uses_cue"] == (shuffle["did_low"] > 0)
     assert verdict["claim"]["answer"] == ("yes" if verdict["uses_cue"] else "no")
     assert set(verdict["architectures"]) == set(ARCHS)
+    assert verdict["architectures"]["costvolume"]["did"] == pytest.approx(shuffle["did"])
     assert (root / layout.probe_figure()).stat().st_size > 0
 
 

@@ -57,7 +57,7 @@ from ..io.images import linear_to_srgb
 from ..seeding import derive_seed
 from ..statistics.bootstrap import draw_counts, percentile_interval, tile_labels
 from ..statistics.regions import valid_set
-from .inputs import camera_residual, counterfactual_pair, reference_mean
+from .inputs import STRATA, camera_residual, counterfactual_pair, reference_mean
 from .scoring import tile_sums
 
 __all__ = [
@@ -122,7 +122,7 @@ class ModelSettings:
     """
 
     test_frames: int = 4
-    strata: int = 16
+    strata: int = STRATA
     tile: int = 16
     reps: int = 1000
     seed: int = 0
