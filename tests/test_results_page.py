@@ -535,7 +535,12 @@ def test_the_page_takes_the_mitigations_and_the_probe_once_they_exist(tmp_path):
     assert layout.mitigation_tables()[0] in inputs and layout.mitigation_figure() in inputs
     assert layout.probe_verdict() not in inputs and layout.probe_figure() not in inputs
     # the probe's outputs, as `snakemake probe` leaves them
-    for path in (*layout.probe_tables(), layout.probe_figure(), layout.probe_verdict()):
+    for path in (
+        *layout.probe_tables(),
+        *layout.probe_training_tables(),
+        layout.probe_figure(),
+        layout.probe_verdict(),
+    ):
         (root / path).parent.mkdir(parents=True, exist_ok=True)
         (root / path).write_text("{}")
     inputs = page_job_inputs(root)
