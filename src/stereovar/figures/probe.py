@@ -60,8 +60,10 @@ def _power_panel(ax, rows) -> None:
                    key=lambda r: planted_factor(r["tested"]))
     none = next((r for r in shuffled if r["tested"] == "none"), None)
     ax.axhline(0.0, color="0.3", lw=0.8)
+    top = 1.0
     if curve:
         factors = [planted_factor(r["tested"]) for r in curve]
+        top = max(factors)
         detected = [r for r in curve if r["did_low"] > 0]
         missed = [r for r in curve if not r["did_low"] > 0]
         _errorbar(ax, factors, curve, "did", fmt="-", color="C0", lw=1)
@@ -71,13 +73,17 @@ def _power_panel(ax, rows) -> None:
                   fmt="o", ms=5, mfc="white", color="C0", label="planted, not detected")
         ax.axvline(1.0, color="0.6", lw=0.8, ls=":")
     if none is not None and math.isfinite(none["did"]):
-        ax.axhspan(none["did_low"], none["did_high"], color="C3", alpha=0.15)
-        ax.axhline(none["did"], color="C3", lw=1, label="none (the renders)")
+        # the renders as they are, at 0 on the planted axis (nothing planted)
+        _errorbar(ax, [0.0], [none], "did", fmt="s", ms=5, color="C3",
+                  label="none (the renders as they are)")
+        ax.axhspan(none["did_low"], none["did_high"], color="C3", alpha=0.1)
         mde = none.get("did_mde", math.nan)
         if math.isfinite(mde):
             ax.axhline(mde, color="k", ls="--", lw=1,
                        label=f"smallest detectable DiD {mde:.3g}")
-    ax.set_xlabel("planted strength, x the renders' strength (dotted: x1)")
+    ax.set_xlim(-0.1 * top - 0.1, 1.1 * top + 0.1)
+    ax.margins(y=0.15)
+    ax.set_xlabel("planted strength, x the renders' strength (dotted: x1; 0: the renders)")
     ax.set_ylabel("DiD of the shuffle vs the twin")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
