@@ -207,8 +207,9 @@ def _flat_scene(h=96, w=128, d=4):
 def test_planted_views_carry_the_pattern_into_the_right_view(sign):
     """With a constant disparity d the right pixel of left pixel x is x + sign*d. The
     views' ln(sample variance) fields, aligned so, correlate as
-    s^2 / (s^2 + psi'(k/2)) with k = 3(N - 1) (ln of a chi^2_k / k has variance psi'(k/2)),
-    and do not correlate at s = 0, nor unaligned."""
+    s^2 / (s^2 + psi'(k/2)) with k = N - 1 (ln of a chi^2_k / k has variance psi'(k/2); the
+    channels share one draw per pixel, as a path tracer's do), and do not correlate at s = 0,
+    nor unaligned."""
     from scipy.special import polygamma
 
     from stereovar.estimators.seeds import variance_field
@@ -225,7 +226,9 @@ def test_planted_views_carry_the_pattern_into_the_right_view(sign):
         rv = np.log(variance_field(right)[1])
         rho = np.corrcoef(lv, rv[:, xs + sign * d].ravel())[0, 1]
         wrong = np.corrcoef(lv, rv[:, xs - sign * d].ravel())[0, 1]  # the other direction
-        expected = s * s / (s * s + polygamma(1, 3 * (n - 1) / 2))
+        noise = left - mean
+        assert np.array_equal(noise[..., 0], noise[..., 2])  # one draw shared by the channels
+        expected = s * s / (s * s + polygamma(1, (n - 1) / 2))
         # the correlation's standard error, widened 3x for the pattern's ~2-px smoothness
         se = 3 * (1 - expected**2) / np.sqrt(lv.size)
         assert abs(rho - expected) < 5 * se, (s, rho, expected)
@@ -251,17 +254,35 @@ def test_planted_views_at_strength_zero_follow_the_camera_law():
 
 def test_renders_strength_recovers_the_planted_strength():
     """The calibration's measure of the renders' strength, on frames planted with a known
-    strength, gives it back (to a few per cent), and about 0 on the camera null."""
+    strength: it gives it back where the channels' noise is independent, as its camera null
+    draws it; where the channels share their noise (a path tracer's, and the probe's planted
+    frames) it reads sqrt(s^2 + psi'((N - 1)/2) - psi'(3(N - 1)/2)), the estimation noise its
+    null does not subtract, the same on the renders and on the planted cue."""
+    from scipy.special import polygamma
+
+    from stereovar.calibration.synthesis import (
+        draw_frames,
+        planted_pattern,
+        variance_fields,
+    )
     from stereovar.probe.planted import planted_views, renders_law, renders_strength
 
-    h, w = 96, 128
+    h, w, n = 96, 128, 8
     base = np.linspace(0.05, 1.2, w)[None, :] * np.linspace(0.6, 1.0, h)[:, None]
     mean = np.repeat(base[..., None], 3, axis=2)
     truth = {"disparity": np.full((h, w), 4.0), "valid": np.ones((h, w), bool)}
-    for s, tol in ((0.0, 0.1), (0.6, 0.06)):
-        left, _ = planted_views(mean, mean, truth, truth, sign=1, law=(0.02, 0.001),
-                                strength=s, n=8, rng=np.random.default_rng(1))
-        est = renders_strength(left, truth, rng=np.random.default_rng(2))
+    offset = polygamma(1, (n - 1) / 2) - polygamma(1, 3 * (n - 1) / 2)
+    for s, tol in ((0.0, 0.1), (0.6, 0.08)):
+        rng = np.random.default_rng(1)
+        pattern = planted_pattern(truth["disparity"], truth["valid"], sign=1, rng=rng)
+        v = variance_fields("planted", s, mean={"left": mean, "right": mean},
+                            law=(0.02, 0.001), render_variance={}, pattern=pattern, rng=rng)
+        independent = draw_frames(mean, v["left"], n, rng)  # the calibration's null's way
+        est = renders_strength(independent, truth, rng=np.random.default_rng(2))
         assert abs(est - s) < tol, (s, est)
+        left, _ = planted_views(mean, mean, truth, truth, sign=1, law=(0.02, 0.001),
+                                strength=s, n=n, rng=np.random.default_rng(1))
+        est = renders_strength(left, truth, rng=np.random.default_rng(2))
+        assert abs(est - np.sqrt(s * s + offset)) < tol, (s, est, np.sqrt(s * s + offset))
     a, b = renders_law(left, truth)
     assert a > 0 and b >= 0

@@ -106,3 +106,29 @@ def test_planted_conditions_and_their_names():
     cfg["probe"]["planted"] = [0]
     with pytest.raises(ConfigError, match="probe.planted"):
         probe_conditions(cfg)
+
+
+def test_the_probe_refuses_too_few_renders_and_a_missing_gpu_in_one_line(monkeypatch):
+    import torch
+
+    from stereovar.probe.conditions import check_probe
+
+    check_probe({"probe": {"device": "cpu"}}, 4)
+    with pytest.raises(ConfigError, match=r"render.n_seeds .* is 3: .*at least 4") as info:
+        check_probe({"probe": {"device": "cpu"}}, 3)
+    assert "\n" not in str(info.value) and "50%" in str(info.value)
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    with pytest.raises(ConfigError, match="probe.device.*no CUDA GPU") as info:
+        check_probe({"probe": {"device": "cuda"}}, 8)
+    assert "\n" not in str(info.value)
+
+
+def test_channel_correlation_of_renders_and_of_independent_noise():
+    rng = np.random.default_rng(5)
+    mean = np.full((40, 40, 3), 0.4)
+    for rho in (0.0, 0.5, 0.9):
+        shared = rng.standard_normal((8, 40, 40, 1))
+        own = rng.standard_normal((8, 40, 40, 3))
+        stack = mean + 0.05 * (np.sqrt(rho) * shared + np.sqrt(1 - rho) * own)
+        # 12 800 pixel variances of 8 draws: the estimate is good to a few hundredths
+        assert experiment.channel_correlation(stack) == pytest.approx(rho, abs=0.05)

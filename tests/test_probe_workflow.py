@@ -27,8 +27,8 @@ TINY_PROBE = {
     "resolution": {"width": 96, "height": 40},
     "render": {
         "spp": 2,
-        "n_seeds": 3,
-        "seeds_per_job": 3,
+        "n_seeds": 4,
+        "seeds_per_job": 4,
         "spp_sweep": {"scene": "scene_000", "spp": [2]},
     },
     "analysis": {"bootstrap": {"tile": 8}},
@@ -86,7 +86,7 @@ def test_every_network_is_saved_with_its_config_and_reloads(probe_run):
                         held_out = TINY_PROBE["scenes"][fold]
                         assert held_out not in meta["scenes"]
                         # one validation frame (the last seed) of the one training scene
-                        assert (meta["frames"], meta["validation_frames"]) == (2, 1)
+                        assert (meta["frames"], meta["validation_frames"]) == (3, 1)
                         cap = TINY_PROBE["probe"]["training" if arch == "mccnn" else arch]
                         assert 1 <= meta["steps"] <= cap["steps"]
     planted = json.loads((root / layout.probe_planted("mitsuba")).read_text())
@@ -98,7 +98,7 @@ def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
     """Rescore one held-out scene with its saved network and compare with the tile table."""
     root, _ = probe_run
     fold, scene = 0, "scene_000"
-    stores = layout.render_store("mitsuba", scene, "left", 2, "0-2")
+    stores = layout.render_store("mitsuba", scene, "left", 2, "0-3")
     left = view_stack([root / stores])[0]
     right = view_stack([root / stores.replace("/left/", "/right/")])[0]
     gt = open_dataset(root / layout.traced_ground_truth(scene)).sel(view="left").load()

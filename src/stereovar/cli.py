@@ -760,6 +760,9 @@ def _cmd_probe(args: argparse.Namespace) -> int:
 
     if args.cores < 1:
         raise StereovarError(f"-j must be >= 1, got {args.cores}")
+    for option, value in (("--test-frames", args.test_frames), ("--batch", args.batch)):
+        if value < 1:
+            raise StereovarError(f"{option} must be >= 1, got {value}")
     weights = Path(args.weights)
     if not weights.is_file():
         raise StereovarError(

@@ -905,7 +905,7 @@ def calibration_targets():
 from stereovar.probe.conditions import CONTROL as PROBE_CONTROL
 from stereovar.probe.conditions import MAIN as PROBE_MAIN
 from stereovar.probe.architectures import architecture
-from stereovar.probe.conditions import probe_conditions
+from stereovar.probe.conditions import check_probe, probe_conditions
 
 PROBE = config["probe"]
 PROBE_WANTED = not AUDIT or bool(AUDIT.get("probe"))
@@ -913,6 +913,8 @@ with exit_with_one_line():
     PROBE_CONDITIONS = (
         {c.name: c for c in probe_conditions(config)} if PROBE_WANTED else {}
     )
+    if PROBE_CONDITIONS:
+        check_probe(config, N_SEEDS)
 PROBE_ARCHS = list(dict.fromkeys(PROBE["architectures"]))
 PROBE_FOLDS = int(PROBE["folds"])
 PROBE_SEEDS = list(range(int(PROBE["train_seeds"])))

@@ -145,6 +145,7 @@ rule probe_table:
         verdict=PROBE_VERDICT,
     params:
         source=PROBE_SOURCE,
+        n_seeds=N_SEEDS,
         runs=[
             {"condition": c.name, "spp": c.run.spp, "planted": c.factor}
             for c in PROBE_CONDITIONS.values()

@@ -180,9 +180,14 @@ def filled(field, fallback=None) -> np.ndarray:
     return np.where(ok, f, fill)
 
 
-def draw_frames(mean, variance, n: int, rng: np.random.Generator) -> np.ndarray:
+def draw_frames(
+    mean, variance, n: int, rng: np.random.Generator, *, channel_correlation: float = 0.0
+) -> np.ndarray:
     """:math:`N` frames :math:`I^{(n)} = \\bar I + \\sqrt{v}\\,\\varepsilon^{(n)}`,
-    :math:`\\varepsilon` standard normal per pixel, channel and frame.
+    :math:`\\varepsilon` standard normal per pixel, channel and frame, with correlation
+    :math:`\\rho` between the channels of a pixel
+    (:math:`\\varepsilon_c = \\sqrt\\rho\\, z + \\sqrt{1 - \\rho}\\, z_c`; a path tracer's
+    channels share their paths, so its :math:`\\rho` is near 1).
 
     Parameters
     ----------
@@ -192,6 +197,8 @@ def draw_frames(mean, variance, n: int, rng: np.random.Generator) -> np.ndarray:
         Per-pixel (all channels) or per-channel noise variance.
     n : int
     rng : numpy.random.Generator
+    channel_correlation : float, keyword-only
+        :math:`\\rho \\in [0, 1]`; 0: independent channels.
 
     Returns
     -------
@@ -203,6 +210,11 @@ def draw_frames(mean, variance, n: int, rng: np.random.Generator) -> np.ndarray:
     if sd.ndim == 2:
         sd = sd[..., None]
     noise = rng.standard_normal((int(n), *mean.shape), dtype=np.float32)
+    rho = float(np.clip(channel_correlation, 0.0, 1.0))
+    if rho > 0:
+        shared = rng.standard_normal((int(n), *mean.shape[:2], 1), dtype=np.float32)
+        noise *= np.float32(np.sqrt(1.0 - rho))
+        noise += np.float32(np.sqrt(rho)) * shared
     noise *= sd.astype(np.float32)
     noise += mean.astype(np.float32)
     return noise

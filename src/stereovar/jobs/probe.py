@@ -177,6 +177,7 @@ def train_job(
             "steps": int(history.get("steps", len(history["loss"]))),
             "best_step": history.get("best_step"),
             "matched_steps": matched,
+            "cap": int(settings.steps),
             "validation": [list(v) for v in history.get("validation", [])],
             "seconds": history["seconds"],
             "step_seconds": history["step_seconds"],
@@ -254,7 +255,7 @@ def test_job(
 
     from ..io.tables import write_tables
     from ..probe.architectures import architecture
-    from ..probe.experiment import TestSettings, scene_law, test_scene
+    from ..probe.experiment import TestSettings, channel_correlation, scene_law, test_scene
     from ..probe.metrics import TILE_COLUMNS
     from ..probe.training import load_matcher
 
@@ -287,7 +288,7 @@ def test_job(
         regions = PROBE_REGIONS if np.asarray(truth["glass"]).any() else ("all",)
         scene_rows = test_scene(
             nets, entry.predict, left, right, truth, scene=scene, sign=sign, regions=regions,
-            law=law, settings=settings,
+            law=law, settings=settings, correlation=channel_correlation(left, truth["valid"]),
         )
         rows += [{"tested": tested, "architecture": arch, **r} for r in scene_rows]
         log.info(
@@ -306,8 +307,9 @@ def test_job(
 
 def training_rows(networks) -> list[dict]:
     """One row per (architecture, condition, variant): the networks trained, the optimiser
-    steps each took to its plateau (mean, min, max), the best step, the best validation
-    accuracy and the seconds of training, from each network's record."""
+    steps each took to its plateau (mean, min, max), the best step, how many stopped at the
+    step cap before a plateau (``at_cap``; a twin trains its network's steps, never counted),
+    the best validation accuracy and the seconds of training, from each network's record."""
     from ..probe.training import load_matcher
 
     groups: dict = {}
@@ -319,6 +321,9 @@ def training_rows(networks) -> list[dict]:
     rows = []
     for (arch, condition, variant), metas in groups.items():
         steps = [int(m["steps"]) for m in metas]
+        capped = sum(
+            1 for m in metas if not m.get("matched_steps") and int(m["steps"]) >= int(m["cap"])
+        ) if all("cap" in m for m in metas) else 0
         best = [max((a for _, a in m.get("validation") or []), default=math.nan) for m in metas]
         rows.append(
             {
@@ -330,6 +335,7 @@ def training_rows(networks) -> list[dict]:
                 "steps_min": min(steps),
                 "steps_max": max(steps),
                 "best_step_mean": float(np.mean([m.get("best_step") or 0 for m in metas])),
+                "at_cap": capped,
                 "validation_accuracy": float(np.nanmean(best)) if np.isfinite(best).any()
                 else math.nan,
                 "seconds_mean": float(np.mean([m["seconds"] for m in metas])),
@@ -340,7 +346,7 @@ def training_rows(networks) -> list[dict]:
 
 def probe_table_job(
     tiles, outputs: dict, *, figure, verdict, training_outputs: dict, networks=(),
-    planted=None, source="", runs: list | None = None,
+    planted=None, source="", runs: list | None = None, n_seeds: int | None = None,
 ) -> list[dict]:
     """The probe table, its training table, its figure and the verdict JSON from every test
     job's tiles and every network's record."""
@@ -389,6 +395,9 @@ def probe_table_job(
     result["source"] = source
     result["runs"] = list(runs or [])
     result["training"] = trained
+    result["paragraph"] += _caveats(trained, n_seeds)
+    if n_seeds:
+        result["aligned_share_kept"] = 1.0 / (int(n_seeds) - 1)
     if record:
         result["renders_strength"] = record["strength"]
     text = json.dumps(_clean(result), indent=2) + "\n"
@@ -398,6 +407,29 @@ def probe_table_job(
     save_figure(probe_figure(rows), figure)
     log.info("%s", result["paragraph"])
     return rows
+
+
+def _caveats(trained: list[dict], n_seeds) -> str:
+    """What the verdict rests on beyond its intervals: networks stopped at the step cap
+    before a plateau, and the share of the aligned noise the shuffled inputs keep."""
+    out = ""
+    mains = [r for r in trained if r["variant"] == "main"]
+    capped = sum(int(r["at_cap"]) for r in mains)
+    if capped:
+        total = sum(int(r["networks"]) for r in mains)
+        out += (
+            f" {capped} of the {total} networks stopped at the step cap before a plateau of "
+            "validation accuracy (results/tables/probe_training.*): raise probe.training.steps "
+            "and probe.costvolume.steps to train them to one."
+        )
+    if n_seeds:
+        out += (
+            f" The shuffled inputs' reference mean of the other {int(n_seeds) - 1} renders keeps "
+            f"1/{int(n_seeds) - 1} = {100 / (int(n_seeds) - 1):.0f}% of the aligned noise "
+            "variance, so a reliance is measured at about "
+            f"{100 * (int(n_seeds) - 2) / (int(n_seeds) - 1):.0f}% of its size."
+        )
+    return out
 
 
 def _clean(value):

@@ -59,6 +59,7 @@ def probe_model_job(
 
     from ..io.store import write_file
     from ..io.tables import write_tables
+    from ..probe.experiment import check_renders
     from ..probe.user_model import (
         ModelSettings,
         frame_law,
@@ -76,6 +77,7 @@ def probe_model_job(
     rows = []
     for scene in scenes:
         left, right, truth, sign = frame_data(stores, scene)
+        check_renders(left.shape[0], f"frame {scene}'s renders per view")
         law = frame_law(left, truth["valid"])
         frame_rows = score_frame(
             model,

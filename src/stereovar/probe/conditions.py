@@ -31,6 +31,7 @@ __all__ = [
     "MAIN",
     "TWIN",
     "ProbeCondition",
+    "check_probe",
     "default_conditions",
     "planted_factor",
     "planted_name",
@@ -163,6 +164,28 @@ def probe_conditions(config: dict) -> list[ProbeCondition]:
             )
         out.append(ProbeCondition(planted_name(factor), none, float(factor)))
     return list({c.name: c for c in out}.values())
+
+
+def check_probe(config: dict, n_seeds: int) -> None:
+    """The probe's settings that fail before any work, in one line: too few renders per view
+    (:func:`stereovar.probe.experiment.check_renders`) and ``probe.device: cuda`` where
+    PyTorch sees no GPU (imports PyTorch only then)."""
+    from .experiment import MIN_RENDERS
+
+    if int(n_seeds) < MIN_RENDERS:
+        from .experiment import check_renders
+
+        check_renders(n_seeds, "render.n_seeds (renders per view)")
+    device = str(config.get("probe", {}).get("device", "cpu"))
+    if device.startswith("cuda"):
+        import torch
+
+        if not torch.cuda.is_available():
+            raise ConfigError(
+                f"config key 'probe.device' is {device!r}, but PyTorch sees no CUDA GPU here "
+                f"(torch {torch.__version__}); set probe.device: cpu, or run on a machine "
+                "with a GPU and a CUDA build of PyTorch"
+            )
 
 
 def planted_factor(name: str) -> float | None:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibration.synthesis import camera_law
+from ..errors import ConfigError
 from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import region_masks, valid_set
@@ -37,8 +38,11 @@ from .scoring import SUMS, tile_sums
 from .training import TrainingFrame
 
 __all__ = [
+    "MIN_RENDERS",
     "TWIN_POOL",
     "TestSettings",
+    "channel_correlation",
+    "check_renders",
     "fold_scenes",
     "grey_stack",
     "planted_stacks",
@@ -51,6 +55,11 @@ __all__ = [
     "validation_band",
 ]
 
+
+MIN_RENDERS = 4
+"""Renders per view the probe needs: its reference mean of the other :math:`N - 1` renders
+keeps :math:`1/(N - 1)` of the aligned noise variance in every shuffled input (a half at
+:math:`N = 3`, all of it at :math:`N = 2`)."""
 
 TWIN_POOL = 16
 """Stratified shuffles of each training frame's right residual that a twin picks from."""
@@ -101,6 +110,32 @@ def scored_disparity(ground_truth_left, *, sign: int) -> np.ndarray:
     d = np.asarray(ground_truth_left["disparity"], dtype=np.float64)
     omega = valid_set(d, sign=sign, valid=np.asarray(ground_truth_left["valid"]))
     return np.where(omega, d, np.nan)
+
+
+def check_renders(n: int, what: str) -> None:
+    """One line when ``n`` renders per view are too few for the probe's shuffles.
+
+    Raises
+    ------
+    ConfigError
+        ``n`` below :data:`MIN_RENDERS`, naming ``what`` set it and the fix.
+
+    Examples
+    --------
+    >>> check_renders(8, "render.n_seeds")
+    >>> check_renders(3, "render.n_seeds")
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.ConfigError: render.n_seeds is 3: the probe needs at least 4 renders ...
+    """
+    n = int(n)
+    if n < MIN_RENDERS:
+        share = f"{100 / (n - 1):.0f}%" if n > 1 else "all of it"
+        raise ConfigError(
+            f"{what} is {n}: the probe needs at least {MIN_RENDERS} renders per view (its "
+            "reference mean of the other N - 1 renders keeps 1/(N - 1) of the aligned noise "
+            f"in every shuffled input, {share} at N = {n}); render more seeds per view"
+        )
 
 
 def grey_stack(stack) -> np.ndarray:
@@ -265,10 +300,44 @@ def scene_law(left, valid=None) -> tuple[float, float]:
     return a * k, b * k
 
 
+def channel_correlation(left, valid=None) -> float:
+    """The correlation :math:`\\rho` between the channels of a pixel's noise over a scene's
+    renders, from the grey image's share of the channels' variance.
+
+    .. math::
+
+        \\rho = \\frac{3 r - 1}{2}, \\qquad
+        r = \\frac{\\sum_p \\operatorname{Var}_n \\bar g_p}{\\sum_p \\frac13 \\sum_c
+            \\operatorname{Var}_n I_{c,p}},
+
+    with :math:`g` the RGB mean (for channels of equal variance, the grey variance is
+    :math:`\\sigma^2 (1 + 2\\rho)/3`), clipped to [0, 1].
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> z = rng.standard_normal((6, 50, 50, 1))
+    >>> stack = 0.5 + 0.1 * np.repeat(z, 3, axis=3)
+    >>> round(channel_correlation(stack), 2)
+    1.0
+    >>> round(channel_correlation(0.5 + 0.1 * rng.standard_normal((6, 50, 50, 3))), 1)
+    0.0
+    """
+    stack = np.asarray(left, dtype=np.float64)
+    ok = np.ones(stack.shape[1:3], bool) if valid is None else np.asarray(valid, dtype=bool)
+    per_channel = stack.var(axis=0).mean(axis=-1)[ok]
+    grey = stack.mean(axis=-1).var(axis=0)[ok]
+    total = float(per_channel.sum())
+    if not total > 0:
+        return 1.0
+    return float(np.clip((3 * float(grey.sum()) / total - 1) / 2, 0.0, 1.0))
+
+
 def planted_stacks(left, right, truth_left, truth_right, *, sign, law, strength, seed) -> tuple:
     """The planted positive control of one scene: N frames per view around the renders' seed
     means with camera-law noise whose variance carries a cross-view pattern of ``strength``
-    (:func:`stereovar.probe.planted.planted_views`), drawn from ``seed``."""
+    and whose channels correlate as the renders' (:func:`channel_correlation`;
+    :func:`stereovar.probe.planted.planted_views`), drawn from ``seed``."""
     left = np.asarray(left, dtype=np.float64)
     right = np.asarray(right, dtype=np.float64)
     return planted_views(
@@ -281,21 +350,25 @@ def planted_stacks(left, right, truth_left, truth_right, *, sign, law, strength,
         strength=float(strength),
         n=left.shape[0],
         rng=np.random.default_rng(int(seed)),
+        channel_correlation=channel_correlation(left, truth_left.get("valid")),
     )
 
 
-def _camera_residual(mean, law, scene, view, frame, settings: TestSettings) -> np.ndarray:
+def _camera_residual(mean, law, rho, scene, view, frame, settings: TestSettings) -> np.ndarray:
     seed = derive_seed("probe-camera", settings.seed, scene, view, frame)
-    return camera_residual(mean, law, np.random.default_rng(seed))
+    return camera_residual(mean, law, np.random.default_rng(seed), channel_correlation=rho)
 
 
-def test_pairs(left, right, *, scene: str, sign: int, law, settings: TestSettings) -> dict:
+def test_pairs(
+    left, right, *, scene: str, sign: int, law, settings: TestSettings, correlation: float = 1.0
+) -> dict:
     """Every counterfactual input of the first ``test_frames`` seed indices, as network
     inputs: ``(frame, test input) -> (left, right)``.
 
     Each frame's clean image is the mean of the other renders (it excludes the frame,
     :func:`~stereovar.probe.inputs.reference_mean`); the camera inputs draw camera-law noise
-    at the scene's law; the shuffles are drawn per frame from ``shuffle_seed``; the noise
+    at the scene's law and channel ``correlation``; the shuffles are drawn per frame from
+    ``shuffle_seed``; the noise
     each counterfactual adds is scaled so that every input holds one render's noise variance
     (:func:`~stereovar.probe.inputs.noise_scale`). The reference keeps :math:`1/(N - 1)` of
     the noise variance aligned across the views, so a shuffled input removes
@@ -310,8 +383,8 @@ def test_pairs(left, right, *, scene: str, sign: int, law, settings: TestSetting
     for frame in range(min(int(settings.test_frames), left.shape[0])):
         mean_l, mean_r = reference_mean(left, frame), reference_mean(right, frame)
         camera = (
-            _camera_residual(mean_l, law, scene, "left", frame, settings),
-            _camera_residual(mean_r, law, scene, "right", frame, settings),
+            _camera_residual(mean_l, law, correlation, scene, "left", frame, settings),
+            _camera_residual(mean_r, law, correlation, scene, "right", frame, settings),
         )
         for test_input in settings.inputs:
             a, b = counterfactual_pair(
@@ -343,6 +416,7 @@ def test_scene(
     regions,
     law,
     settings: TestSettings,
+    correlation: float = 1.0,
 ) -> list[dict]:
     """Tile sums of every network on every test input of one held-out scene.
 
@@ -364,6 +438,9 @@ def test_scene(
     law : (a, b), keyword-only
         The scene's camera law, for the ``camera`` inputs.
     settings : TestSettings, keyword-only
+    correlation : float, keyword-only
+        The renders' channel correlation (:func:`channel_correlation`), for the ``camera``
+        inputs.
 
     Returns
     -------
@@ -372,7 +449,9 @@ def test_scene(
         ``variant``, ``train_seed``, ``test_input``, ``region``, ``scene``, ``tile`` and the
         sums of :func:`stereovar.probe.scoring.tile_sums` pooled over the test frames.
     """
-    pairs = test_pairs(left, right, scene=scene, sign=sign, law=law, settings=settings)
+    pairs = test_pairs(
+        left, right, scene=scene, sign=sign, law=law, settings=settings, correlation=correlation
+    )
     d_gt = scored_disparity(ground_truth_left, sign=sign)
     masks = region_masks(ground_truth_left, np.isfinite(d_gt), regions=tuple(regions))
     labels = tile_labels(d_gt.shape, settings.tile)

@@ -264,16 +264,21 @@ def reference_mean(stack, frame: int) -> np.ndarray:
     return (a.sum(axis=0) - a[frame]) / (n - 1)
 
 
-def camera_residual(mean, law, rng) -> np.ndarray:
+def camera_residual(mean, law, rng, *, channel_correlation: float = 1.0) -> np.ndarray:
     """Camera noise of a mean image: Gaussian with the camera law's variance per pixel and
-    channel.
+    channel, and the renders' correlation between the channels of a pixel.
 
-    .. math:: \\eta_c(p) = \\sqrt{\\max\\bigl(a\\,\\bar I_c(p) + b,\\ 0\\bigr)}\\; z_c(p),
-        \\qquad z_c(p) \\sim \\mathcal N(0, 1)\\ \\text{i.i.d.}
+    .. math:: \\eta_c(p) = \\sqrt{\\max\\bigl(a\\,\\bar I_c(p) + b,\\ 0\\bigr)}\\;
+        \\bigl(\\sqrt\\rho\\, z(p) + \\sqrt{1 - \\rho}\\, z_c(p)\\bigr),
+        \\qquad z, z_c \\sim \\mathcal N(0, 1)\\ \\text{i.i.d.}
 
     with :math:`(a, b)` the law fitted to the renders' variance
-    (:func:`stereovar.calibration.synthesis.camera_law`, the shot-noise law of Sec. 2.4).
-    Non-finite means give non-finite noise.
+    (:func:`stereovar.calibration.synthesis.camera_law`, the shot-noise law of Sec. 2.4) and
+    :math:`\\rho` their channels' correlation
+    (:func:`stereovar.probe.experiment.channel_correlation`): a path tracer's channels share
+    their paths (:math:`\\rho` about 0.9 on the default scenes), and the noise of the grey
+    image the networks see follows :math:`\\rho` (independent channels would give it a third
+    of one channel's). Non-finite means give non-finite noise.
 
     Parameters
     ----------
@@ -282,6 +287,8 @@ def camera_residual(mean, law, rng) -> np.ndarray:
     law : (float, float)
         :math:`(a, b)`.
     rng : numpy.random.Generator or int
+    channel_correlation : float, keyword-only
+        :math:`\\rho \\in [0, 1]`.
 
     Returns
     -------
@@ -289,14 +296,24 @@ def camera_residual(mean, law, rng) -> np.ndarray:
 
     Examples
     --------
-    >>> eta = camera_residual(np.full((200, 200), 2.0), (0.5, 0.0), 0)
-    >>> round(float(eta.var()), 1)
-    1.0
+    >>> eta = camera_residual(np.full((200, 200, 3), 2.0), (0.5, 0.0), 0)
+    >>> round(float(eta.var()), 1), bool(np.array_equal(eta[..., 0], eta[..., 2]))
+    (1.0, True)
+    >>> eta = camera_residual(np.full((200, 200, 3), 2.0), (0.5, 0.0), 0, channel_correlation=0)
+    >>> abs(float(np.corrcoef(eta[..., 0].ravel(), eta[..., 1].ravel())[0, 1])) < 0.02
+    True
     """
     a, b = (float(v) for v in law)
     m = np.asarray(mean, dtype=np.float64)
     sd = np.sqrt(np.maximum(a * m + b, 0.0))
-    return sd * np.random.default_rng(rng).standard_normal(m.shape)
+    generator = np.random.default_rng(rng)
+    if m.ndim != 3:
+        return sd * generator.standard_normal(m.shape)
+    rho = float(np.clip(channel_correlation, 0.0, 1.0))
+    z = np.sqrt(rho) * generator.standard_normal((*m.shape[:2], 1))
+    if rho < 1:
+        z = z + np.sqrt(1.0 - rho) * generator.standard_normal(m.shape)
+    return sd * z
 
 
 def noise_scale(reference_renders: int | None, *, residual: bool) -> float:

@@ -39,8 +39,11 @@ def planted_views(
     strength: float,
     n: int,
     rng: np.random.Generator,
+    channel_correlation: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:math:`N` frames per view with a planted cue of strength :math:`s`.
+    """:math:`N` frames per view with a planted cue of strength :math:`s`, the channels of a
+    pixel correlated as ``channel_correlation`` (the renders', a path tracer's near 1;
+    :func:`stereovar.calibration.synthesis.draw_frames`).
 
     .. math::
 
@@ -68,6 +71,8 @@ def planted_views(
     n : int, keyword-only
         :math:`N`.
     rng : numpy.random.Generator, keyword-only
+    channel_correlation : float, keyword-only
+        :math:`\\rho \\in [0, 1]` between the channels of a pixel.
 
     Returns
     -------
@@ -93,7 +98,10 @@ def planted_views(
         "planted", float(strength), mean=mean, law=law, render_variance={}, pattern=pattern,
         rng=rng,
     )
-    return tuple(draw_frames(mean[view], v[view], int(n), rng) for view in ("left", "right"))
+    return tuple(
+        draw_frames(mean[view], v[view], int(n), rng, channel_correlation=channel_correlation)
+        for view in ("left", "right")
+    )
 
 
 def _scene(renders_left, truth_left) -> SceneFrames:

@@ -262,7 +262,24 @@ def load_user_model(factory: str, weights, *, device: str = "cpu") -> torch.nn.M
         raise ModelError(
             f"weights file {weights} does not fit the model of {factory!r} ({_one_line(err)})"
         ) from None
-    return model.to(device).eval()
+    return model.to(_device(device)).eval()
+
+
+def _device(device) -> torch.device:
+    """``device`` as a torch device PyTorch can use here, else one line."""
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError) as err:
+        raise ModelError(
+            f"device {device!r} is not a torch device ({_one_line(err)}); use cpu, cuda or "
+            "cuda:N"
+        ) from None
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise ModelError(
+            f"device {device!r}: PyTorch sees no CUDA GPU here (torch {torch.__version__}); "
+            "use --device cpu, or a machine with a GPU and a CUDA build of PyTorch"
+        )
+    return dev
 
 
 # --------------------------------------------------------------------------------------------
@@ -381,12 +398,21 @@ def camera_stack(stack, law, *, seed) -> np.ndarray:
     .. math:: C^{(m)} = \\bar I + \\eta^{(m)}, \\qquad m = 1, \\dots, N,
 
     with :math:`\\bar I` the mean of all :math:`N` renders and :math:`\\eta^{(m)}`
-    :func:`~stereovar.probe.inputs.camera_residual` at ``law``.
+    :func:`~stereovar.probe.inputs.camera_residual` at ``law`` and the renders' channel
+    correlation (:func:`~stereovar.probe.experiment.channel_correlation`).
     """
+    from .experiment import channel_correlation
+
     stack = np.asarray(stack, dtype=np.float64)
     mean = stack.mean(axis=0)
+    rho = channel_correlation(stack)
     rng = np.random.default_rng(int(seed))
-    return np.stack([mean + camera_residual(mean, law, rng) for _ in range(stack.shape[0])])
+    return np.stack(
+        [
+            mean + camera_residual(mean, law, rng, channel_correlation=rho)
+            for _ in range(stack.shape[0])
+        ]
+    )
 
 
 def model_pairs(left, right, *, scene: str, sign: int, law, settings: ModelSettings) -> dict:
@@ -652,12 +678,9 @@ def model_reading(rows) -> str:
 
 
 def frame_law(left, valid=None) -> tuple[float, float]:
-    """The camera law :math:`\\sigma^2 = a\\mu + b` of a frame's left renders: the per-pixel
-    variance over renders (Eq. 1, averaged over channels) against the mean's grey level
-    (:func:`stereovar.calibration.synthesis.camera_law`)."""
-    from ..calibration.synthesis import camera_law
+    """The camera law :math:`\\sigma^2 = a\\mu + b` of a frame's left renders: one render's
+    noise variance, as the learned probe takes it
+    (:func:`stereovar.probe.experiment.scene_law`)."""
+    from .experiment import scene_law
 
-    stack = np.asarray(left, dtype=np.float64)
-    mean = stack.mean(axis=0)
-    variance = ((stack - mean) ** 2).mean(axis=(0, 3)) * stack.shape[0] / (stack.shape[0] - 1)
-    return camera_law(variance, mean.mean(axis=-1), valid)
+    return scene_law(left, valid)
