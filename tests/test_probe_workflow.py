@@ -255,3 +255,15 @@ def test_stereovar_probe_runs_the_users_model_on_the_runs_frames(probe_run):
     )
     assert missing.returncode != 0
     assert len(missing.stderr.strip().splitlines()) == 1 and "nowhere.pt" in missing.stderr
+
+
+def test_too_few_renders_stop_the_probe_in_one_line_before_any_job(probe_run):
+    root, _ = probe_run
+    few = {"render": {"n_seeds": 3, "seeds_per_job": 3}}
+    proc = snakemake(root, "-n", "probe", check=False, config=few)
+    assert proc.returncode != 0
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("stereovar:")]
+    assert len(lines) == 1 and "at least 4 renders per view" in lines[0], proc.stderr[-2000:]
+    # the main experiment, which needs no probe, still plans at N = 3
+    assert snakemake(root, "-n", "all", config=few).returncode == 0
+    (root / "override.yaml").unlink()

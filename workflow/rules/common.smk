@@ -913,8 +913,6 @@ with exit_with_one_line():
     PROBE_CONDITIONS = (
         {c.name: c for c in probe_conditions(config)} if PROBE_WANTED else {}
     )
-    if PROBE_CONDITIONS:
-        check_probe(config, N_SEEDS)
 PROBE_ARCHS = list(dict.fromkeys(PROBE["architectures"]))
 PROBE_FOLDS = int(PROBE["folds"])
 PROBE_SEEDS = list(range(int(PROBE["train_seeds"])))
@@ -966,13 +964,22 @@ def probe_condition_stores(name, scenes):
     return stores
 
 
+def probe_checked():
+    """The probe's settings that fail before any job (too few renders per view, a GPU that
+    PyTorch cannot use), checked when the plan first holds a probe job: one line and exit."""
+    with exit_with_one_line():
+        check_probe(config, N_SEEDS)
+
+
 def probe_planted_inputs(wildcards):
     """`none`'s renders of every scene, whose strength and camera laws set the planted cue."""
+    probe_checked()
     return probe_condition_stores("none", SCENES)
 
 
 def probe_train_inputs(wildcards):
     """The training scenes of the wildcards' fold under its condition."""
+    probe_checked()
     return probe_condition_stores(wildcards.condition, probe_folds()[int(wildcards.fold)][0])
 
 
