@@ -20,6 +20,7 @@ Importing this module pulls in only numpy.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -30,6 +31,7 @@ __all__ = [
     "Plateau",
     "StopRule",
     "fixed_frames",
+    "train_to_plateau",
     "validation_accuracy",
 ]
 
@@ -190,3 +192,68 @@ def validation_accuracy(
             hits += int(np.count_nonzero(err < 1))  # NaN (no prediction) compares False
             total += int(np.count_nonzero(scored))
     return hits / total if total else float("nan")
+
+
+def train_to_plateau(
+    net, step: Callable, *, steps: int, rule: StopRule, held, predict: Callable,
+    max_disparity: int,
+) -> dict:
+    """The training loop both probe architectures share: ``step(i)`` for
+    :math:`i = 1, \\dots,` ``steps``; every ``rule.check_every`` steps (and at the last) the
+    accuracy of ``predict(net, ...)`` on the ``held`` frames (:func:`validation_accuracy`)
+    feeds a :class:`Plateau`, which may stop the loop; the network then gets back the weights
+    of its best check. Without ``held`` frames it runs every step.
+
+    Parameters
+    ----------
+    net : torch.nn.Module
+        Put in training mode before each step.
+    step : callable
+        One optimiser step, given its number.
+    steps : int
+        The cap.
+    rule : StopRule
+    held : sequence
+        Validation frames (:func:`fixed_frames`), or empty.
+    predict : callable
+        The architecture's batched prediction, ``predict(net, pairs, *, sign, max_disparity)``.
+    max_disparity : int
+        :math:`D` of the checks.
+
+    Returns
+    -------
+    dict
+        ``seconds`` of the loop, ``step_seconds`` (per step, checks excluded), ``steps``
+        taken, ``best_step`` (the step whose weights the network holds), ``validation`` as
+        ``(step, accuracy)`` per check and ``validation_seconds``.
+    """
+    plateau = Plateau(rule)
+    best_state = None
+    check_seconds = 0.0
+    start = time.perf_counter()
+    i = 0
+    for i in range(1, int(steps) + 1):
+        net.train()
+        step(i)
+        if held and (i % int(rule.check_every) == 0 or i == int(steps)):
+            t0 = time.perf_counter()
+            accuracy = validation_accuracy(
+                lambda pairs, **kw: predict(net, pairs, **kw), held, max_disparity=max_disparity
+            )
+            stop = plateau.update(i, accuracy)
+            if plateau.improved():
+                best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
+            check_seconds += time.perf_counter() - t0
+            if stop:
+                break
+    seconds = time.perf_counter() - start
+    if best_state is not None:
+        net.load_state_dict(best_state)
+    return {
+        "seconds": seconds,
+        "step_seconds": (seconds - check_seconds) / max(i, 1),
+        "steps": int(i),
+        "best_step": int(plateau.best_step if plateau.best_step is not None else i),
+        "validation": list(plateau.history),
+        "validation_seconds": check_seconds,
+    }

@@ -26,9 +26,7 @@ Importing this module imports PyTorch (the ``probe`` extra).
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 import torch
@@ -36,7 +34,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from ..errors import ConfigError
-from .convergence import Plateau, StopRule, fixed_frames, validation_accuracy
+from .convergence import StopRule, fixed_frames, train_to_plateau
 
 __all__ = [
     "CostVolumeNet",
@@ -536,43 +534,20 @@ def train_costvolume(
     opt = torch.optim.Adam(net.parameters(), lr=settings.learning_rate)
     rng = np.random.default_rng([int(seed), 1])
     redraw_rng = np.random.default_rng([int(seed), 2])
-    plateau = Plateau(settings.stop_rule())
-    best_state = None
     losses, counts = [], []
-    check_seconds = 0.0
-    start = time.perf_counter()
-    step = 0
-    for step in range(1, int(settings.steps) + 1):
-        net.train()
+
+    def one_step(step: int) -> None:
         batch = draw_crops(frames, settings, rng, redraw_rng, max_disparity=d_max)
         value, count = _train_step(net, opt, batch, settings, device, step)
         losses.append(value)
         counts.append(count)
-        if held and (step % int(settings.check_every) == 0 or step == int(settings.steps)):
-            t0 = time.perf_counter()
-            accuracy = validation_accuracy(
-                partial(predict_costvolume, net), held, max_disparity=d_max
-            )
-            stop = plateau.update(step, accuracy)
-            if plateau.improved():
-                best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
-            check_seconds += time.perf_counter() - t0
-            if stop:
-                break
-    seconds = time.perf_counter() - start
-    if best_state is not None:
-        net.load_state_dict(best_state)
+
+    loop = train_to_plateau(
+        net, one_step, steps=int(settings.steps), rule=settings.stop_rule(), held=held,
+        predict=predict_costvolume, max_disparity=d_max,
+    )
     net.to("cpu").eval()
-    history = {
-        "loss": losses,
-        "triplets": counts,
-        "seconds": seconds,
-        "step_seconds": (seconds - check_seconds) / max(step, 1),
-        "steps": int(step),
-        "best_step": int(plateau.best_step if plateau.best_step is not None else step),
-        "validation": list(plateau.history),
-        "validation_seconds": check_seconds,
-    }
+    history = {"loss": losses, "triplets": counts, **loop}
     return net, history
 
 

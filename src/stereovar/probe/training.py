@@ -22,10 +22,8 @@ Importing this module imports PyTorch (the ``probe`` extra).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from functools import partial
 from importlib import import_module
 
 import numpy as np
@@ -33,7 +31,7 @@ import torch
 
 from ..errors import ConfigError, MatcherFileError
 from ..io.images import file_kind, open_regular
-from .convergence import Plateau, StopRule, fixed_frames, validation_accuracy
+from .convergence import StopRule, fixed_frames, train_to_plateau
 from .network import MatchingNet, border, predict_matcher
 
 __all__ = [
@@ -327,47 +325,25 @@ def train_matcher(
     rng = np.random.default_rng([int(seed), 1])
     redraw_rng = np.random.default_rng([int(seed), 2])
     held = fixed_frames(validation) if validation is not None else []
-    plateau = Plateau(settings.stop_rule())
     max_d = validation_disparity(frames + held, settings)
-    best_state = None
     losses, counts = [], []
-    check_seconds = 0.0
-    start = time.perf_counter()
-    net.train()
-    step = 0
-    for step in range(1, int(settings.steps) + 1):
-        _train_step(net, opt, frames, settings, rng, redraw_rng, reach, device, step,
-                    losses, counts)
-        if held and (step % int(settings.check_every) == 0 or step == int(settings.steps)):
-            t0 = time.perf_counter()
-            accuracy = validation_accuracy(
-                partial(predict_matcher, net), held, max_disparity=max_d
-            )
-            net.train()
-            stop = plateau.update(step, accuracy)
-            if plateau.improved():
-                best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
-            check_seconds += time.perf_counter() - t0
-            if stop:
-                break
-    if best_state is not None:
-        net.load_state_dict(best_state)
+    loop = train_to_plateau(
+        net,
+        lambda step: _train_step(
+            net, opt, frames, settings, rng, redraw_rng, reach, device, step, losses, counts
+        ),
+        steps=int(settings.steps),
+        rule=settings.stop_rule(),
+        held=held,
+        predict=predict_matcher,
+        max_disparity=max_d,
+    )
     bad = nonfinite_weights(net)
     if bad:
-        what = f"after step {step} the weights {bad} are NaN or Inf"
+        what = f"after step {loop['steps']} the weights {bad} are NaN or Inf"
         raise ConfigError(_diverged(f"probe training diverged: {what}", settings))
-    seconds = time.perf_counter() - start
     net.to("cpu").eval()
-    history = {
-        "loss": losses,
-        "triplets": counts,
-        "seconds": seconds,
-        "step_seconds": (seconds - check_seconds) / max(step, 1),
-        "steps": int(step),
-        "best_step": int(plateau.best_step if plateau.best_step is not None else step),
-        "validation": list(plateau.history),
-        "validation_seconds": check_seconds,
-    }
+    history = {"loss": losses, "triplets": counts, **loop}
     return net, history
 
 
