@@ -29,6 +29,7 @@ import numpy as np
 __all__ = [
     "VALIDATION_SEED",
     "Plateau",
+    "PlateauSettings",
     "StopRule",
     "fixed_frames",
     "train_to_plateau",
@@ -112,6 +113,27 @@ class Plateau:
     def improved(self) -> bool:
         """Whether the last check set a new best (the loop then keeps these weights)."""
         return bool(self.history) and self.history[-1][0] == self.best_step
+
+
+@dataclass(frozen=True)
+class PlateauSettings:
+    """The stop-rule fields of an architecture's training settings (``probe.training``,
+    ``probe.costvolume``): a check every ``check_every`` steps, ``patience`` checks without a
+    gain above ``min_delta``, not before ``min_steps``."""
+
+    check_every: int = 25
+    patience: int = 4
+    min_delta: float = 0.002
+    min_steps: int = 100
+
+    def stop_rule(self) -> StopRule:
+        """The :class:`StopRule` of these settings (which checks its fields)."""
+        return StopRule(
+            check_every=int(self.check_every),
+            patience=int(self.patience),
+            min_delta=float(self.min_delta),
+            min_steps=int(self.min_steps),
+        )
 
 
 def fixed_frames(frames: Sequence, seed: int = VALIDATION_SEED) -> list:

@@ -34,7 +34,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from ..errors import ConfigError
-from .convergence import StopRule, fixed_frames, train_to_plateau
+from .convergence import PlateauSettings, fixed_frames, train_to_plateau
 
 __all__ = [
     "CostVolumeNet",
@@ -294,7 +294,7 @@ def parameter_count(net: nn.Module) -> int:
 
 
 @dataclass(frozen=True)
-class CostVolumeSettings:
+class CostVolumeSettings(PlateauSettings):
     """Training of a :class:`CostVolumeNet`: ``crops`` crops of ``crop_rows`` x ``crop_cols``
     pixels per step, Adam with ``learning_rate``, at most ``steps`` steps, the plateau rule
     (validation accuracy checked every ``check_every`` steps; stop after ``patience`` checks
@@ -308,10 +308,6 @@ class CostVolumeSettings:
     crop_cols: int = 96
     learning_rate: float = 1e-3
     steps: int = 2000
-    check_every: int = 25
-    patience: int = 4
-    min_delta: float = 0.002
-    min_steps: int = 100
     beta: float = 1.0
     threads: int = 1
     max_disparity: int | None = None
@@ -323,15 +319,6 @@ class CostVolumeSettings:
         """The network's size from these settings (:class:`CostVolumeNet`'s ``scale`` and
         ``features``)."""
         return {"scale": int(self.scale), "features": int(self.features)}
-
-    def stop_rule(self) -> StopRule:
-        """The :class:`~stereovar.probe.convergence.StopRule` of these settings."""
-        return StopRule(
-            check_every=int(self.check_every),
-            patience=int(self.patience),
-            min_delta=float(self.min_delta),
-            min_steps=int(self.min_steps),
-        )
 
     def __post_init__(self):
         self.stop_rule()  # checks the rule's fields

@@ -31,7 +31,7 @@ import torch
 
 from ..errors import ConfigError, MatcherFileError
 from ..io.images import file_kind, open_regular
-from .convergence import StopRule, fixed_frames, train_to_plateau
+from .convergence import PlateauSettings, fixed_frames, train_to_plateau
 from .network import MatchingNet, border, predict_matcher
 
 __all__ = [
@@ -54,7 +54,7 @@ OPTIMISERS = ("adam", "sgd")
 
 
 @dataclass(frozen=True)
-class TrainSettings:
+class TrainSettings(PlateauSettings):
     """``probe.training``: the cap on steps, crops per step, feature rows and columns per crop,
     the offsets :math:`p, n_{lo}, n_{hi}`, the margin :math:`m`, the optimiser, its learning
     rate and momentum (SGD), the Torch threads of the job, and the stop rule on a plateau of
@@ -74,19 +74,6 @@ class TrainSettings:
     learning_rate: float = 1e-3
     momentum: float = 0.9
     threads: int = 1
-    check_every: int = 25
-    patience: int = 4
-    min_delta: float = 0.002
-    min_steps: int = 100
-
-    def stop_rule(self) -> StopRule:
-        """The :class:`~stereovar.probe.convergence.StopRule` of these settings."""
-        return StopRule(
-            check_every=int(self.check_every),
-            patience=int(self.patience),
-            min_delta=float(self.min_delta),
-            min_steps=int(self.min_steps),
-        )
 
     def __post_init__(self):
         if self.optimiser not in OPTIMISERS:
