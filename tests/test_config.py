@@ -470,3 +470,22 @@ def test_moments_needs_independent_samples_in_their_own_pixel(render, message):
     with pytest.raises(ConfigError, match=re.escape(message)):
         validate_config(config, SCHEMA)
     assert validate_config({"render": {"estimator": "moments"}}, SCHEMA)["render"]["spp"] == 32
+
+
+@pytest.mark.parametrize(
+    "config",
+    [
+        {},
+        {"audit": {"name": "a", "renders": "r/{view}/{seed}.exr"}},
+        {"audit": {"name": "a", "renders": "r/{view}/{seed}.exr",
+                   "probe_model": {"factory": "m:f", "weights": "w.pt"}}},
+    ],
+)
+def test_snakemakes_own_default_filling_takes_every_config(config):
+    """The workflow also runs Snakemake's `validate(..., set_default=True)`, which descends
+    into every property's defaults: a nullable object must not declare defaults inside it."""
+    from snakemake.utils import validate
+
+    given = copy.deepcopy(config)
+    validate(given, str(SCHEMA), set_default=True)
+    assert given["probe"]["architectures"] == ["mccnn", "costvolume"]

@@ -40,7 +40,7 @@ if PROBE_MODEL:
         params:
             scenes=SCENES,
             factory=PROBE_MODEL["factory"],
-            device=PROBE_MODEL["device"],
+            device=PROBE_MODEL.get("device", "cpu"),
             source=PROBE_MODEL_SOURCE,
         log:
             f"logs/{PROBE_MODEL_SOURCE}/tables/probe_model.log",
