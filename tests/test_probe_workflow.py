@@ -264,6 +264,5 @@ def test_too_few_renders_stop_the_probe_in_one_line_before_any_job(probe_run):
     assert proc.returncode != 0
     lines = [line for line in proc.stderr.splitlines() if line.startswith("stereovar:")]
     assert len(lines) == 1 and "at least 4 renders per view" in lines[0], proc.stderr[-2000:]
-    # the main experiment, which needs no probe, still plans at N = 3
-    assert snakemake(root, "-n", "all", config=few).returncode == 0
     (root / "override.yaml").unlink()
+    # (the main experiment plans at N = 2 without a probe job: tests/test_workflow.py)

@@ -530,7 +530,11 @@ def page_job_inputs(root: Path) -> str:
 def test_the_page_takes_the_mitigations_and_the_probe_once_they_exist(tmp_path):
     from .test_workflow import TINY, copy_workflow
 
-    root = copy_workflow(tmp_path / "wf", {**TINY, "mitigations": {"names": ["equalise"]}})
+    # 4 renders per view: the probe's jobs are planned once its outputs exist, and it needs 4
+    render = {**TINY["render"], "n_seeds": 4, "seeds_per_job": 4}
+    root = copy_workflow(
+        tmp_path / "wf", {**TINY, "render": render, "mitigations": {"names": ["equalise"]}}
+    )
     inputs = page_job_inputs(root)
     assert layout.mitigation_tables()[0] in inputs and layout.mitigation_figure() in inputs
     assert layout.probe_verdict() not in inputs and layout.probe_figure() not in inputs

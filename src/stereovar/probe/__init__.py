@@ -1,16 +1,22 @@
-"""The learned probe: does a stereo matcher trained on these renders use the Monte Carlo cue?
+"""The learned probe: does a stereo network trained on these renders use the Monte Carlo cue,
+and could the probe tell if it did?
 
-A small matcher (MC-CNN "fast", :mod:`~stereovar.probe.network`) is trained on single renders
-of each training condition (:mod:`~stereovar.probe.conditions`,
-:mod:`~stereovar.probe.training`), cross-validated over scenes
+Two architectures (:mod:`~stereovar.probe.architectures`, the registry): MC-CNN "fast"
+(:mod:`~stereovar.probe.network`, trained in :mod:`~stereovar.probe.training`) and a small
+end-to-end cost-volume network (:mod:`~stereovar.probe.costvolume`). Each is trained on
+single renders of each training condition (:mod:`~stereovar.probe.conditions`: the
+mitigations, the control ``sensor_only`` and the planted positive control of
+:mod:`~stereovar.probe.planted`), beside a cue-blind twin, to a plateau of validation
+accuracy (:mod:`~stereovar.probe.convergence`), cross-validated over scenes
 (:mod:`~stereovar.probe.experiment`), and tested on counterfactual inputs that change only the
-right view's Monte Carlo residual (:mod:`~stereovar.probe.inputs`): the block shuffle
-:math:`\\Pi`, camera noise, no noise, and a cue conflict that moves the residual's variance
-structure to :math:`d + k`. Its predictions are scored per tile
-(:mod:`~stereovar.probe.scoring`) and summarised with intervals over test tiles and training
-seeds (:mod:`~stereovar.probe.metrics`); :mod:`~stereovar.probe.verdict` states whether the
-matcher uses the cue, against the ``sensor_only`` control.
+right view's Monte Carlo residual (:mod:`~stereovar.probe.inputs`). Its predictions are
+scored per tile (:mod:`~stereovar.probe.scoring`) and summarised with intervals over training
+seeds and test tiles (:mod:`~stereovar.probe.metrics`); :mod:`~stereovar.probe.verdict`
+states whether each network uses the cue, against its twin, and the smallest reliance the
+probe detects. :mod:`~stereovar.probe.user_model` runs the user's own trained network through
+the same counterfactual inputs.
 
 The modules that train or run a network import PyTorch (the ``probe`` extra); ``inputs``,
-``scoring``, ``metrics`` and ``verdict`` need only numpy and pandas.
+``scoring``, ``metrics``, ``verdict``, ``conditions``, ``architectures`` and ``convergence``
+need only numpy, scipy and pandas.
 """
