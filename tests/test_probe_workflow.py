@@ -242,7 +242,7 @@ def test_stereovar_probe_runs_the_users_model_on_the_runs_frames(probe_run):
     torch.save(factory().state_dict(), root / "weights.pt")
     command = [sys.executable, "-m", "stereovar.cli", "probe", "--model", "user_models:factory"]
     proc = subprocess.run(
-        [*command, "--weights", "weights.pt", "--test-frames", "2"],
+        [*command, "--weights", "weights.pt", "--test-frames", "2", "--config", "tiny.yaml"],
         cwd=root, capture_output=True, text=True,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
