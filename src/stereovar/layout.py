@@ -9,7 +9,8 @@ under one directory per source and transform, the *source key*:
 ``results/{source}/{transform}``
     the same scenes after a mitigation: a store transform (:mod:`stereovar.transforms`)
     applied to the source's renders, or a render-time policy (``shared_seed``) that renders
-    them anew.
+    them anew; or ``results/cycles/{profile}``, the scenes rendered by Cycles under a
+    generator's own settings (:mod:`stereovar.generators`, the ``generators`` target).
 
 ``source`` is a renderer (``mitsuba``, ``cycles``) or an audit (``audit/{name}``). Under a
 source key:
@@ -67,6 +68,10 @@ __all__ = [
     "estimator_figure",
     "estimator_tables",
     "export_dir",
+    "generator_calibration_rows",
+    "generator_figure",
+    "generator_source",
+    "generator_tables",
     "ground_truth_store",
     "import_record",
     "intervention_margins",
@@ -328,6 +333,32 @@ def calibration_rows(source: str, estimator: str, scene: str, spp) -> str:
     transform and statistic), drawn as the estimator's variance store was:
     ``results/{source}/{estimator}/calibration/{scene}/spp{spp}.csv``."""
     return f"{run_prefix(source, estimator)}/calibration/{scene}/spp{spp}.csv"
+
+
+def generator_source(profile: str) -> str:
+    """The source key of a generator profile's renders (:mod:`stereovar.generators`):
+    ``cycles`` for the paper's own settings, else ``cycles/{profile}``."""
+    from .generators import PAPER
+
+    return "cycles" if profile == PAPER else source_key("cycles", profile)
+
+
+def generator_calibration_rows(profile: str, scene: str, spp) -> str:
+    """One scene's calibration replicates matched to a generator profile (its camera-law
+    nulls, through its denoiser where it has one):
+    ``results/cycles/seeds/generator_calibration/{profile}/{scene}/spp{spp}.csv``."""
+    return f"{run_prefix('cycles', 'seeds')}/generator_calibration/{profile}/{scene}/spp{spp}.csv"
+
+
+def generator_tables() -> list[str]:
+    """The generator table: ``results/tables/generators.{csv,md,tex,html}`` (every column,
+    and each number beside its interval and matched null)."""
+    return table_paths("generators")
+
+
+def generator_figure() -> str:
+    """The generator figure: ``results/figures/generators.png``."""
+    return f"{RESULTS}/figures/generators.png"
 
 
 def calibration_tables(source: str | None = None) -> list[str]:

@@ -142,9 +142,12 @@ def resolve_mitigation(name: str) -> Mitigation:
 
 
 def keyed_transforms() -> tuple[str, ...]:
-    """Every name that can follow a source in a source key: the seed-policy mitigations and
-    the store transforms."""
-    return (*SEED_POLICY_MITIGATIONS, *_store_transforms())
+    """Every name that can follow a source in a source key: the seed-policy mitigations,
+    the store transforms and the generator profiles (:data:`stereovar.generators.PROFILES`,
+    rendered by Cycles under a generator's settings)."""
+    from .generators import PROFILES
+
+    return (*SEED_POLICY_MITIGATIONS, *_store_transforms(), *PROFILES)
 
 
 def audit_mitigation_runs(config: dict) -> list[MitigationRun]:
