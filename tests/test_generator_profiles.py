@@ -1,0 +1,126 @@
+"""Generator profiles: the presets, their scaling to a budget, and the generator table."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+from stereovar.errors import ConfigError
+from stereovar.generators import (
+    PAPER,
+    PROFILES,
+    GeneratorProfile,
+    automatic_min_samples,
+    budget_profile,
+    generator_profiles,
+    load_profile,
+    profile_path,
+)
+from stereovar.renderers.cycles.settings import cycles_options, cycles_options_error
+from stereovar.statistics.generators import GENERATOR_COLUMNS, compact_table, generator_rows
+
+
+@pytest.mark.parametrize("name", PROFILES)
+def test_every_preset_is_a_valid_cycles_config_citing_its_source(name):
+    path = profile_path(name)
+    text = path.read_text()
+    profile = load_profile(name)
+    # the settings pass the renderer's own validation once its defaults are filled in
+    assert cycles_options_error(cycles_options(profile.cycles)) is None
+    # the preset cites the generator's repository at a commit, with line numbers
+    assert re.search(r"@ [0-9a-f]{40}", text.splitlines()[0])
+    cited = re.findall(r"^#\s+\S+\.(?:py|gin) L\d+", text, flags=re.M)
+    assert len(cited) >= 3
+    # and is a config file of its own, merged on the default config as --configfile does
+    from stereovar.config import load_config
+    from stereovar.workflow_home import workflow_root
+
+    root = workflow_root()
+    config = load_config(
+        [root / "config.yaml", path], root / "workflow" / "schemas" / "config.schema.yaml"
+    )
+    assert config["render"]["renderer"] == "cycles"
+    assert config["render"]["spp"] == profile.spp
+    assert {k: config["render"]["cycles"][k] for k in profile.cycles} == profile.cycles
+
+
+def test_cycles_automatic_minimum_follows_its_formula():
+    for tau in (0.1, 0.05, 0.01, 0.005, 0.001):
+        expected = max(4, math.ceil(16.0 / tau**0.3))
+        assert automatic_min_samples(tau) == expected
+    # the comment in Cycles' source: 0.1 -> 32, 0.01 -> 64, 0.001 -> 128
+    assert [automatic_min_samples(t) for t in (0.1, 0.01, 0.001)] == [32, 64, 128]
+
+
+def test_a_profile_within_the_budget_is_unchanged():
+    p = GeneratorProfile("x", 32, {"adaptive_sampling": True, "adaptive_threshold": 0.02})
+    assert budget_profile(p, 64) is p
+
+
+@pytest.mark.parametrize("spp,budget", [(1024, 64), (8192, 64), (128, 64), (300, 100)])
+def test_scaling_keeps_the_share_of_the_budget_where_pixels_stop(spp, budget):
+    tau = 0.01
+    p = GeneratorProfile("x", spp, {"adaptive_sampling": True, "adaptive_threshold": tau})
+    q = budget_profile(p, budget)
+    k = spp / budget
+    assert q.spp == budget and math.isclose(q.scale, 1 / k)
+    # error ~ 1/sqrt(n): the threshold a pixel reaches at n/k samples is sqrt(k) times higher
+    assert math.isclose(q.cycles["adaptive_threshold"], tau * math.sqrt(k), rel_tol=1e-4)
+    # the automatic minimum, a share of the generator's SPP, keeps that share of the budget
+    share = automatic_min_samples(tau) / spp
+    assert abs(q.cycles["adaptive_min_samples"] - share * budget) <= 0.5 or (
+        q.cycles["adaptive_min_samples"] == 1
+    )
+    # the preset's own settings are left alone
+    assert p.cycles["adaptive_threshold"] == tau
+
+
+def test_non_adaptive_profiles_only_lose_samples():
+    q = budget_profile(GeneratorProfile("k", 128, {"denoise": True}), 64)
+    assert (q.spp, q.scale, q.cycles) == (64, 0.5, {"denoise": True})
+
+
+def test_budget_below_one_is_refused_in_one_line():
+    with pytest.raises(ConfigError, match="generators.spp"):
+        budget_profile(GeneratorProfile("k", 128), 0)
+
+
+def test_the_rows_put_the_paper_first_and_name_unknown_profiles():
+    config = {"generators": {"profiles": list(PROFILES), "spp": 64}}
+    rows = generator_profiles(config)
+    assert [r.name for r in rows] == [PAPER, *PROFILES]
+    assert rows[0].seed_rule == "per_view" and rows[0].seed_policy == "independent"
+    assert all(r.spp <= 64 for r in rows)
+    with pytest.raises(ConfigError, match="no generator profile 'nope'; use any of"):
+        generator_profiles({"generators": {"profiles": ["nope"], "spp": 64}})
+
+
+@pytest.mark.parametrize(
+    "cycles,rule,policy",
+    [
+        ({}, "per_view", "independent"),
+        ({"seed": "unset"}, "unset", "shared"),
+        ({"seed": "animated"}, "animated", "shared"),
+        ({"multiview": True, "seed": "unset"}, "multiview", "shared"),
+    ],
+)
+def test_seed_rules_map_to_the_seed_policy_they_imply(cycles, rule, policy):
+    p = GeneratorProfile("x", 64, cycles)
+    assert (p.seed_rule, p.seed_policy) == (rule, policy)
+
+
+def test_generator_rows_carry_the_profile_and_every_column():
+    p = budget_profile(GeneratorProfile("blenderproc", 1024, {"denoise": True,
+                                                             "denoiser": "compositor"}), 64)
+    measured = [{"region": "all", "mc_specific": 0.2, "mc_specific_low": 0.1,
+                 "mc_specific_high": 0.3, "null_partial": 0.5, "mc_cue": "remains"}]
+    rows = generator_rows(p, measured, generator_spp=1024, matched="denoise")
+    assert set(rows[0]) == set(GENERATOR_COLUMNS)
+    assert rows[0]["denoiser"] == "compositor" and rows[0]["spp_scale"] == 1 / 16
+    assert "OIDN" in rows[0]["matched_null"]
+    text = compact_table(rows)[0]
+    assert text["SPP (generator's)"] == "64 (1024, scaled x1/16)"
+    assert text["matched null"] == "0.500"
+    assert math.isnan(rows[0]["psnr"]) and text["PSNR"] == "n/a"
