@@ -29,7 +29,13 @@ DEFAULTS = {
         "renderer": "mitsuba",
         "cycles": {
             "denoise": False,
+            "denoiser": "render",
+            "denoising_input_passes": "RGB_ALBEDO_NORMAL",
             "adaptive_sampling": False,
+            "adaptive_threshold": 0.01,
+            "adaptive_min_samples": 0,
+            "multiview": False,
+            "seed": "per_view",
             "view_transform": "Standard",
             "light_tree": False,
             "clamp_direct": 0,

@@ -56,8 +56,6 @@ def test_missing_bpy_is_one_line_naming_the_extra(monkeypatch):
 @pytest.mark.parametrize(
     "cycles, key",
     [
-        ({"denoise": True}, "render.cycles.denoise"),
-        ({"adaptive_sampling": True}, "render.cycles.adaptive_sampling"),
         ({"view_transform": "Filmic"}, "render.cycles.view_transform"),
         ({"view_transform": "AgX"}, "render.cycles.view_transform"),
     ],

@@ -48,9 +48,14 @@ KEY_FIELDS = (
 )
 """What determines a render's pixels, and so its cache key."""
 
+OPTIONAL_KEY_FIELDS = ("renderer_options",)
+"""Part of the key when a render has them: the options only one renderer reads
+(``render.cycles``: the denoiser, adaptive sampling, the seed rule, ...)."""
+
 
 def render_key(determining: Mapping) -> str:
-    """SHA-256 of the :data:`KEY_FIELDS` of one render (canonical JSON).
+    """SHA-256 of the :data:`KEY_FIELDS` (and any :data:`OPTIONAL_KEY_FIELDS`) of one render
+    (canonical JSON).
 
     Raises
     ------
@@ -61,6 +66,7 @@ def render_key(determining: Mapping) -> str:
     if missing:
         raise KeyError(f"render key needs {', '.join(missing)}")
     fields = {k: determining[k] for k in KEY_FIELDS}
+    fields.update({k: determining[k] for k in OPTIONAL_KEY_FIELDS if k in determining})
     text = json.dumps(fields, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()
 

@@ -2,11 +2,13 @@
 
 :mod:`.backend` loads ``bpy`` (the optional ``cycles`` extra), :mod:`.scene` compiles specs
 into a Blender scene with the same geometry as the Mitsuba compiler, :mod:`.settings` sets
-and records the render settings that keep the experiment honest, and :mod:`.render` renders
-a view. The ground truth stays renderer-neutral: :meth:`CyclesScene.trace` and
-:meth:`CyclesScene.shape_materials` trace the Mitsuba-compiled geometry of the same spec, so
-one ground truth serves both renderers (:meth:`CyclesScene.geometry` renders Cycles' own
-planar depth and object index, which the tests compare with it).
+and records every render setting (``render.cycles``: the generators' adaptive sampling,
+denoiser, multiview and seed rules among them), and :mod:`.render` renders a view, or both
+views in one multiview render. The ground truth stays renderer-neutral:
+:meth:`CyclesScene.trace` and :meth:`CyclesScene.shape_materials` trace the Mitsuba-compiled
+geometry of the same spec, so one ground truth serves both renderers
+(:meth:`CyclesScene.geometry` renders Cycles' own planar depth and object index, which the
+tests compare with it).
 
 Importing this package pulls in no third-party module; ``bpy`` loads in
 :meth:`CyclesRenderer.prepare`.
@@ -15,7 +17,7 @@ Importing this package pulls in no third-party module; ``bpy`` loads in
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ..base import FirstHits, PreparedScene, Renderer, RenderSettings
@@ -37,6 +39,8 @@ class CyclesScene(PreparedScene):
     threads: int | None = None
     rig_options: dict | None = None
     _mitsuba: Any = None
+    _other_eyes: dict = field(default_factory=dict)
+    """Multiview renders' eyes not yet asked for, by (view, spp, seed, settings)."""
 
     _current = None
     """The scene whose data Blender holds: ``bpy`` has one scene per process, so preparing
@@ -63,7 +67,18 @@ class CyclesScene(PreparedScene):
 
     def render_with_attrs(self, view, *, spp, seed, settings: RenderSettings):
         """:meth:`render` plus the Cycles settings used, as store attributes
-        (:func:`.render.render_view`)."""
+        (:func:`.render.render_view`).
+
+        Under ``render.cycles.multiview`` one render gives both views
+        (:func:`.render.render_pair`): the view asked for is returned and the other kept
+        until it is asked for with the same seed, SPP and settings, so a caller asking for
+        every view of every seed (views outer, seeds inner, as
+        :func:`stereovar.jobs.render.render_job` does) renders each seed once.
+        """
+        from .settings import cycles_options
+
+        if cycles_options(settings.renderer_options)["multiview"]:
+            return self._render_pair_view(view, spp=spp, seed=seed, settings=settings)
         from .render import render_view
 
         self._ensure_built()
@@ -78,6 +93,34 @@ class CyclesScene(PreparedScene):
             threads=self.threads,
             options=settings.renderer_options,
         )
+
+    def _render_pair_view(self, view, *, spp, seed, settings: RenderSettings):
+        import json
+
+        from ...rig import VIEWS
+        from .render import render_pair
+
+        if view not in VIEWS:
+            raise ValueError(f"view must be one of {VIEWS}, got {view!r}")
+        same = (int(spp), int(seed), json.dumps(settings.as_attrs(), sort_keys=True))
+        kept = self._other_eyes.pop((view, *same), None)
+        if kept is not None:
+            return kept
+        self._ensure_built()
+        images, attrs = render_pair(
+            self.bpy,
+            self.camera,
+            self.rig,
+            spp=spp,
+            seed=seed,
+            max_depth=settings.max_depth,
+            threads=self.threads,
+            options=settings.renderer_options,
+        )
+        for other in VIEWS:
+            if other != view:
+                self._other_eyes[(other, *same)] = (images[other], attrs)
+        return images[view], attrs
 
     def geometry(self, view: str) -> dict:
         """Cycles' own planar depth and pass index (shape index + 1) at the pixel centres of

@@ -42,7 +42,11 @@ FIXED_SETTINGS = {
     "cycles_view_transform": "Standard",
     "cycles_output": "linear float32 OpenEXR",
     "cycles_bounces": "max_bounces = max_depth - 2 (diffuse, glossy, transmission alike)",
-    "cycles_seed_rule": "cycles.seed = render seed mod 2^31",
+    "cycles_seed_rule": (
+        "render.cycles.seed per_view: cycles.seed = sampler seed mod 2^31, a seed per view; "
+        "unset: the same, one sampler seed per replicate shared by both views; animated: "
+        "cycles.seed 0, use_animated_seed, frame = sampler seed = replicate index + 1"
+    ),
 }
 """Render settings every Cycles render uses whatever the config says
 (:func:`.settings.apply_settings`), recorded in every store's provenance."""
