@@ -53,6 +53,7 @@ include: "workflow/rules/mitigations.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/probe.smk"
 include: "workflow/rules/probe_model.smk"
+include: "workflow/rules/generators.smk"
 
 
 onstart:

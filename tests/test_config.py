@@ -95,6 +95,11 @@ DEFAULTS = {
         "aux_spp": 16,
         "seed": 0,
     },
+    "generators": {
+        "profiles": ["kubric", "blenderproc", "infinigen"],
+        "scenes": ["scene_000", "scene_001"],
+        "spp": 64,
+    },
     "probe": {
         "conditions": ["none", "sensor_only"],
         "planted": [1],

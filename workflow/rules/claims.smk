@@ -146,6 +146,9 @@ rule results_page:
         # the probe's verdict and figure, once `snakemake probe` has made them
         probe=probe_if_run()[-1:],
         probe_figure=probe_if_run()[-2:-1],
+        # the generator table and figure, once `snakemake generators` has made them
+        generators=generators_if_run()[:-1],
+        generators_figure=generators_if_run()[-1:],
         # the calibration's table: its sentence goes under the headline
         calibration=CALIBRATION_TABLES[0],
     output:

@@ -1056,6 +1056,13 @@ def probe_if_run():
     return targets if targets and all(Path(p).exists() for p in targets) else []
 
 
+def generators_if_run():
+    """The generator tables and figure when they exist (`snakemake generators` is not part
+    of `all`; a run that made them has its results page show them)."""
+    targets = [*layout.generator_tables(), layout.generator_figure()]
+    return targets if all(Path(p).exists() for p in targets) else []
+
+
 # The results page (results/index.html, made in claims.smk; stereovar.pages.results): the
 # claims, the headline with its controls and every figure and table of `all`, each figure
 # with its report caption.
@@ -1069,6 +1076,7 @@ PAGE_CAPTIONS = {
     "cross_renderer": "fig_cross_renderer.rst",
     "mitigations": "mitigations_figure.rst",
     "probe": "probe_figure.rst",
+    "generators": "generators.rst",
     "calibration": "calibration.rst",
     "claims": "claims.rst",
     "workflow": "workflow.rst",

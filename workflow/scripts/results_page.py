@@ -14,6 +14,8 @@ run_job(
     mitigation_figure=(list(snakemake.input.mitigation_figure) or [None])[0],
     probe=(list(snakemake.input.probe) or [None])[0],
     probe_figure=(list(snakemake.input.probe_figure) or [None])[0],
+    generators=list(snakemake.input.generators),
+    generators_figure=(list(snakemake.input.generators_figure) or [None])[0],
     calibration=snakemake.input.calibration,
     out=snakemake.output[0],
     **snakemake.params,

@@ -246,6 +246,8 @@ def results_page_job(
     mitigation_figure=None,
     probe=None,
     probe_figure=None,
+    generators=None,
+    generators_figure=None,
     calibration=None,
 ) -> dict:
     """Write ``results/index.html`` (:mod:`stereovar.pages.results`): the headline
@@ -253,7 +255,8 @@ def results_page_job(
     the claims table (``claims``, its CSV), every figure of ``figures`` embedded with its
     caption (``captions``: figure name, ``claims`` and ``workflow`` to the report's caption,
     its Jinja already filled), with ``mitigations`` (the mitigation table's CSV) and
-    ``probe`` (the probe's verdict JSON) their sections and figures, links to every table of
+    ``probe`` (the probe's verdict JSON) and ``generators`` (the generator table's files) their
+    sections and figures, links to every table of
     ``tables`` relative to the page, and to ``report`` (Snakemake's report) when it exists;
     with ``calibration`` (the calibration table's CSV) its sentence under the headline.
 
@@ -296,6 +299,15 @@ def results_page_job(
             "figure": _page_figure(probe_figure, captions) if probe_figure else None,
             "tables": section_tables("probe"),
         }
+    generator_section = None
+    if generators:
+        from ..statistics.generators import compact_table
+
+        generator_section = {
+            "rows": compact_table(read_rows(next(p for p in generators if p.endswith(".csv")))),
+            "figure": _page_figure(generators_figure, captions) if generators_figure else None,
+            "tables": _page_tables(generators, out),
+        }
     report = report or snakemake_report()
     sections = page_sections(
         summary=document,
@@ -307,6 +319,7 @@ def results_page_job(
         intro=captions.get("workflow", ""),
         mitigations=mitigation_section,
         probe=probe_section,
+        generators=generator_section,
         report=relative_link(report, out) if Path(report).is_file() else None,
         report_command=f"snakemake --report {report}",
         calibration=headline(read_rows(calibration)) if calibration else "",

@@ -314,6 +314,7 @@ def page_sections(
     intro: str = "",
     mitigations: dict | None = None,
     probe: dict | None = None,
+    generators: dict | None = None,
     report: str | None = None,
     report_command: str = "snakemake --report results/report.html",
     calibration: str = "",
@@ -338,6 +339,9 @@ def page_sections(
     mitigations, probe : dict, optional
         When they have run: ``lines`` (mitigations) or ``paragraph`` (probe), ``figure``
         (as in ``figures``, or None) and ``tables`` (as in ``tables``).
+    generators : dict, optional
+        When the ``generators`` target has run: ``rows``
+        (:func:`stereovar.statistics.generators.compact_table`), ``figure`` and ``tables``.
     report : str, optional
         Snakemake's report relative to the page, when it exists.
     report_command : str, optional
@@ -372,6 +376,7 @@ def page_sections(
         "figures": list(figures),
         "mitigations": mitigations,
         "probe": probe,
+        "generators": generators,
         "tables": list(tables),
         "report": report,
         "report_command": report_command,
@@ -528,11 +533,33 @@ def _mitigation_headline_html(rows: list[dict]) -> str:
     )
 
 
+def _generator_table_html(rows: list[dict]) -> str:
+    """The generator table (:func:`stereovar.statistics.generators.compact_table`), all
+    pixels."""
+    if not rows:
+        return ""
+    columns = list(rows[0])
+    head = "".join(f"<th>{_e(c)}</th>" for c in columns)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{_e(r[c])}</td>" for c in columns) + "</tr>" for r in rows
+    )
+    return (
+        '<table class="mitigations"><thead><tr>' + head + "</tr></thead><tbody>" + body
+        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals. Each row is "
+        "Cycles under one generator's own defaults (its SPP scaled to the budget where it is "
+        "above it). The Monte Carlo-specific rho is the intensity-controlled rho minus the "
+        "same statistic on the profile's own matched null, whose value stands beside it; the "
+        "residual coupling at zero disparity is what one seed shared by both views "
+        "couples.</p>"
+    )
+
+
 def to_html_page(s: dict) -> str:
     """The page as one self-contained HTML document (no script)."""
     nav = [("headline", "Headline"), ("claims", "Claims"), ("figures", "Figures")]
     nav += [("mitigations", "Mitigations")] if s["mitigations"] else []
     nav += [("probe", "Learned probe")] if s["probe"] else []
+    nav += [("generators", "Generators")] if s.get("generators") else []
     nav += [("tables", "Tables"), ("report", "Snakemake report")]
     body = [
         f"<h1>{_e(s['title'])}</h1>",
@@ -568,6 +595,15 @@ def to_html_page(s: dict) -> str:
             f"<p>{_e(p['paragraph'])}</p>",
             _figure_html(p["figure"]) if p.get("figure") else "",
             _links_html(p.get("tables") or []),
+            "</section>",
+        ]
+    g = s.get("generators")
+    if g:
+        body += [
+            '<section id="generators"><h2>Generator profiles</h2>',
+            _generator_table_html(g["rows"]),
+            _figure_html(g["figure"]) if g.get("figure") else "",
+            _links_html(g.get("tables") or []),
             "</section>",
         ]
     body += [

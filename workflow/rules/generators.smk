@@ -1,0 +1,189 @@
+# Generator profiles (stereovar.generators; `snakemake generators`, not part of `all`): the
+# scenes of `generators.scenes` rendered by Cycles under each generator's own defaults
+# (render_profile, under results/cycles/{profile}) and under the paper's (the Cycles renders of
+# render.smk), each measured like a mitigation (the variance, warp, correlation and
+# mitigation_scene rules on the source key) against its own matched null (generator_calibration),
+# then results/tables/generators.* and its figure.
+from stereovar.generators import PAPER, PROFILES, generator_profiles
+from stereovar.jobs.generators import profile_matched_transform
+from stereovar.renderers.cycles.settings import cycles_options
+
+GENERATORS = config["generators"]
+GENERATOR_SPP = int(GENERATORS["spp"])
+GENERATOR_SCENES = list(GENERATORS["scenes"])
+with exit_with_one_line():
+    GENERATOR_ROWS = {p.name: p for p in generator_profiles(config)}
+    _outside = [s for s in GENERATOR_SCENES if s not in SCENES]
+    if _outside:
+        raise ConfigError(
+            f"config key 'generators.scenes': {', '.join(_outside)} not in 'scenes'; "
+            "list only scenes of the run"
+        )
+
+
+def generator_stores(profile, scene):
+    """View to the render stores of one scene under ``profile`` at the budget SPP."""
+    return seed_stores(run_config(layout.generator_source(profile)), scene, GENERATOR_SPP)
+
+
+def generator_calibration_inputs(wildcards):
+    """The variance store the profile's matched null is drawn like and the ground truth: the
+    profile's own, or for a profile whose denoiser runs the paper row's (the raw renders'
+    noise level, which the null then passes through OIDN with each view's albedo and normal
+    from Mitsuba's auxiliary pass of the same scene)."""
+    profile = GENERATOR_ROWS[wildcards.profile]
+    matched = profile_matched_transform(profile.cycles)
+    drawn_like = PAPER if matched == "denoise" else profile.name
+    inputs = {
+        "variance": layout.variance_store(
+            layout.generator_source(drawn_like), "seeds", wildcards.scene, wildcards.spp
+        ),
+        "ground_truth": layout.traced_ground_truth(wildcards.scene),
+    }
+    if matched == "denoise":
+        for view in VIEWS:
+            inputs[f"aux_{view}"] = layout.aux_store("mitsuba", wildcards.scene, view)
+    return inputs
+
+
+def generator_table_params():
+    """Per profile: the profile as rendered and its per-scene files."""
+    runs = []
+    for name, p in GENERATOR_ROWS.items():
+        source = layout.generator_source(name)
+        runs.append(
+            {
+                "profile": name,
+                "spp": p.spp,
+                "generator_spp": round(p.spp / p.scale),
+                "scale": p.scale,
+                "cycles": p.cycles,
+                "calibration_transform": profile_matched_transform(p.cycles),
+                "correlation": [
+                    layout.correlation_rows(source, "seeds", s, GENERATOR_SPP)
+                    for s in GENERATOR_SCENES
+                ],
+                "scene_rows": [
+                    layout.mitigation_rows(source, "seeds", s, GENERATOR_SPP)
+                    for s in GENERATOR_SCENES
+                ],
+                "calibration": [
+                    layout.generator_calibration_rows(name, s, GENERATOR_SPP)
+                    for s in GENERATOR_SCENES
+                ],
+            }
+        )
+    return runs
+
+
+def generator_targets():
+    """`snakemake generators`: the generator table and its figure."""
+    return [*layout.generator_tables(), layout.generator_figure()]
+
+
+rule render_profile:
+    wildcard_constraints:
+        profile="|".join(PROFILES),
+    input:
+        unpack(scene_inputs),
+    output:
+        left=directory(
+            layout.render_store("cycles", "{scene}", "left", "{spp}", "{batch}", "{profile}")
+        ),
+        right=directory(
+            layout.render_store("cycles", "{scene}", "right", "{spp}", "{batch}", "{profile}")
+        ),
+    params:
+        seeds=lambda wc: batch_seeds(wc.batch),
+        spp=lambda wc: int(wc.spp),
+        renderer="cycles",
+        width=config["resolution"]["width"],
+        height=config["resolution"]["height"],
+        baseline_m=config["rig"]["baseline_m"],
+        convention=config["rig"]["convention"],
+        **{
+            k: v
+            for k, v in render_params().items()
+            if k not in ("seed_policy", "renderer_options")
+        },
+        seed_policy=lambda wc: GENERATOR_ROWS[wc.profile].seed_policy,
+        renderer_options=lambda wc: cycles_options(GENERATOR_ROWS[wc.profile].cycles),
+    log:
+        "logs/cycles/{profile}/renders/{scene}/spp{spp}/seeds{batch}.log",
+    benchmark:
+        "benchmarks/cycles/{profile}/renders/{scene}/spp{spp}/seeds{batch}.tsv"
+    threads: RENDER_THREADS
+    resources:
+        **render_resources(gpu=False),
+    conda:
+        ENV
+    script:
+        "../scripts/render.py"
+
+
+rule generator_calibration:
+    wildcard_constraints:
+        profile="|".join([PAPER, *PROFILES]),
+    input:
+        unpack(generator_calibration_inputs),
+    output:
+        layout.generator_calibration_rows("{profile}", "{scene}", "{spp}"),
+    params:
+        transforms=lambda wc: list(
+            dict.fromkeys(["none", profile_matched_transform(GENERATOR_ROWS[wc.profile].cycles)])
+        ),
+        options={},
+        calibration=config["calibration"],
+        analysis=config["analysis"],
+        controls=config["controls"],
+    log:
+        "logs/generators/{profile}/calibration/{scene}/spp{spp}.log",
+    benchmark:
+        "benchmarks/generators/{profile}/calibration/{scene}/spp{spp}.tsv"
+    threads: 1
+    resources:
+        **calibration_resources(),
+    conda:
+        ENV
+    script:
+        "../scripts/calibration_scene.py"
+
+
+rule generators_table:
+    input:
+        correlation=[p for run in generator_table_params() for p in run["correlation"]],
+        scene_rows=[p for run in generator_table_params() for p in run["scene_rows"]],
+        calibration=[p for run in generator_table_params() for p in run["calibration"]],
+    output:
+        csv=layout.generator_tables()[0],
+        md=layout.generator_tables()[1],
+        tex=layout.generator_tables()[2],
+        html=report(
+            layout.generator_tables()[3],
+            caption="../report/generators.rst",
+            category="Tables",
+            labels={"table": "generators"},
+        ),
+        figure=report(
+            layout.generator_figure(),
+            caption="../report/generators.rst",
+            category="Figures",
+            labels={"figure": "generators"},
+        ),
+    params:
+        runs=generator_table_params(),
+    log:
+        "logs/cycles/tables/generators.log",
+    benchmark:
+        "benchmarks/cycles/tables/generators.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/generators_table.py"
+
+
+rule generators:
+    input:
+        generator_targets(),
+    localrule: True
