@@ -140,4 +140,4 @@ def test_unreadable_files_give_one_line_naming_the_file(tmp_path):
     with pytest.raises(ImageError, match="2 arrays"):
         read_image(npz)
     with pytest.raises(ImageError, match="unknown image format"):
-        read_image(tmp_path / "a.tiff")
+        read_image(tmp_path / "a.bmp")

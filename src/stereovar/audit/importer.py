@@ -42,6 +42,7 @@ from ..io.contracts import config_digest
 from ..io.images import (
     image_format,
     image_size,
+    integer_bits,
     missing_error,
     not_regular_error,
     read_field,
@@ -59,6 +60,13 @@ from ..io.store import (
 )
 from ..layout import import_record
 from ..rig import VIEWS
+from .generators import (
+    FOCAL_AGREEMENT,
+    depth_size,
+    read_camera,
+    read_depth,
+    stereo_geometry,
+)
 from .ground_truth import CONVENTIONS, disparity_from_depth, imported_ground_truth
 from .layout import NAME, Discovery, Frame, discover
 from .sign import HIGH_ERROR, sign_check
@@ -541,8 +549,13 @@ def _killed_imports(name: str, *, remove: bool) -> list:
 
 def _check_sizes(frame: Frame) -> tuple[int, int]:
     """The frame's size from its files' headers; a file whose header gives another size than
-    most of the frame's files is named, before any file is decoded."""
-    sizes = {path: image_size(path) for path in frame.files()}
+    most of the frame's files is named, before any file is decoded. An Infinigen depth at
+    twice the renders' size counts as the renders' size
+    (:func:`~stereovar.audit.generators.depth_size`)."""
+    sizes = {path: image_size(path) for path in frame.images()}
+    render_size = sizes[next(iter(frame.renders[VIEWS[0]].values()))]
+    for path in frame.ground_truth.get("depth", {}).values():
+        sizes[path] = depth_size(path, render_size)
     size, count = Counter(sizes.values()).most_common(1)[0]  # a tie: the first render's
     for path, other in sizes.items():
         if other != size:
@@ -559,53 +572,136 @@ def _check_sizes(frame: Frame) -> tuple[int, int]:
     return size
 
 
-def _is_png8(path) -> bool:
-    if image_format(path) != "png":
-        return False
-    with open(path, "rb") as f:
-        head = f.read(25)
-    return len(head) == 25 and head[24] == 8
+@dataclass
+class Optics:
+    """What a frame's settings and its generator's camera files say about its rig: the
+    focal length in px and baseline in m that turn depth into disparity (None: not
+    known), the disparity sign the cameras' poses give (None: they give none), each view's
+    :class:`~stereovar.audit.generators.Camera`, and where each number came from."""
+
+    focal_px: float | None = None
+    baseline_m: float | None = None
+    sign: int | None = None
+    cameras: dict = field(default_factory=dict)
+    sources: dict = field(default_factory=dict)
 
 
-def _disparity(settings: dict, frame: Frame, reads: _Reads) -> dict:
-    gt = frame.ground_truth
-    channels = settings["channels"]
+def _agreeing(key: str, given, stated, where: str):
+    """``audit.<key>`` when given, else what the camera files state; both given and more
+    than :data:`~stereovar.audit.generators.FOCAL_AGREEMENT` apart are refused."""
+    if given and stated and abs(given - stated) > FOCAL_AGREEMENT * stated:
+        unit = "px" if key == "focal_px" else "m"
+        raise AuditError(
+            f"audit.{key} is {given:g} {unit} but {where} gives {stated:.6g} {unit}; "
+            f"remove audit.{key} to use the generator's camera, or set it to {stated:.6g}"
+        )
+    return given or stated or None
+
+
+def frame_optics(settings: dict, frame: Frame, size, reads) -> Optics:
+    """The focal length, baseline and disparity sign of a frame from ``audit.focal_px``,
+    ``audit.baseline_m`` and the generator's camera files (Kubric's ``metadata.json``:
+    the focal length; Infinigen's ``camview`` of both views: the focal length, the baseline
+    and which camera is to the right, :func:`~stereovar.audit.generators.stereo_geometry`).
+
+    Raises
+    ------
+    AuditError
+        A camera file of another image size, views with different focal lengths, a setting
+        that disagrees with the files, or poses that are not a rectified pair (one line).
+    """
+    cameras = {v: reads(read_camera, p) for v, p in frame.cameras.items()}
+    optics = Optics(cameras=cameras)
+    for camera in cameras.values():
+        if tuple(camera.size) != tuple(size):
+            raise AuditError(
+                f"{camera.path} gives the image size {camera.size[1]}x{camera.size[0]} but "
+                f"the renders of frame {frame.name} are {size[1]}x{size[0]}; give the camera "
+                "file of these renders"
+            )
+    focal = {v: c.focal_px for v, c in cameras.items()}
+    if len(focal) == 2:
+        left, right = focal["left"], focal["right"]
+        if abs(left - right) > FOCAL_AGREEMENT * left:
+            raise AuditError(
+                f"{cameras['left'].path} gives a focal length of {left:.6g} px, "
+                f"{cameras['right'].path} {right:.6g} px: the views are not a rectified pair; "
+                "give audit.disparity"
+            )
+    stated_focal = next(iter(focal.values()), None)
+    where = str(next(iter(cameras.values())).path) if cameras else ""
+    optics.focal_px = _agreeing("focal_px", settings["focal_px"], stated_focal, where)
+    stated_baseline = None
+    posed = [c for c in cameras.values() if c.pose is not None]
+    if len(posed) == 2:
+        geometry = stereo_geometry(cameras["left"], cameras["right"])
+        stated_baseline, optics.sign = geometry.baseline_m, geometry.sign
+        where = " and ".join(geometry.files)
+    optics.baseline_m = _agreeing("baseline_m", settings["baseline_m"], stated_baseline, where)
+    optics.sources = {
+        "focal_px": "audit.focal_px" if settings["focal_px"] else (where if focal else ""),
+        "baseline_m": "audit.baseline_m" if settings["baseline_m"] else (
+            where if stated_baseline else ""),
+    }
+    return optics
+
+
+def _check_geometry(settings: dict, frame: Frame, optics: Optics, sign: int) -> None:
+    """Refuse a declared convention that the cameras' poses contradict."""
+    if optics.sign is None or optics.sign == sign:
+        return
+    declared = settings["convention"]
+    other = "conventional" if declared == "paper" else "paper"
+    side = "right" if optics.sign == -1 else "left"
+    files = " and ".join(str(c.path) for c in optics.cameras.values())
+    raise AuditError(
+        f"frame {frame.name}: the camera poses of {files} put the right view's camera "
+        f"{optics.baseline_m:.4g} m to the {side} of the left one ({RELATIONS[optics.sign]}) "
+        f"but audit.convention is {declared} ({RELATIONS[sign]}); set audit.convention: "
+        f"{other}, or swap audit.views if the views are the other way round"
+    )
+
+
+def _fields(settings: dict, frame: Frame, size, optics: Optics, reads: _Reads) -> tuple:
+    """The frame's disparity and planar depth (view to ``(H, W)``): read from the files
+    (depth through :func:`~stereovar.audit.generators.read_depth`), and each computed from
+    the other with the focal length and baseline where it is not given (:math:`d = f B /
+    z`)."""
+    gt, channels = frame.ground_truth, settings["channels"]
+    depth = {
+        v: reads(read_depth, p, size=size, camera=optics.cameras.get(v),
+                 view=VIEWS.index(v), channel=channels.get("depth"))
+        for v, p in gt.get("depth", {}).items()
+    }
+    focal, baseline = optics.focal_px, optics.baseline_m
     if "disparity" in gt:
         scale, channel = settings["disparity_scale"], channels.get("disparity")
-        return {
-            v: reads(read_field, p, png_scale=scale, role="disparity", channel=channel)
+        disparity = {
+            v: reads(read_field, p, png_scale=scale, role="disparity", channel=channel,
+                     view=VIEWS.index(v))
             for v, p in gt["disparity"].items()
         }
-    focal, baseline = settings["focal_px"], settings["baseline_m"]
-    if not (focal and baseline):
+    elif not (focal and baseline):
+        known = [f"{k.replace('_', ' ')} from {optics.sources[k]}"
+                 for k in ("focal_px", "baseline_m") if optics.sources.get(k)]
+        missing = [f"audit.{k}" for k, v in (("focal_px", focal), ("baseline_m", baseline))
+                   if not v]
         raise AuditError(
-            "audit.depth needs audit.focal_px and audit.baseline_m to give disparity "
-            "(d = f B / z); set both, or give audit.disparity"
+            f"audit.depth needs {' and '.join(missing)} to give disparity (d = f B / z"
+            + (f"; the {', '.join(known)}" if known else "")
+            + f"); set {'both' if len(missing) == 2 else 'it'}, or give audit.disparity"
         )
-    return {
-        v: disparity_from_depth(
-            reads(read_field, p, role="depth", channel=channels.get("depth")),
-            focal_px=focal,
-            baseline_m=baseline,
-        )
-        for v, p in gt["depth"].items()
-    }
-
-
-def _depth(settings: dict, frame: Frame, disparity: dict, reads: _Reads) -> dict:
-    if "depth" in frame.ground_truth:
-        channel = settings["channels"].get("depth")
-        return {
-            v: reads(read_field, p, role="depth", channel=channel)
-            for v, p in frame.ground_truth["depth"].items()
+    else:
+        disparity = {
+            v: disparity_from_depth(z, focal_px=focal, baseline_m=baseline)
+            for v, z in depth.items()
         }
-    focal, baseline = settings["focal_px"], settings["baseline_m"]
-    if focal and baseline:
-        return {
+    if not depth and focal and baseline:
+        depth = {
             v: disparity_from_depth(d, focal_px=focal, baseline_m=baseline)
             for v, d in disparity.items()
         }
-    return {}
+    return disparity, depth
 
 
 def _glass(settings: dict, frame: Frame, reads: _Reads):
@@ -643,6 +739,13 @@ def _unmatched_ids(seg: np.ndarray, ids: list, path) -> str | None:
         + (" (so there is no glass region)" if len(missing) == len(ids) else "")
         + f"; the ids it holds, largest first: {largest}; fix audit.glass_ids"
     )
+
+
+def _integer_kind(frame: Frame, view: str) -> str:
+    """``PNG`` or ``BlenderProc colors``: the kind of a view's integer renders, for the
+    quantisation warning."""
+    paths = frame.renders[view].values()
+    return "PNG" if any(image_format(p) == "png" for p in paths) else "BlenderProc colors"
 
 
 def _seed_mean(stack: np.ndarray, n_nonfinite) -> np.ndarray:
@@ -748,12 +851,13 @@ def _render(path, *, channel=None, **options) -> tuple:
 
 
 def _decode_view(
-    paths: list, size: tuple, pool, transfer, scale, reads: _Reads, channel=None
+    paths: list, size: tuple, pool, transfer, scale, reads: _Reads, channel=None, view=0
 ) -> tuple:
     """Decode one view's renders into one ``(n, H, W, 3)`` float32 stack, each file straight
     into its slice by a worker thread, which also counts its NaN/Inf pixels and reads from
     its header whether it is stored as half floats; ``channel``: ``audit.channels.render``,
-    the EXR layer of the render.
+    the EXR layer or HDF5 dataset of the render; ``view``: the view (0 left, 1 right) read
+    from a file that holds both.
 
     Returns
     -------
@@ -767,7 +871,8 @@ def _decode_view(
 
     def one(k):
         image, half = reads(
-            _render, paths[k], transfer=transfer, scale=scale, out=stack[k], channel=channel
+            _render, paths[k], transfer=transfer, scale=scale, out=stack[k], channel=channel,
+            view=view,
         )
         if np.isfinite(image.sum(dtype=np.float64)):  # one pass when every value is finite
             return 0, half
@@ -796,23 +901,27 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     fr = FrameReport(frame.name, True, n_seeds=frame.n_seeds)
     reads = _Reads()
     with report.timed("ground truth"):
-        gt, gt_files = _frame_ground_truth(settings, frame, sign, source, fr, reads, report)
+        gt, gt_files = _frame_ground_truth(
+            settings, frame, size, sign, source, fr, reads, report
+        )
     datasets, means, view_files = {}, {}, {}
     for view in VIEWS:
         labels = list(frame.renders[view])
         paths = view_files[view] = [str(p) for p in frame.renders[view].values()]
         with report.timed("decode"):
+            render_channel = settings["channels"].get("render")
             images, n_bad, stored = _decode_view(
                 paths, size, pool, transfer, scale, reads,
-                channel=settings["channels"].get("render"),
+                channel=render_channel, view=VIEWS.index(view),
             )
         fr.nonfinite_pixels[view] = int(n_bad.sum())
         _check_distinct(images, frame.name, view, paths)
         means[view] = _seed_mean(images, n_bad)
         valid = gt["valid"].sel(view=view).values
-        if any(_is_png8(p) for p in paths):
+        bits = [integer_bits(p, channel=render_channel) for p in paths]
+        if 8 in bits:
             fr.floored[view] = _floored_fraction(images, valid)
-        if any(image_format(p) == "png" for p in paths):
+        if any(b is not None for b in bits):
             fr.clipped[view] = _clipped_fraction(images, valid, scale)
         elif _half_renders(stored, images):
             fr.half[view] = _half_quantised_fraction(images, valid, means[view])
@@ -860,7 +969,8 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
             continue
         report.warn(
             "quantisation",
-            f"frame {frame.name}, {view}: 8-bit PNG quantisation floors the variance to 0 at "
+            f"frame {frame.name}, {view}: 8-bit {_integer_kind(frame, view)} quantisation "
+            "floors the variance to 0 at "
             f"{100 * fraction:.1f}% of the valid pixels (all {frame.n_seeds} renders "
             "identical); export 16-bit PNG or EXR for an audit that can see small variance",
             frame.name,
@@ -890,27 +1000,31 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
 
 
 def _frame_ground_truth(
-    settings, frame: Frame, sign, source, fr: FrameReport, reads: _Reads, report: ImportReport
+    settings, frame: Frame, size, sign, source, fr: FrameReport, reads: _Reads,
+    report: ImportReport,
 ):
     """The frame's ground-truth dataset (its ``scene_digest`` and ``source_sha256`` are set
     once every file is read) and its files; fills the disparity counts of ``fr``."""
-    disparity = _disparity(settings, frame, reads)
+    optics = frame_optics(settings, frame, size, reads)
+    _check_geometry(settings, frame, optics, sign)
+    disparity, depth = _fields(settings, frame, size, optics, reads)
     glass, glass_source, unmatched = _glass(settings, frame, reads)
     if unmatched:
         report.warn("glass_ids", f"frame {frame.name}: {unmatched}", frame.name)
     gt_files = [str(p) for paths in frame.ground_truth.values() for p in paths.values()]
+    gt_files = list(dict.fromkeys(gt_files + [str(p) for p in frame.cameras.values()]))
     gt, counts = imported_ground_truth(
         disparity[VIEWS[0]],
         sign=sign,
         disparity_right=disparity.get(VIEWS[1]),
-        depth=_depth(settings, frame, disparity, reads),
+        depth=depth,
         glass=glass,
         material_source=glass_source,
         attrs={
             "scene": frame.name,
             "renderer": source,
-            "baseline_m": float(settings["baseline_m"] or 0.0),
-            "focal_px": float(settings["focal_px"] or 0.0),
+            "baseline_m": float(optics.baseline_m or 0.0),
+            "focal_px": float(optics.focal_px or 0.0),
             "source_files": gt_files,
         },
     )
@@ -1063,12 +1177,29 @@ def check_settings(settings: dict) -> None:
 
 
 def _png_transfer_warning(settings: dict, frames, report: ImportReport) -> None:
-    pngs = [p for f in frames for v in VIEWS for p in f.renders[v].values()]
-    if not settings["transfer"] and any(image_format(p) == "png" for p in pngs):
+    """Warn once when integer renders (PNG, BlenderProc's integer ``colors``) are decoded
+    as sRGB because ``audit.transfer`` is not set."""
+    if settings["transfer"]:
+        return
+    renders = list(dict.fromkeys(p for f in frames for v in VIEWS for p in f.renders[v].values()))
+    if any(image_format(p) == "png" for p in renders):
         report.warn(
             "transfer",
             "PNG renders without audit.transfer are decoded as sRGB; set audit.transfer: "
             "linear or srgb to say how they were written",
+        )
+    channel = settings["channels"].get("render")
+    hdf5_bits = {
+        integer_bits(p, channel=channel) for p in renders if image_format(p) == "hdf5"
+    }
+    if hdf5_bits - {None}:
+        report.warn(
+            "transfer",
+            f"BlenderProc {'/'.join(f'{b}-bit' for b in sorted(hdf5_bits - {None}))} colors "
+            "without audit.transfer are decoded as sRGB, which does not undo Blender's view "
+            "transform (Filmic in BlenderProc's defaults) or its clipping at 1; render with "
+            "bproc.renderer.set_output_format('OPEN_EXR', 32) for linear float colors, or "
+            "set audit.transfer: linear or srgb to say how they were written",
         )
 
 

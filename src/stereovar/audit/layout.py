@@ -4,9 +4,14 @@ A template names one file per value of its fields, e.g.
 ``renders/{frame}/{view}/seed_{seed}.exr``. The renders template has ``{view}`` and
 ``{seed}`` (and ``{frame}`` for more than one frame); the ground-truth templates (disparity,
 depth, glass mask, segmentation) have ``{frame}`` and, for one file per view, ``{view}``.
-``{view}`` takes the values of ``audit.views`` (``left: L``, ``right: R``). Frames, views and
-seeds are discovered from the files; :func:`discover` checks that they form N >= 2 renders
-per view of every frame, with ground truth, before anything is read.
+``{view}`` takes the values of ``audit.views`` (``left: L``, ``right: R``). A renders template
+without ``{view}`` names files that hold both views: BlenderProc's stereo HDF5 (each dataset
+with a leading axis of 2, or ``<key>_0`` and ``<key>_1``), whose headers say so. Frames,
+views and seeds are discovered from the files; :func:`discover` checks that they form N >= 2
+renders per view of every frame, with ground truth, before any pixel is read. The files a
+generator states its cameras in (Kubric's ``metadata.json``, Infinigen's ``camview``) are
+found beside the depth files and renders by the generator's naming
+(:func:`stereovar.audit.generators.camera_file`) and belong to the frame.
 """
 
 from __future__ import annotations
@@ -17,8 +22,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import AuditError
-from ..io.images import regular_file
+from ..io import hdf5
+from ..io.images import image_format, regular_file
 from ..rig import VIEWS
+from .generators import camera_file
 
 FIELDS = ("frame", "view", "seed")
 """Template fields."""
@@ -90,19 +97,27 @@ def match_template(template: str, views: dict, root: Path) -> list[tuple[dict, P
 
 @dataclass
 class Frame:
-    """One stereo frame's files: renders per view (seed label to path, seed order) and its
-    ground-truth files (view to path; a template without ``{view}`` gives ``left`` only)."""
+    """One stereo frame's files: renders per view (seed label to path, seed order), its
+    ground-truth files (view to path; a template without ``{view}`` gives ``left`` only)
+    and the files stating its cameras (view to path: Kubric's ``metadata.json``,
+    Infinigen's ``camview_*.npz``)."""
 
     name: str
     renders: dict = field(default_factory=dict)
     ground_truth: dict = field(default_factory=dict)
+    cameras: dict = field(default_factory=dict)
 
-    def files(self) -> list[Path]:
-        """Every file of the frame, renders first."""
+    def images(self) -> list[Path]:
+        """The frame's renders and ground-truth files, renders first, each once (a file
+        holding both views, or renders and depth, is listed once)."""
         out = [p for view in VIEWS for p in self.renders[view].values()]
         for paths in self.ground_truth.values():
             out += list(paths.values())
-        return out
+        return list(dict.fromkeys(out))
+
+    def files(self) -> list[Path]:
+        """Every file of the frame, each once: :meth:`images`, then the camera files."""
+        return list(dict.fromkeys(self.images() + list(self.cameras.values())))
 
     @property
     def n_seeds(self) -> int:
@@ -151,6 +166,8 @@ def discover(settings: dict) -> Discovery:
     template = settings["renders"]
     fields = template_fields(template)
     missing = [f for f in ("view", "seed") if f not in fields]
+    if missing == ["view"] and image_format_or_none(template) == "hdf5":
+        missing = []  # files that hold both views: checked below
     if missing:
         raise AuditError(
             f"audit.renders {template!r} has no {{{missing[0]}}} field; name the "
@@ -179,7 +196,12 @@ def discover(settings: dict) -> Discovery:
                 "rename the frames or move the punctuation out of {frame}"
             )
         frame = frames.setdefault(name, Frame(name, {v: {} for v in VIEWS}))
-        frame.renders[values["view"]][values["seed"]] = path
+        if "view" in values:
+            frame.renders[values["view"]][values["seed"]] = path
+        else:
+            _check_both_views(path, settings)
+            for view in VIEWS:
+                frame.renders[view][values["seed"]] = path
     for frame in frames.values():
         for view in VIEWS:
             frame.renders[view] = dict(
@@ -187,6 +209,7 @@ def discover(settings: dict) -> Discovery:
             )
         _check_seeds(frame, template, views)
         frame.ground_truth = _ground_truth_files(frame.name, settings, views, root, fields)
+        frame.cameras = _camera_files(frame)
     ordered = [frames[k] for k in sorted(frames)]
     counts = {f.name: f.n_seeds for f in ordered}
     if len(set(counts.values())) > 1:
@@ -197,6 +220,45 @@ def discover(settings: dict) -> Discovery:
             "same N: add the missing renders or leave the extra seeds out of the template"
         )
     return Discovery(ordered)
+
+
+def image_format_or_none(path) -> str | None:
+    """:func:`~stereovar.io.images.image_format` of a path, or None for an unknown one."""
+    try:
+        return image_format(path)
+    except Exception:
+        return None
+
+
+def _check_both_views(path: Path, settings: dict) -> None:
+    """Refuse a file of a renders template without ``{view}`` unless its header says it
+    holds both views (BlenderProc's stereo HDF5)."""
+    regular_file(path)
+    channel = (settings.get("channels") or {}).get("render")
+    views = hdf5.render_views(path, channel)
+    if views != 2:
+        raise AuditError(
+            f"{path}: its render holds one view, and audit.renders {settings['renders']!r} "
+            "has no {view} field; name the view in the path (e.g. "
+            "bp/seed_{seed}/{view}.hdf5 with views {left: 0, right: 1}), or give files that "
+            "hold both views (BlenderProc with bproc.renderer.toggle_stereo(True))"
+        )
+
+
+def _camera_files(frame: Frame) -> dict:
+    """View to the file stating its camera (:func:`~stereovar.audit.generators.camera_file`),
+    from the view's depth file, else from its first render; views with none are left out."""
+    depth = frame.ground_truth.get("depth", {})
+    out = {}
+    for view in VIEWS:
+        candidates = [depth[view]] if view in depth else []
+        candidates += list(frame.renders[view].values())[:1]
+        for path in candidates:
+            found = camera_file(path)
+            if found is not None:
+                out[view] = found
+                break
+    return out
 
 
 def _check_seeds(frame: Frame, template: str, views: dict) -> None:

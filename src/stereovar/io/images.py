@@ -1,4 +1,5 @@
-"""Image files other tools write and read: OpenEXR, PFM, PNG (8 and 16 bit), NPY and NPZ.
+"""Image files other tools write and read: OpenEXR, PFM, PNG (8 and 16 bit), NPY, NPZ, and
+the generators' own formats: BlenderProc's HDF5 and Kubric's float TIFF.
 
 The audit (:mod:`stereovar.audit`) reads renders, disparity, depth and masks made elsewhere
 through :func:`read_image`, :func:`read_field` and :func:`read_labels`; the export writes
@@ -15,8 +16,15 @@ across all its parts (Blender 5 writes each pass of a multilayer file as a part)
 by what their names mean (:mod:`stereovar.io.channels`: ``ViewLayer.Depth.Z`` is depth,
 ``ViewLayer.Combined`` the render), or as ``audit.channels`` names them;
 PNG through OpenCV (the only maintained reader and writer of 16-bit RGB PNG on PyPI; Pillow
-reduces 48-bit RGB to 8 bit); PFM, a plain header and raw float32 rows stored bottom to top,
-by hand; NPY and NPZ through numpy.
+reduces 48-bit RGB to 8 bit), except a palette PNG read as a field (Kubric's
+``segmentation_%05d.png``), whose palette indices Pillow reads (OpenCV returns the palette's
+colours); PFM, a plain header and raw float32 rows stored bottom to top, by hand; NPY and NPZ
+through numpy; BlenderProc's HDF5 (``.hdf5``, ``.h5``) through h5py, its datasets picked by
+name (:mod:`stereovar.io.hdf5`); TIFF (``.tiff``, ``.tif``: Kubric's float32
+``depth_%05d.tiff``) through OpenCV, as a field only.
+
+A file that holds both views (a BlenderProc stereo render: each dataset with a leading axis
+of 2) is read one view at a time: the readers' ``view`` (0 left, 1 right) picks it.
 
 A path is read only when it is a regular file: a named pipe, a device or a directory is
 refused by its kind before it is opened for reading (:func:`regular_file`), so nothing waits
@@ -36,11 +44,18 @@ import numpy as np
 
 from ..errors import ImageError
 from ..renderers.quiet import silenced
+from . import hdf5
 from .channels import field_channel, render_channels, unique_channels
 from .exr_header import channel_types
 
-FORMATS = ("exr", "pfm", "png", "npy", "npz")
-"""File formats by extension (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``)."""
+FORMATS = ("exr", "pfm", "png", "npy", "npz", "hdf5", "tiff")
+"""File formats (``.exr``, ``.pfm``, ``.png``, ``.npy``, ``.npz``, ``.hdf5``, ``.tiff``)."""
+
+ALIASES = {"h5": "hdf5", "tif": "tiff"}
+"""Other extensions of a format."""
+
+FIELD_ONLY = ("tiff",)
+"""Formats read as fields (depth, disparity, a mask) only, never as a render."""
 
 TRANSFERS = ("linear", "srgb")
 """Transfer functions of integer images: stored values are linear, or sRGB-encoded."""
@@ -55,8 +70,16 @@ _KINDS = {
 
 
 def image_format(path) -> str:
-    """The format of ``path`` from its extension (one of :data:`FORMATS`)."""
+    """The format of ``path`` from its extension (one of :data:`FORMATS`; ``.h5`` is
+    ``hdf5``, ``.tif`` is ``tiff``).
+
+    Examples
+    --------
+    >>> image_format("a/0.hdf5"), image_format("b.h5"), image_format("depth_00000.tif")
+    ('hdf5', 'hdf5', 'tiff')
+    """
     ext = Path(path).suffix.lower().lstrip(".")
+    ext = ALIASES.get(ext, ext)
     if ext not in FORMATS:
         raise ImageError(
             f"{path}: unknown image format '.{ext}'; use one of "
@@ -251,8 +274,64 @@ def _header_size(f, fmt, path) -> tuple[int, int]:
         return int(height), int(width)
     if fmt == "npy":
         return tuple(_npy_header(f)[0][:2])
+    if fmt == "hdf5":
+        return hdf5.size(path)
+    if fmt == "tiff":
+        return tiff_size(f)
     with np.load(f) as z:
         return tuple(z[_npz_key(z, path)].shape[:2])
+
+
+TIFF_WIDTH, TIFF_LENGTH = 256, 257
+"""The TIFF tags of an image's width and height (TIFF 6.0, Section 8)."""
+
+
+def tiff_size(f) -> tuple[int, int]:
+    """``(height, width)`` of a TIFF's first image from its header: the byte order
+    (``II`` or ``MM``), the magic 42 and the first image file directory's ``ImageWidth``
+    and ``ImageLength`` entries (TIFF 6.0, Sections 2 and 8); BigTIFF (magic 43) too.
+
+    Parameters
+    ----------
+    f : binary file object
+        Opened at its start.
+
+    Examples
+    --------
+    >>> import io
+    >>> entries = struct.pack("<HHHII", 2, 256, 3, 1, 640) + struct.pack("<HHII", 257, 4, 1, 480)
+    >>> head = b"II" + struct.pack("<HI", 42, 8) + entries
+    >>> tiff_size(io.BytesIO(head))
+    (480, 640)
+    """
+    order = f.read(2)
+    if order not in (b"II", b"MM"):
+        raise ValueError("no TIFF byte-order mark")
+    e = "<" if order == b"II" else ">"
+    (magic,) = struct.unpack(e + "H", f.read(2))
+    big = magic == 43
+    if magic not in (42, 43):
+        raise ValueError(f"TIFF magic {magic} is neither 42 nor 43")
+    if big:
+        f.read(4)  # offset size and padding
+        (offset,) = struct.unpack(e + "Q", f.read(8))
+        count_fmt, entry_size = "Q", 20
+    else:
+        (offset,) = struct.unpack(e + "I", f.read(4))
+        count_fmt, entry_size = "H", 12
+    f.seek(offset)
+    (count,) = struct.unpack(e + count_fmt, f.read(struct.calcsize(count_fmt)))
+    found = {}
+    for _ in range(count):
+        entry = f.read(entry_size)
+        tag, kind = struct.unpack(e + "HH", entry[:4])
+        value = entry[12:] if big else entry[8:]
+        if tag in (TIFF_WIDTH, TIFF_LENGTH):
+            code = "H" if kind == 3 else ("Q" if kind == 16 else "I")
+            found[tag] = struct.unpack(e + code, value[: struct.calcsize(code)])[0]
+    if len(found) < 2:
+        raise ValueError("no ImageWidth or ImageLength entry")
+    return int(found[TIFF_LENGTH]), int(found[TIFF_WIDTH])
 
 
 def _npy_header(f) -> tuple:
@@ -278,9 +357,9 @@ def stored_as_half(path, *, channel: str | None = None) -> bool | None:
     bool or None
         EXR: whether a channel of the render (its ``R, G, B`` or its one grey channel,
         picked as :func:`read_image` picks them) has pixel type ``HALF``
-        (:func:`stereovar.io.exr_header.channel_types`); NPY and NPZ: whether the array's
-        dtype is float16. None for PFM and PNG, whose headers cannot say it (PFM holds
-        float32 only, PNG integers).
+        (:func:`stereovar.io.exr_header.channel_types`); NPY, NPZ and HDF5: whether the
+        render's dtype is float16. None for PFM and PNG, whose headers cannot say it (PFM
+        holds float32 only, PNG integers).
 
     Raises
     ------
@@ -288,10 +367,12 @@ def stored_as_half(path, *, channel: str | None = None) -> bool | None:
         The file cannot be opened, is not a regular file, or its header is unreadable.
     """
     fmt = image_format(path)
-    if fmt not in ("exr", "npy", "npz"):
+    if fmt not in ("exr", "npy", "npz", "hdf5"):
         return None
     with open_regular(path) as f:
         try:
+            if fmt == "hdf5":
+                return hdf5.render_dtype(path, channel) == np.float16
             if fmt == "exr":
                 types = channel_types(f)
                 return any(types[c] == "half" for c in render_channels(types, path, channel))
@@ -406,6 +487,33 @@ def _exr_field(channels: dict, path, role: str | None = None, channel: str | Non
     return channels[field_channel(channels, role, path, channel)]
 
 
+PNG_PALETTE = 3
+"""The PNG colour type of a palette image (PNG specification, Section 11.2.2, IHDR)."""
+
+
+def png_header(path) -> tuple[int, int]:
+    """``(bit depth, colour type)`` of a PNG from its IHDR chunk (PNG specification,
+    Section 11.2.2): 8 or 16 bits, colour type 0 grey, 2 RGB, 3 palette, 4 grey and alpha,
+    6 RGBA."""
+    with open(path, "rb") as f:
+        head = f.read(26)
+    if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR" or len(head) < 26:
+        raise ValueError("no PNG signature")
+    return head[24], head[25]
+
+
+def _palette_indices(path) -> np.ndarray:
+    """The palette indices of a palette PNG (Kubric's ``segmentation_%05d.png``,
+    ``write_palette_png``: the index is the segment id), through Pillow: OpenCV returns
+    the palette's colours instead."""
+    from PIL import Image
+
+    with Image.open(path) as image:
+        if image.mode != "P":
+            raise ValueError(f"a palette PNG read in mode {image.mode}")
+        return np.asarray(image)
+
+
 def _png(path) -> tuple[np.ndarray, int]:
     """Pixels (RGB order, or grey) and bit depth of a PNG."""
     import cv2
@@ -457,6 +565,36 @@ def _decoded(path, decode):
         raise _unreadable(path, err) from None
 
 
+def integer_bits(path, *, channel: str | None = None) -> int | None:
+    """The bits per sample of a render stored as integers, from the file's header: a PNG's
+    bit depth, the dtype of a BlenderProc HDF5 file's integer ``colors``; None for a
+    render stored as floats (EXR, PFM, a float NPY or HDF5 dataset) or in NPY/NPZ.
+
+    Integer renders are display-referred: :func:`read_image` decodes them with
+    ``transfer`` and ``scale``, and the import warns about their quantisation and clipping.
+    """
+    fmt = image_format(path)
+    if fmt == "png":
+        return png_header(path)[0]
+    if fmt == "hdf5":
+        dtype = hdf5.render_dtype(path, channel)
+        return 8 * dtype.itemsize if dtype.kind == "u" else None
+    return None
+
+
+def _decode_integer(a: np.ndarray, path, transfer: str, scale: float) -> np.ndarray:
+    """An integer render (HDF5 ``uint8`` or ``uint16`` colors) decoded as a PNG's values are
+    (:func:`_decode_png`); floats are returned as they are (linear)."""
+    if a.dtype.kind == "f":
+        return a
+    if a.dtype not in (np.uint8, np.uint16):
+        raise ImageError(
+            f"{path}: a render of type {a.dtype}; BlenderProc writes colors as uint8, "
+            "uint16 or float"
+        )
+    return _decode_png(a, 8 * a.dtype.itemsize, transfer, scale)
+
+
 def read_image(
     path,
     *,
@@ -464,6 +602,7 @@ def read_image(
     scale: float = 1.0,
     out: np.ndarray | None = None,
     channel: str | None = None,
+    view: int = 0,
 ) -> np.ndarray:
     """One render as float32 linear RGB, shape ``(H, W, 3)``.
 
@@ -472,17 +611,22 @@ def read_image(
     path : path-like
         ``.exr`` (half or float, the R, G, B of its render layer or one grey channel, from
         any part), ``.pfm``, ``.png`` (8 or 16 bit), ``.npy`` or ``.npz`` (``(H, W, 3)``,
-        ``(H, W, 4)`` or ``(H, W)``).
+        ``(H, W, 4)`` or ``(H, W)``), or BlenderProc's ``.hdf5`` (its ``colors``: integer
+        values are decoded as a PNG's, floats are linear).
     transfer : {"linear", "srgb"}, optional, keyword-only
-        How PNG values encode radiance (default ``srgb``); float formats are linear.
+        How integer values (PNG, BlenderProc's 8-bit colors) encode radiance (default
+        ``srgb``); float formats are linear.
     scale : float, keyword-only
-        Radiance of a PNG value of 1 (full scale) after the transfer function.
+        Radiance of an integer value of full scale after the transfer function.
     out : numpy.ndarray, float32, shape (H, W, 3), optional, keyword-only
         Decode into this array (e.g. one slice of a stack of renders) instead of a new one.
     channel : str, optional, keyword-only
         EXR only (``audit.channels.render``): the layer whose R, G, B are the render
         (``ViewLayer.Combined``), or one grey channel; default: picked by name
-        (:func:`~stereovar.io.channels.render_channels`).
+        (:func:`~stereovar.io.channels.render_channels`). HDF5: the dataset.
+    view : {0, 1}, keyword-only
+        The view read from a file that holds both (BlenderProc's stereo HDF5: 0 left, 1
+        right); a file of one view is read whatever it is.
 
     Returns
     -------
@@ -491,6 +635,11 @@ def read_image(
         exclude them).
     """
     fmt = image_format(path)
+    if fmt in FIELD_ONLY:
+        raise ImageError(
+            f"{path}: a {fmt.upper()} file is read as a field (depth, disparity), not as a "
+            "render; give the renders as EXR, PNG (Kubric's rgba_%05d.png), PFM, NPY or HDF5"
+        )
     if out is not None:  # the header's size first: no decode of a file of another size
         height, width = image_size(path)
         if (height, width) != out.shape[:2]:
@@ -506,6 +655,9 @@ def read_image(
             return read_pfm(path)
         if fmt == "png":
             return _decode_png(*_png(path), transfer or "srgb", scale)
+        if fmt == "hdf5":
+            a = hdf5.read(path, role="render", view=view, channel=channel)
+            return _decode_integer(a, path, transfer or "srgb", scale)
         return _array(path, fmt)
 
     a = _decoded(path, decode)
@@ -528,10 +680,24 @@ def read_image(
     return out
 
 
-def _one_channel(path, what: str, role: str | None, channel: str | None) -> np.ndarray:
-    """The ``(H, W)`` values of a one-field file as stored (a PNG's integers, an EXR
-    channel's or a PFM's floats, an NPY's dtype): an EXR's channel holding ``role``, a
-    PNG's first channel; ``what`` (``"a field"``) names it in the error line."""
+def _tiff(path) -> np.ndarray:
+    """A TIFF's values as stored (one channel, or its first), through OpenCV."""
+    import cv2
+
+    a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if a is None:
+        raise ValueError("OpenCV could not decode it")
+    return a
+
+
+def _one_channel(
+    path, what: str, role: str | None, channel: str | None, view: int = 0
+) -> np.ndarray:
+    """The ``(H, W)`` values of a one-field file as stored (a PNG's integers or palette
+    indices, an EXR channel's or a PFM's floats, an NPY's or HDF5 dataset's dtype): an EXR's
+    channel or an HDF5 file's dataset holding ``role``, a PNG's first channel; ``what``
+    (``"a field"``) names it in the error line; ``view`` picks the view of an HDF5 file
+    that holds both."""
     fmt = image_format(path)
 
     def decode():
@@ -540,7 +706,13 @@ def _one_channel(path, what: str, role: str | None, channel: str | None) -> np.n
         if fmt == "pfm":
             return read_pfm(path)
         if fmt == "png":
+            if png_header(path)[1] == PNG_PALETTE:
+                return _palette_indices(path)
             return _png(path)[0]
+        if fmt == "hdf5":
+            return hdf5.read(path, role=role, view=view, channel=channel)
+        if fmt == "tiff":
+            return _tiff(path)
         return _array(path, fmt)
 
     a = _decoded(path, decode)
@@ -557,6 +729,7 @@ def read_field(
     png_scale: float | None = None,
     role: str | None = None,
     channel: str | None = None,
+    view: int = 0,
 ) -> np.ndarray:
     """One scalar field (disparity, depth, a mask or a segmentation map) as float32 (H, W).
 
@@ -565,7 +738,9 @@ def read_field(
     path : path-like
         ``.exr`` (its one channel, or the channel holding ``role``, from any part),
         ``.pfm`` (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, first
-        channel), ``.npy`` or ``.npz``.
+        channel; a palette PNG's indices), ``.npy``, ``.npz``, ``.tiff`` (first channel;
+        :mod:`stereovar.audit.generators` says what a Kubric depth TIFF holds) or
+        ``.hdf5`` (the dataset holding ``role``, :func:`stereovar.io.hdf5.field_layer`).
     png_scale : float, optional, keyword-only
         Divide PNG values by this (KITTI disparity: 256); default 1 (raw integer values).
     role : {"depth", "disparity", "segmentation", "glass_mask"}, optional, keyword-only
@@ -574,7 +749,9 @@ def read_field(
         ``ViewLayer.Combined.R`` never is); default: the one channel whose name means a
         field.
     channel : str, optional, keyword-only
-        EXR only (``audit.channels``): the channel's name.
+        EXR and HDF5 (``audit.channels``): the channel's or dataset's name.
+    view : {0, 1}, keyword-only
+        The view read from an HDF5 file that holds both.
 
     Raises
     ------
@@ -582,17 +759,39 @@ def read_field(
         The file cannot be read, or no channel, or more than one, holds ``role`` (one line
         listing the channels and naming the fix).
     """
-    a = _one_channel(path, "a field", role, channel)
+    a = _one_channel(path, "a field", role, channel, view)
     if image_format(path) == "png":
         a = a.astype(np.float64) / float(png_scale or 1.0)
-    return np.asarray(a, dtype=np.float32)
+    with np.errstate(over="ignore"):  # beyond float32 (Infinigen's DBL_MAX for no hit): inf
+        return np.asarray(a, dtype=np.float32)
 
 
-def read_labels(path, *, channel: str | None = None) -> np.ndarray:
+def _one_id_per_pixel(path) -> None:
+    """Refuse an NPY segmentation with several values per pixel (Infinigen's
+    ``InstanceSegmentation_*.npy``, ``(H, W, 3)``: which of its values is the segment is
+    not for the reader to guess), from its header."""
+    if image_format(path) != "npy":
+        return
+    with open_regular(path) as f:
+        try:
+            shape = _npy_header(f)[0]
+        except Exception as err:  # numpy raises its own exception types
+            raise _unreadable(path, err, "header") from None
+    if len(shape) == 3 and shape[-1] > 1:
+        raise ImageError(
+            f"{path}: a segmentation of shape {tuple(shape)}, {shape[-1]} values per pixel, "
+            "and which one is the segment id is not for the reader to guess; give one id per "
+            "pixel, (H, W) (Infinigen: ObjectSegmentation_*.npy, not InstanceSegmentation)"
+        )
+
+
+def read_labels(path, *, channel: str | None = None, view: int = 0) -> np.ndarray:
     """A segmentation map's segment ids as int64 ``(H, W)``, never through a float.
 
-    Integer files keep their ids exactly: PNG (8 or 16 bit, first channel), an EXR ``UINT``
-    channel, an integer NPY or NPZ. Float files (an EXR ``HALF`` or ``FLOAT`` channel such
+    Integer files keep their ids exactly: PNG (8 or 16 bit, first channel; a palette PNG's
+    indices, as Kubric's ``segmentation_%05d.png`` stores its ids), an EXR ``UINT``
+    channel, an integer NPY or NPZ (Infinigen's ``ObjectSegmentation_*.npy``), a
+    BlenderProc ``*_segmaps`` dataset. Float files (an EXR ``HALF`` or ``FLOAT`` channel such
     as Blender's ``IndexOB``, PFM, a float NPY) tell whole numbers apart only below
     :math:`2^{p}` (:math:`p` the mantissa bits plus one: :math:`2^{24}` = 16777216 for
     float32, 2048 for half; :math:`2^{p} + 1` is stored as :math:`2^{p}`): their values are
@@ -605,7 +804,9 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
         ``.png``, ``.exr`` (its one channel, or the channel holding the segmentation,
         :func:`~stereovar.io.channels.field_channel`), ``.pfm``, ``.npy`` or ``.npz``.
     channel : str, optional, keyword-only
-        EXR only (``audit.channels.segmentation``): the channel's name.
+        EXR and HDF5 (``audit.channels.segmentation``): the channel's or dataset's name.
+    view : {0, 1}, keyword-only
+        The view read from an HDF5 file that holds both.
 
     Returns
     -------
@@ -618,7 +819,8 @@ def read_labels(path, *, channel: str | None = None) -> np.ndarray:
         The file cannot be read, is not one ``(H, W)`` map, holds no numbers, or holds float
         ids beyond what its float type tells apart (one line naming the fix).
     """
-    a = _one_channel(path, "a segmentation map", "segmentation", channel)
+    _one_id_per_pixel(path)
+    a = _one_channel(path, "a segmentation map", "segmentation", channel, view)
     if a.dtype.kind in "biu":
         return a.astype(np.int64)
     if a.dtype.kind != "f":
