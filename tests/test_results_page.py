@@ -141,7 +141,12 @@ def formats(paths: list[str]) -> dict:
 
 
 def synthetic_results(
-    root: Path, *, mitigations: bool = False, probe: bool = False, seed: int = 0
+    root: Path,
+    *,
+    mitigations: bool = False,
+    probe: bool = False,
+    generators: bool = False,
+    seed: int = 0,
 ) -> dict:
     """Write a run's results under ``root/results`` as the workflow would (claims table,
     summary.json, figures and tables of every format) and return the job's arguments,
@@ -224,6 +229,22 @@ def synthetic_results(
         Image.new("RGB", (200, 100), (160, 40, 40)).save(root / layout.probe_figure())
         kwargs |= {"probe": layout.probe_verdict(), "probe_figure": layout.probe_figure()}
         kwargs["tables"] = [*kwargs["tables"], *paths]
+    if generators:
+        from stereovar.statistics.generators import GENERATOR_COLUMNS
+
+        rows = []
+        for profile, value, own in (("paper", 0.466, 64), ("kubric", 0.026, 128)):
+            row = dict.fromkeys(GENERATOR_COLUMNS, math.nan)
+            row |= {"profile": profile, "region": "all", "spp": 64, "generator_spp": own,
+                    "adaptive": "off", "denoiser": "off", "seed_rule": "per_view",
+                    "mc_specific": value, "mc_specific_low": value - 0.07,
+                    "mc_specific_high": value + 0.07, "null_partial": 0.819,
+                    "mc_cue": "remains", "probe": "not run"}
+            rows.append(row)
+        paths = layout.generator_tables()
+        write_tables(rows, GENERATOR_COLUMNS, formats(paths))
+        Image.new("RGB", (200, 100), (40, 40, 160)).save(root / layout.generator_figure())
+        kwargs |= {"generators": paths, "generators_figure": layout.generator_figure()}
     return kwargs
 
 
@@ -391,6 +412,20 @@ def test_mitigations_and_probe_sections_appear_when_they_have_run(synthetic):
     assert text.index('id="figures"') < text.index('id="mitigations"') < text.index('id="probe"')
 
 
+def test_the_generator_section_appears_once_the_generators_have_run(synthetic):
+    _, _, text, _ = synthetic()
+    assert 'id="generators"' not in text
+    _, kwargs, text, page = synthetic("with", generators=True)
+    shown = " ".join(page.text_by_id["generators"].split())
+    # each profile's Monte Carlo-specific rho with its interval, beside its matched null
+    assert "kubric 64 (128, scaled x1/2)" in shown
+    assert "0.026 [-0.044, 0.096] 0.819 remains" in shown
+    assert "0.466 [0.396, 0.536]" in shown
+    embedded = [base64.b64decode(i["src"].split(",", 1)[1]) for i in page.images]
+    assert Path(kwargs["generators_figure"]).read_bytes() in embedded
+    assert "tables/generators.csv" in page.links and '<a href="#generators">' in text
+
+
 # ----------------------------------------------------------------------------- in a browser
 
 VIEWPORT = (1280, 900)
@@ -549,3 +584,10 @@ def test_the_page_takes_the_mitigations_and_the_probe_once_they_exist(tmp_path):
         (root / path).write_text("{}")
     inputs = page_job_inputs(root)
     assert layout.probe_verdict() in inputs and layout.probe_figure() in inputs
+    # the generator table and figure, as `snakemake generators` leaves them
+    assert layout.generator_figure() not in inputs
+    for path in (*layout.generator_tables(), layout.generator_figure()):
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text("{}")
+    inputs = page_job_inputs(root)
+    assert layout.generator_tables()[0] in inputs and layout.generator_figure() in inputs

@@ -10,7 +10,7 @@ from .paper import _pyplot
 PANELS = (
     ("mc_specific", "Monte Carlo-specific $\\rho$\n(partial $\\rho$ minus its matched null)"),
     ("residual_rho_zero", "residual coupling\nat zero disparity"),
-    ("psnr", "PSNR of one render [dB]"),
+    ("psnr", "PSNR of one render [dB]\n(mean over scenes, Student t interval)"),
 )
 """(column, axis label) of each panel, all pixels."""
 
