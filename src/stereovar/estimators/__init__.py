@@ -15,6 +15,9 @@ schema's ``render.estimator`` enum.
 ``subsets``
     Eq. 1 on split halves and disjoint subsets of the seeds (the reliability and the
     seed-subset curve).
+``single``
+    One render per view: the single-render noise estimates that were measured and refused,
+    not registered (``docs/single_render.md``).
 """
 
 from __future__ import annotations
