@@ -264,6 +264,13 @@ def _camera_files(frame: Frame) -> dict:
 def _check_seeds(frame: Frame, template: str, views: dict) -> None:
     for view in VIEWS:
         seeds = frame.renders[view]
+        if len(seeds) == 1:
+            from ..estimators.single import refusal
+
+            raise AuditError(
+                f"frame {frame.name}, view {view} ({views[view]}): 1 render "
+                f"({next(iter(seeds.values()))}) match {template!r}; {refusal()}"
+            )
         if len(seeds) < 2:
             have = f" ({next(iter(seeds.values()))})" if seeds else ""
             raise AuditError(
