@@ -53,9 +53,11 @@ are compared on Eq. 1 over the N seeds."""
 SEED_POLICY_MITIGATIONS = {"shared_seed": "shared"}
 """Mitigation name to the seed policy it renders with (:data:`stereovar.seeding.SEED_POLICIES`).
 
-``shared_seed`` is what Kubric, BlenderProc and Infinigen do by default: they never set
-Cycles' seed (default 0, not animated), so both views of a frame get the same sampler seed.
-Mitsuba also defaults to ``seed=0``."""
+``shared_seed`` is what Kubric and Infinigen do by default: they never set Cycles' seed
+(default 0, not animated) and render each view as its own job, so both views of a frame get
+the same sampler seed. BlenderProc never sets it either, but its multiview render gives every
+eye after the first a seed derived from it, so its eyes' noise is independent
+(:mod:`stereovar.generators`). Mitsuba also defaults to ``seed=0``."""
 
 SPP_PATTERN = re.compile(r"spp_x(\d+)")
 
@@ -126,7 +128,7 @@ def resolve_mitigation(name: str) -> Mitigation:
         return Mitigation(
             name,
             "seed_policy",
-            "the same sampler seed in both views (Kubric, BlenderProc, Infinigen default)",
+            "the same sampler seed in both views (Kubric's and Infinigen's default)",
             transform=name,
             seed_policy=SEED_POLICY_MITIGATIONS[name],
         )

@@ -40,10 +40,11 @@ def independent_labels(scene: str, view: str, spp, index) -> tuple:
 
 @SEED_POLICIES.register("shared")
 def shared_labels(scene: str, view: str, spp, index) -> tuple:
-    """Both views of render ``index`` get one seed: what Kubric, BlenderProc and Infinigen do,
-    since none sets Cycles' seed (default 0). Mitsuba then gives both sensors the same random
-    stream at the same pixel coordinates (``sample_tea_32(seed, pixel index)``). The label
-    ``"shared"`` keeps these seeds apart from any ``independent`` one."""
+    """Both views of render ``index`` get one seed: what Kubric and Infinigen do, since
+    neither sets Cycles' seed (default 0) and each renders a view as its own job. Mitsuba
+    then gives both sensors the same random stream at the same pixel coordinates
+    (``sample_tea_32(seed, pixel index)``). The label ``"shared"`` keeps these seeds apart
+    from any ``independent`` one."""
     return ("shared", scene, spp, index)
 
 

@@ -49,10 +49,8 @@ class _Job:
         provenance = scene_provenance(self.spec, backend)
         self.name = self.spec["name"]
         self.spp, self.variant, self.threads = int(spp), variant, threads
-        if renderer == "cycles":  # a shared seed rule shares the views' seeds
-            from ..renderers.cycles.settings import seed_policy_of
-
-            seed_policy = seed_policy_of(seed_policy, self.settings.renderer_options)
+        # a renderer's own seed rule (Cycles' render.cycles.seed) may share the views' seeds
+        seed_policy = self.engine.seed_policy(seed_policy, self.settings.renderer_options)
         self.seed_policy = seed_policy
         determining = {
             "renderer": renderer,
@@ -86,23 +84,16 @@ class _Job:
         return self._prepared
 
     def seed(self, view: str, index) -> int:
-        """The sampler seed of render ``index`` of ``view`` (:func:`render_seed`).
-
-        Cycles takes it from its seed rule ``render.cycles.seed``
-        (:func:`stereovar.renderers.cycles.settings.sampler_seed`): under ``unset`` and
-        ``animated`` both views of a replicate share one (the ``shared`` labels, the policy
-        recorded), and ``animated`` gives the frame number.
-        """
-        if self.engine.name == "cycles":
-            from ..renderers.cycles.settings import sampler_seed
-
-            options = self.settings.renderer_options
-            return sampler_seed(
-                self.name, view, self.spp, index, policy=self.seed_policy, options=options
-            )
-        from ..seeding import render_seed
-
-        return render_seed(self.name, view, self.spp, index, policy=self.seed_policy)
+        """The sampler seed of render ``index`` of ``view``, as the renderer takes it
+        (:meth:`stereovar.renderers.base.Renderer.sampler_seed`)."""
+        return self.engine.sampler_seed(
+            self.name,
+            view,
+            self.spp,
+            index,
+            policy=self.seed_policy,
+            options=self.settings.renderer_options,
+        )
 
     def get_or_render(self, view: str, index, render, *, spp=None, extra=None, channels=None):
         """The cached array of one render, or ``render(seed)``'s, then cached.

@@ -211,6 +211,20 @@ class Renderer(ABC):
     """The auxiliary passes :meth:`PreparedScene.render_aux` gives (``albedo``, ``normal``),
     read by the denoise mitigations; empty when it gives none."""
 
+    def seed_policy(self, policy: str, options: dict | None = None) -> str:
+        """The seed policy (:data:`stereovar.seeding.SEED_POLICIES`) a job's renders take
+        under ``policy`` and the renderer's own ``options``: ``policy`` itself, unless the
+        renderer has a seed rule of its own that shares the views' seeds."""
+        return policy
+
+    def sampler_seed(self, scene: str, view: str, spp, index, *, policy: str, options=None):
+        """The sampler seed of render ``index`` of ``view``, as stored with the render:
+        :func:`stereovar.seeding.render_seed` under ``policy``, unless the renderer derives
+        it from its own ``options``."""
+        from ..seeding import render_seed
+
+        return render_seed(scene, view, spp, index, policy=policy)
+
     def backend(self, variant: str = "auto") -> dict:
         """The back end a render with ``variant`` uses on this machine, found without
         compiling a scene: part of every render's cache key and provenance.

@@ -2,7 +2,7 @@
 
 The paper's statistic (Eq. 3) correlates the two views' *variance fields*. A render-time
 policy can couple the noise draws themselves: with the same sampler seed in both views
-(Cycles' default seed 0, which Kubric, BlenderProc and Infinigen never change; Mitsuba's
+(Cycles' default seed 0, which Kubric and Infinigen never change; Mitsuba's
 ``seed=0``, whose per-pixel stream depends only on the pixel index), the residual
 :math:`\\epsilon^{(n)} = I^{(n)} - \\bar I` of seed :math:`n` in the left view repeats in the
 right view, at the same pixel coordinates or at the corresponding scene point. This module

@@ -152,6 +152,21 @@ class CyclesRenderer(Renderer):
 
     name = "cycles"
 
+    def seed_policy(self, policy: str, options: dict | None = None) -> str:
+        """``shared`` under a seed rule that gives both views of a replicate one seed
+        (``render.cycles.seed``: :func:`.settings.seed_policy_of`), else ``policy``."""
+        from .settings import seed_policy_of
+
+        return seed_policy_of(policy, options)
+
+    def sampler_seed(self, scene: str, view: str, spp, index, *, policy: str, options=None):
+        """What Cycles is given under ``render.cycles.seed`` (:func:`.settings.sampler_seed`):
+        under ``unset`` and ``animated`` both views of a replicate share one, and
+        ``animated`` gives the frame number."""
+        from .settings import sampler_seed
+
+        return sampler_seed(scene, view, spp, index, policy=policy, options=options)
+
     def backend(self, variant: str = "auto") -> dict:
         """Blender's version and build; the device is always the CPU."""
         from .backend import describe_backend
