@@ -97,7 +97,7 @@ DEFAULTS = {
     },
     "generators": {
         "profiles": ["kubric", "blenderproc", "infinigen"],
-        "scenes": ["scene_000", "scene_001"],
+        "scenes": None,
         "spp": 64,
     },
     "probe": {

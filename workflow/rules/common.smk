@@ -1120,7 +1120,7 @@ from stereovar.renderers.cycles.settings import cycles_options
 
 GENERATORS = config["generators"]
 GENERATOR_SPP = int(GENERATORS["spp"])
-GENERATOR_SCENES = list(GENERATORS["scenes"])
+GENERATOR_SCENES = list(GENERATORS["scenes"] or SCENES[:2])
 # an audit renders nothing: its profiles are never planned
 GENERATOR_ROWS = {}
 if not AUDIT:

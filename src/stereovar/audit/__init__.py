@@ -7,5 +7,7 @@ convention photometrically; ``verdict`` decides whether the data carry the cue a
 lays the verdict out as one page; ``run`` makes an audit a workflow run (its discovery, config
 and targets, which ``stereovar audit`` drives); ``export`` writes this project's renders,
 variance fields and disparity in the same file formats; ``synthetic`` writes stereo renders
-with a known cross-view variance correlation as files (the test data and the examples).
+with a known cross-view variance correlation as files (the test data and the examples);
+``generators`` reads the generators' own ground truth by meaning (Kubric's depth TIFF and
+``metadata.json``, Infinigen's frame folders and ``camview`` files).
 """

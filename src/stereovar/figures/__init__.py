@@ -18,6 +18,9 @@ The caller saves the figure; nothing here reads or writes results.
     Each rule's power on a planted cue and its false-positive rate on the matched nulls.
 ``probe``
     The learned probe's accuracy on each test input, per training condition.
+``generators``
+    Each generator profile's Monte Carlo-specific cue beside its matched null, its residual
+    coupling and its image quality.
 ``preview``
     Both renders of a scene, its disparity and material map; the audit's thumbnails.
 

@@ -18,6 +18,8 @@
     Which channels of an OpenEXR file hold a render, depth, disparity or a mask.
 ``exr_header``
     The pixel type of each channel of an OpenEXR file, from its header alone.
+``hdf5``
+    BlenderProc's HDF5 files: their datasets read by name, both views of a stereo file.
 
 Importing this package imports none of its modules (nor xarray or zarr); import the one you
 need, e.g. ``from stereovar.io.store import open_dataset``.

@@ -5,7 +5,8 @@
 ``intervention``, ``estimators`` (the moments estimator against N seeds), ``claims`` (the
 claims table), ``mitigations``, ``calibration`` (synthetic nulls and planted cues through
 every transform, statistic and verdict rule), ``probe`` (the learned probe),
-``probe_model`` (the user's own network on the counterfactual inputs) and ``audit``
+``probe_model`` (the user's own network on the counterfactual inputs), ``generators`` (the
+generator table and figure) and ``audit``
 (an audit's import, verdict page and export). Import the module you need, e.g.
 ``from stereovar.jobs.render import render_job``.
 """

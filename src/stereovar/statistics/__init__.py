@@ -43,6 +43,8 @@ interval, and the tables built from the per-scene rows.
     The mitigation table: cue, controls and image-quality cost per mitigation.
 ``utility``
     Image-quality cost of a mitigation against a converged reference.
+``generators``
+    The generator table: each generator profile's cue against its own matched null.
 ``claims``
     The claims table: which of the paper's quantitative claims hold.
 
