@@ -121,6 +121,6 @@ def test_generator_rows_carry_the_profile_and_every_column():
     assert rows[0]["denoiser"] == "compositor" and rows[0]["spp_scale"] == 1 / 16
     assert "OIDN" in rows[0]["matched_null"]
     text = compact_table(rows)[0]
-    assert text["SPP (generator's)"] == "64 (1024, scaled x1/16)"
+    assert text["SPP"] == "64 of 1024 (x1/16)"
     assert text["matched null"] == "0.500"
     assert math.isnan(rows[0]["psnr"]) and text["PSNR"] == "n/a"

@@ -418,7 +418,7 @@ def test_the_generator_section_appears_once_the_generators_have_run(synthetic):
     _, kwargs, text, page = synthetic("with", generators=True)
     shown = " ".join(page.text_by_id["generators"].split())
     # each profile's Monte Carlo-specific rho with its interval, beside its matched null
-    assert "kubric 64 (128, scaled x1/2)" in shown
+    assert "kubric 64 of 128 (x1/2)" in shown
     assert "0.026 [-0.044, 0.096] 0.819 remains" in shown
     assert "0.466 [0.396, 0.536]" in shown
     embedded = [base64.b64decode(i["src"].split(",", 1)[1]) for i in page.images]

@@ -538,14 +538,21 @@ def _generator_table_html(rows: list[dict]) -> str:
     pixels."""
     if not rows:
         return ""
+    from ..statistics.generators import PROBE_NOT_RUN
+
     columns = list(rows[0])
+    probe = ""
+    if all(r.get("probe") == PROBE_NOT_RUN for r in rows):  # a column of "not run" says less
+        columns.remove("probe")
+        probe = " The learned probe was not run on these profiles (docs: Generator profiles)."
     head = "".join(f"<th>{_e(c)}</th>" for c in columns)
     body = "".join(
         "<tr>" + "".join(f"<td>{_e(r[c])}</td>" for c in columns) + "</tr>" for r in rows
     )
     return (
         '<table class="mitigations"><thead><tr>' + head + "</tr></thead><tbody>" + body
-        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals. Each row is "
+        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals." + probe
+        + " Each row is "
         "Cycles under one generator's own defaults (its SPP scaled to the budget where it is "
         "above it). The Monte Carlo-specific rho is the intensity-controlled rho minus the "
         "same statistic on the profile's own matched null, whose value stands beside it; the "

@@ -53,14 +53,14 @@ GENERATOR_COLUMNS = [
 
 COMPACT_COLUMNS = [
     "profile",
-    "SPP (generator's)",
+    "SPP",
     "adaptive",
     "denoiser",
     "seed rule",
     "Monte Carlo-specific rho",
     "matched null",
     "verdict",
-    "residual coupling at d = 0",
+    "coupling at d = 0",
     "probe",
     "PSNR",
 ]
@@ -114,7 +114,7 @@ def _spp_text(row: dict) -> str:
     spp, own = int(_f(row["spp"])), int(_f(row["generator_spp"]))
     if spp == own:
         return f"{spp}"
-    return f"{spp} ({own}, scaled x1/{own / spp:g})"
+    return f"{spp} of {own} (x1/{own / spp:g})"
 
 
 def compact_table(rows: list[dict], region: str = "all") -> list[dict]:
@@ -130,8 +130,8 @@ def compact_table(rows: list[dict], region: str = "all") -> list[dict]:
     ...        "residual_rho_zero_low": 0.5, "residual_rho_zero_high": 0.7,
     ...        "probe": "not run", "psnr": 30.0, "psnr_low": 29.0, "psnr_high": 31.0}
     >>> out = compact_table([row])[0]
-    >>> out["SPP (generator's)"], out["Monte Carlo-specific rho"]
-    ('64 (128, scaled x1/2)', '0.100 [0.050, 0.150]')
+    >>> out["SPP"], out["Monte Carlo-specific rho"]
+    ('64 of 128 (x1/2)', '0.100 [0.050, 0.150]')
     """
     out = []
     for r in rows:
@@ -141,14 +141,14 @@ def compact_table(rows: list[dict], region: str = "all") -> list[dict]:
         out.append(
             {
                 "profile": r["profile"],
-                "SPP (generator's)": _spp_text(r),
+                "SPP": _spp_text(r),
                 "adaptive": r["adaptive"],
                 "denoiser": r["denoiser"],
                 "seed rule": r["seed_rule"],
                 "Monte Carlo-specific rho": _iv(r, "mc_specific"),
                 "matched null": f"{null:.3f}" if math.isfinite(null) else "n/a",
                 "verdict": r["mc_cue"],
-                "residual coupling at d = 0": _iv(r, "residual_rho_zero"),
+                "coupling at d = 0": _iv(r, "residual_rho_zero"),
                 "probe": r["probe"],
                 "PSNR": _iv(r, "psnr", " dB", 1),
             }
