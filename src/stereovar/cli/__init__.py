@@ -1,0 +1,105 @@
+"""Command-line interface: ``stereovar <group> <command> ...``.
+
+Commands are grouped with argparse subparsers, one module per group:
+
+- :mod:`~stereovar.cli.workflow` -- ``init``, ``run`` and ``report``;
+- :mod:`~stereovar.cli.scenes` -- ``scenes generate`` and ``scenes validate``;
+- :mod:`~stereovar.cli.audit` -- ``audit`` and ``export``;
+- :mod:`~stereovar.cli.probe` -- ``probe``;
+- :mod:`~stereovar.cli.snakemake` -- what they share: the folder they work in, the
+  workflow's folder and config, and running Snakemake;
+- :mod:`~stereovar.cli.monitor` -- how ``audit`` follows Snakemake's output;
+- ``__main__`` -- ``python -m stereovar.cli``.
+
+To add a group (e.g. ``stereovar backend``), write a module with a
+``_register_<group>(subparsers)`` function that adds its parser and sets ``func=<handler>``
+on each leaf command, and call it from :func:`build_parser`. Handlers take the parsed
+namespace and return an exit status. Heavy modules (numpy, mitsuba, ...) are imported inside
+the handlers so that ``stereovar --help`` stays fast.
+
+Every :class:`~stereovar.errors.StereovarError` is printed as one line,
+``stereovar: error: <message>``, on stderr and the exit status is 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+# ``name as name``: re-exported, reached through the package: the constants, Snakemake's
+# runner (replaced here, it is replaced for every command: ``snakemake._run_snakemake``),
+# the audit's monitor, its hook and its log file, and the workflow's config.
+from ..errors import StereovarError
+from .audit import _audit_log as _audit_log
+from .audit import _register_audit
+from .monitor import AUDIT_STAGES as AUDIT_STAGES
+from .monitor import _AuditMonitor as _AuditMonitor
+from .probe import _register_probe
+from .scenes import _register_scenes
+from .snakemake import _MONITOR as _MONITOR
+from .snakemake import PROG, _workflow
+from .snakemake import _project_root as _project_root
+from .snakemake import _snakemake as _snakemake
+from .snakemake import _workflow_config as _workflow_config
+from .workflow import AUDIT_STARTER as AUDIT_STARTER
+from .workflow import _register_workflow
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with one subparser per command group."""
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Cross-view Monte Carlo variance correlation in path-traced stereo.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,  # --version's line unwrapped
+    )
+    parser.add_argument("--version", action="version", version=_version())
+    subparsers = parser.add_subparsers(dest="command", metavar="GROUP", required=True)
+    _register_workflow(subparsers)
+    _register_scenes(subparsers)
+    _register_audit(subparsers)
+    _register_probe(subparsers)
+    return parser
+
+
+def _version() -> str:
+    """``stereovar <version> (workflow: <folder>)``."""
+    from .. import __version__
+
+    try:
+        return f"{PROG} {__version__} (workflow: {_workflow()})"
+    except StereovarError as err:
+        return f"{PROG} {__version__} ({err})"
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns (and, as a script, exits with) the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        0 on success, 2 on a usage error or a :class:`~stereovar.errors.StereovarError`.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    passthrough = []
+    if "--" in argv:  # snakemake's own options, for the commands that run it
+        cut = argv.index("--")
+        argv, passthrough = argv[:cut], argv[cut + 1 :]
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if passthrough and not getattr(args, "passthrough", False):
+        parser.error(f"options after -- are for run and report only, not {args.command}")
+    args.snakemake_args = passthrough
+    try:
+        return int(args.func(args) or 0)
+    except StereovarError as err:
+        message = " ".join(str(err).split())
+        print(f"{PROG}: error: {message}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # output piped into e.g. `head`, which closed early
+        sys.stderr.close()
+        return 0

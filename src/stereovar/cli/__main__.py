@@ -1,0 +1,8 @@
+"""``python -m stereovar.cli``: the ``stereovar`` command."""
+
+import sys
+
+from . import main
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,218 @@
+"""``stereovar audit`` (renders made elsewhere, checked, run through the workflow, the
+verdict printed) and ``stereovar export`` (the run's renders and ground truth as files an
+audit reads)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..errors import StereovarError
+from .monitor import _JOB_LINE, _AuditMonitor
+from .snakemake import _MONITOR, PROG, _project_root, _run_snakemake, _workflow_config
+
+
+def _audit_log(root, name: str):
+    """A new file for the whole Snakemake output of one ``stereovar audit``,
+    ``logs/audit/<name>/stereovar-audit-<time>.log`` under ``root`` (never one that exists)."""
+    import time
+
+    folder = root / "logs" / "audit" / name
+    stem = f"stereovar-audit-{time.strftime('%Y%m%d-%H%M%S')}"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for k in range(1, 1000):
+            path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
+            try:
+                return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (caller closes)
+            except FileExistsError:
+                continue
+    except OSError as err:
+        raise StereovarError(
+            f"{folder}: cannot create the run's log file there ({err.strerror or err}); "
+            "make room or make it writable, then run the same command again"
+        ) from None
+    raise StereovarError(f"{folder}: cannot create a new log file there")
+
+
+def _import_warnings(root, name: str, frames) -> list:
+    """The ``warning:`` lines of the audit's import logs (rule ``audit_import``'s
+    ``logs/audit/<name>/import/<frame>.log``), each once."""
+    warnings = []
+    for frame in frames:
+        path = root / "logs" / "audit" / name / "import" / f"{frame}.log"
+        try:
+            lines = path.read_text(errors="replace").splitlines()
+        except OSError:
+            continue
+        for line in lines:
+            match = _JOB_LINE.fullmatch(line)
+            text = (match.group(2) if match else line).strip()
+            if text.startswith("warning:"):
+                text = text[len("warning:") :].strip()
+                if text not in warnings:
+                    warnings.append(text)
+    return warnings
+
+
+def _audit_preflight(root, config: dict, discovery) -> None:
+    """The workflow's checks of an audit, made before Snakemake starts and before anything
+    is written: the folders the run writes can be written, the disk has room for
+    Snakemake's lock (:mod:`stereovar.preflight`), and the run config's mitigations and
+    memory (:func:`stereovar.audit.run.check_audit_run`); one line for the first problem."""
+    from ..audit.run import audit_run_config, check_audit_run
+    from ..preflight import WRITTEN_FOLDERS, check_free_space, check_writable
+
+    check_writable([root / d for d in WRITTEN_FOLDERS])
+    check_free_space(root)
+    check_audit_run({**config, **audit_run_config(config, discovery)}, discovery)
+
+
+def _cmd_audit(args: argparse.Namespace) -> int:
+    import json
+    import os
+    from pathlib import Path
+
+    from ..audit.run import PREVIOUS, audit_paths, discover_audit
+    from ..layout import audit_source
+    from ..schema import load_yaml
+
+    root = _project_root()
+    config = Path(args.config)
+    if not config.is_file():
+        raise StereovarError(f"{config}: no such config file; give the audit's YAML config")
+    data = load_yaml(config, "audit config", error=StereovarError) or {}
+    settings = data.get("audit") if isinstance(data, dict) else None
+    if not isinstance(settings, dict):
+        raise StereovarError(
+            f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
+            "convention; see the documentation's Auditing your renders page, docs/audit.md)"
+        )
+    # The whole config, as the workflow will see it, before any file is read; then the
+    # files, found (not read) as the workflow finds them; the import is the workflow's (one
+    # audit_import job per frame).
+    workflow_config = _workflow_config(root, [config])
+    settings = workflow_config["audit"]
+    name = settings["name"]
+    discovery = discover_audit(settings)
+    _audit_preflight(root, workflow_config, discovery)
+    command = ["-j", str(args.cores), "all", "--configfile", str(config.resolve())]
+    if args.import_only:
+        command += ["--until", "audit_import"]
+    log_path, log = _audit_log(root, name)
+    shown_log = os.path.relpath(log_path)
+    monitor = _AuditMonitor(
+        log,
+        import_label=f"import: {discovery.summary()}",
+        source=audit_source(name),
+        verbose=args.verbose,
+        command=f"{PROG} audit {args.config}",
+    )
+    token = _MONITOR.set(monitor)
+    try:
+        rc = _run_snakemake(command, root)
+    finally:
+        _MONITOR.reset(token)
+        try:
+            log.close()
+        except OSError as err:  # a full disk: the end of the log is lost, not the run
+            monitor.log_error = monitor.log_error or err.strerror or str(err)
+    monitor.finish(rc)
+    paths = audit_paths(name)
+    summary = root / paths["summary"]
+    lines = json.loads(summary.read_text())["summary"] if rc == 0 and not args.import_only else []
+    # the import's warnings, each once: those the verdict's summary does not already say
+    for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
+        if not any(warning in line for line in lines):
+            print(f"warning: {warning}", file=sys.stderr)
+    if monitor.log_error:
+        print(f"warning: the log ends early: {monitor.log_error}", file=sys.stderr)
+    if rc != 0:
+        for message in monitor.errors(rc):
+            print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+        previous = root / Path(paths["verdict_html"]).parent / PREVIOUS
+        if not (root / paths["verdict_html"]).exists() and (previous / "verdict.html").exists():
+            print(
+                f"the verdict before this run, set aside as out of date: {previous}/",
+                file=sys.stderr,
+            )
+        jobs = monitor.job_logs()
+        print(
+            f"log: {shown_log}" + (f" (the failed job's: {', '.join(jobs)})" if jobs else ""),
+            file=sys.stderr,
+        )
+        return rc
+    if args.import_only:
+        records = root / Path(paths["summary"]).parent / "import"
+        print(f"imported {name}: one record per frame in {records}")
+    else:
+        print("\n".join(lines))
+        print(f"verdict page: {summary.parent / 'verdict.html'}")
+    print(f"log: {shown_log}")
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from ..audit.export import check_export_targets, export_targets
+
+    root = _project_root()
+    files = [Path(f) for f in args.configfile or []]
+    config = _workflow_config(root, files)
+    targets = export_targets(config, args.format)
+    check_export_targets(targets)  # a link or a stray folder would pass for an export
+    options = ["-j", str(args.cores), "export", "--config", f"export={{formats: [{args.format}]}}"]
+    for f in args.configfile or []:
+        options[3:3] = ["--configfile", f]
+    rc = _run_snakemake(options, root)
+    if rc != 0:
+        return rc
+    check_export_targets(targets)
+    folder = Path(targets[0]).parent
+    scenes = ", ".join(Path(t).name for t in targets)
+    print(
+        f"exported {len(targets)} scene{'s' * (len(targets) != 1)} to {folder}/ ({scenes}); "
+        "each scene directory has an audit.yaml that audits it"
+    )
+    return 0
+
+
+def _register_audit(subparsers) -> None:
+    audit = subparsers.add_parser(
+        "audit",
+        help="audit renders made elsewhere for the cross-view variance cue",
+        description="Import N >= 2 renders per view of stereo frames and their ground truth "
+        "(the audit: section of CONFIG), run every statistic, control and the intervention on "
+        "them, and print the verdict's summary; the page is results/audit/<name>/verdict.html. "
+        "Prints one line per stage (import, statistics, controls, intervention, mitigations, "
+        "verdict) and the import's warnings; Snakemake's whole output goes to a log file whose "
+        "path is printed (-v shows it live). A failed job: its one-line error, the log's "
+        "path and a non-zero exit status.",
+    )
+    audit.add_argument("config", metavar="CONFIG", help="YAML config with an audit: section")
+    audit.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    audit.add_argument(
+        "--import-only",
+        action="store_true",
+        help="run only the import jobs (one per frame: decode, check, sign-check, store)",
+    )
+    audit.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="show Snakemake's whole output live (it always goes to "
+        "logs/audit/<name>/stereovar-audit-<time>.log)",
+    )
+    audit.set_defaults(func=_cmd_audit)
+    export = subparsers.add_parser(
+        "export",
+        help="export renders, variance fields and disparity as EXR, PFM, NPY or PNG files",
+        description="Write every scene's renders, variance fields, disparity and glass mask "
+        "to results/export/<renderer>/<estimator>/<format>/<scene>/ (the workflow's export "
+        "target), with an audit.yaml that audits the export.",
+    )
+    export.add_argument("--format", required=True, choices=["exr", "pfm", "npy", "png"])
+    export.add_argument("--configfile", action="append", help="workflow config(s) to export")
+    export.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    export.set_defaults(func=_cmd_export)

@@ -1,0 +1,159 @@
+"""``stereovar init`` (starter configs), ``stereovar run`` (the workflow) and
+``stereovar report`` (Snakemake's report), each in the current directory."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import StereovarError
+from .snakemake import _project_root, _run_snakemake, _workflow
+
+#: The starter audit config ``stereovar init`` writes; ``{name}``, ``{renders}``, ``{views}``,
+#: ``{disparity}`` and ``{convention}`` are filled in (placeholders, or the example's files).
+AUDIT_STARTER = """\
+# stereovar audit audit.yaml: audit renders made elsewhere for the cross-view variance cue.
+# Keys, types and defaults: the documentation's configuration reference (audit: section).
+audit:
+  # results/audit/<name>/verdict.html
+  name: {name}
+  renders: {renders}
+  # the {{view}} values in the paths
+  views: {views}
+  # the left view's disparity (add {{view}} to give both views')
+  disparity: {disparity}
+  # conventional: x_R = x_L - d (Middlebury, KITTI, SceneFlow); paper: x_R = x_L + d
+  convention: {convention}
+  # glass_mask: masks/{{frame}}.png      # or segmentation: seg/{{frame}}.png, glass_ids: [3]
+  # depth: depth/{{frame}}.exr           # instead of disparity, with focal_px and baseline_m
+  # transfer: srgb                     # PNG renders: srgb (default, with a warning) or linear
+  # spp: 128                           # for the tables; null = not given (0)
+  # mitigations: [denoise]             # test mitigations on these renders
+  # probe: true                        # train and test the learned matcher on these frames
+"""
+
+
+def _write_new(path, text: str) -> bool:
+    """Write ``text`` to ``path`` atomically unless it exists; True if written."""
+    from ..io.store import atomic_path
+
+    if path.exists():
+        print(f"kept {path} (it exists)")
+        return False
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    print(f"wrote {path}")
+    return True
+
+
+def _cmd_init(args: argparse.Namespace) -> int:
+    import os
+
+    root = _project_root()
+    fields = {
+        "name": "my_renders",
+        "renders": "renders/{frame}/{view}/seed_{seed}.exr",
+        "views": "{left: L, right: R}",
+        "disparity": "disparity/{frame}.pfm",
+        "convention": "conventional",
+    }
+    if args.example:
+        from ..audit.synthetic import write_synthetic_audit
+
+        folder = root / "data" / "synthetic"
+        for path in (folder, root / "audit.yaml"):
+            if path.exists():
+                raise StereovarError(
+                    f"{path} exists; remove it or run stereovar init --example in another directory"
+                )
+        settings, _ = write_synthetic_audit(os.path.relpath(folder, root))
+        fields = {**settings, "views": "{left: L, right: R}"}
+        print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
+    _write_new(root / "config.yaml", (_workflow() / "config.yaml").read_text())
+    _write_new(root / "audit.yaml", AUDIT_STARTER.format(**fields))
+    print("next: stereovar run -j2 (the default experiment) or stereovar audit audit.yaml")
+    return 0
+
+
+def _configfiles(args) -> list:
+    """``--preset`` configs (the workflow's) then ``--configfile`` configs, as given."""
+    from pathlib import Path
+
+    from ..workflow_home import preset_path
+
+    files = [str(preset_path(name)) for name in args.preset or []]
+    for f in args.configfile or []:
+        if not Path(f).is_file():
+            raise StereovarError(f"{f}: no such config file; give an existing --configfile")
+        files.append(f)
+    return files
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    if args.cores < 1:
+        raise StereovarError(f"-j must be >= 1, got {args.cores}")
+    files = _configfiles(args)
+    options = ["-j", str(args.cores), *(args.targets or ["all"])]
+    if files:
+        options += ["--configfile", *files]
+    return _run_snakemake([*options, *args.snakemake_args], _project_root())
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    files = _configfiles(args)
+    options = ["--report", args.output]
+    if files:
+        options += ["--configfile", *files]
+    rc = _run_snakemake([*options, *args.snakemake_args], _project_root())
+    if rc == 0:
+        print(f"report: {args.output}")
+    return rc
+
+
+def _add_configs(parser) -> None:
+    parser.add_argument(
+        "--configfile", action="append", metavar="FILE", help="config merged on top (repeatable)"
+    )
+    parser.add_argument(
+        "--preset",
+        action="append",
+        metavar="NAME",
+        help="the workflow's preset NAME (workflow/presets/NAME.yaml: paper, paper-moments, "
+        "probe), merged before --configfile",
+    )
+
+
+def _register_workflow(subparsers) -> None:
+    init = subparsers.add_parser(
+        "init",
+        help="write a starter config.yaml and audit.yaml here",
+        description="Write config.yaml (the workflow's defaults, commented) and audit.yaml (an "
+        "audit config to fill in) in the current directory; an existing file is kept.",
+    )
+    init.add_argument(
+        "--example",
+        action="store_true",
+        help="also write two synthetic frames under data/synthetic and point audit.yaml at them",
+    )
+    init.set_defaults(func=_cmd_init)
+    run = subparsers.add_parser(
+        "run",
+        help="run the workflow here (results under ./results)",
+        description="Run the stereovar workflow with the current directory as its working "
+        "directory: config.yaml here if there is one (else the defaults), then --preset and "
+        "--configfile configs. Options after -- go to snakemake unchanged.",
+    )
+    run.add_argument("targets", nargs="*", metavar="TARGET", help="targets (default: all)")
+    run.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    _add_configs(run)
+    run.set_defaults(func=_cmd_run, passthrough=True)
+    report = subparsers.add_parser(
+        "report",
+        help="write Snakemake's report of the run here",
+        description="Write Snakemake's self-contained report of the results here (the "
+        "workflow's captions, figures and tables). Options after -- go to snakemake.",
+    )
+    report.add_argument(
+        "-o", "--output", default="results/report.html", help="default results/report.html"
+    )
+    _add_configs(report)
+    report.set_defaults(func=_cmd_report, passthrough=True)
