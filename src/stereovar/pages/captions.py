@@ -1,40 +1,34 @@
 """The report's captions (``workflow/report/*.rst``) as page text.
 
 Snakemake's report renders each caption with Jinja (``{{ snakemake.config[...] }}``) and
-then as reStructuredText. A page needs only the inline markup the captions use:
-:func:`render_caption` fills the Jinja expressions from the run's config, and
-:func:`rst_to_html` turns ``**bold**``, ``*italic*``, double-backquoted code and
-``:math:`` roles into HTML, one ``<p>`` per paragraph.
+then as reStructuredText. A page does the same: :func:`render_caption` fills the Jinja
+expressions from the run's config, and :func:`rst_to_html` renders the text with docutils,
+its ``:math:`` roles as MathML (docutils' ``math_output = "MathML"``), so an equation is
+typeset by the browser and no TeX reaches the reader. :func:`caption_markup` is the same as
+:class:`markupsafe.Markup`, the templates' ``caption`` filter.
 """
 
 from __future__ import annotations
 
-import html
-import re
+from functools import lru_cache
 from types import SimpleNamespace
 
-__all__ = ["render_caption", "rst_to_html"]
+__all__ = ["caption_markup", "render_caption", "rst_to_html"]
 
-_LATEX = {
-    r"\sigma": "σ",
-    r"\epsilon": "ε",
-    r"\varepsilon": "ε",
-    r"\rho": "ρ",
-    r"\mu": "μ",
-    r"\Omega": "Ω",
-    r"\setminus": "∖",
-    r"\cap": "∩",
-    r"\ln": "ln",
-    r"\to": "→",
-    r"\hat": "",
+DOCUTILS_SETTINGS = {
+    "math_output": "MathML",
+    "report_level": 5,  # no system messages in the output
+    "halt_level": 5,
+    "doctitle_xform": False,  # a caption's first line is text, not a document title
+    "sectsubtitle_xform": False,
+    "file_insertion_enabled": False,  # a caption reads no file
+    "raw_enabled": False,  # and carries no raw HTML
+    "syntax_highlight": "none",
+    "_disable_config": True,  # no docutils.conf of the user's changes the pages
+    "input_encoding": "unicode",
+    "output_encoding": "unicode",
 }
-_LATEX_NAME = re.compile(r"\\[A-Za-z]+")
-_SUBSCRIPT = re.compile(r"_(\{[^{}]*\}|\\?[A-Za-z0-9]+)")
-_SUPERSCRIPT = re.compile(r"\^(\{[^{}]*\}|[A-Za-z0-9]+)")
-_CODE = re.compile(r"``(.+?)``", re.S)
-_MATH = re.compile(r":math:`(.+?)`", re.S)
-_BOLD = re.compile(r"\*\*(.+?)\*\*", re.S)
-_ITALIC = re.compile(r"(?<![\w*])\*(?!\s)(.+?)(?<!\s)\*(?![\w*])", re.S)
+"""docutils' settings for captions: MathML math, quiet, nothing read or passed through."""
 
 
 def render_caption(text: str, config: dict) -> str:
@@ -55,56 +49,50 @@ def render_caption(text: str, config: dict) -> str:
     return template.render(snakemake=SimpleNamespace(config=config))
 
 
-def _math(tex: str) -> str:
-    """A ``:math:`` role's LaTeX as plain HTML: Greek letters and a few operators as
-    characters, ``_x`` and ``^x`` as sub- and superscripts (``tex`` is already escaped)."""
-
-    def name(match):
-        return _LATEX.get(match.group(), match.group()[1:])
-
-    def script(tag):
-        def replace(match):
-            body = match.group(1)
-            body = body[1:-1] if body.startswith("{") else body
-            return f"<{tag}>{_LATEX_NAME.sub(name, body)}</{tag}>"
-
-        return replace
-
-    out = _SUBSCRIPT.sub(script("sub"), tex)
-    out = _SUPERSCRIPT.sub(script("sup"), out)
-    out = _LATEX_NAME.sub(name, out).replace("{", "").replace("}", "")
-    return f'<span class="math">{out}</span>'
-
-
-def _inline(paragraph: str) -> str:
-    """One paragraph's inline markup as HTML (see :func:`rst_to_html`)."""
-    kept: list[str] = []
-
-    def keep(fragment: str) -> str:
-        kept.append(fragment)
-        return f"\x00{len(kept) - 1}\x00"
-
-    body = html.escape(" ".join(paragraph.split()), quote=False)
-    body = _CODE.sub(lambda m: keep(f"<code>{m.group(1)}</code>"), body)
-    body = _MATH.sub(lambda m: keep(_math(m.group(1))), body)
-    body = _BOLD.sub(r"<b>\1</b>", body)
-    body = _ITALIC.sub(r"<i>\1</i>", body)
-    return re.sub("\x00(\\d+)\x00", lambda m: kept[int(m.group(1))], body)
-
-
+@lru_cache(maxsize=256)
 def rst_to_html(text: str) -> str:
-    """A caption's reStructuredText inline markup as HTML: one ``<p>`` per paragraph, the
-    text escaped, ``**bold**`` and ``*italic*``, double-backquoted literals as ``<code>``
-    (their content kept as written) and ``:math:`` roles as text with sub- and superscripts.
+    """A caption's reStructuredText as an HTML fragment (docutils' ``html5`` writer): one
+    ``<p>`` per paragraph, the text escaped, ``:math:`` roles as MathML, literals as
+    ``<span class="docutils literal">``.
+
+    Parameters
+    ----------
+    text : str
+        reStructuredText (its Jinja already filled, :func:`render_caption`).
+
+    Returns
+    -------
+    str
+        The fragment; ``""`` for blank text.
 
     Examples
     --------
     >>> rst_to_html("**Fig. 1.** The ``a_b`` field < 1.")
-    '<p><b>Fig. 1.</b> The <code>a_b</code> field &lt; 1.</p>'
-    >>> rst_to_html(":math:`C_\\\\sigma`")
-    '<p><span class="math">C<sub>σ</sub></span></p>'
+    '<p><strong>Fig. 1.</strong> The <span class="docutils literal">a_b</span> field &lt; 1.</p>'
+    >>> print(rst_to_html(":math:`C_\\\\sigma`"))  # doctest: +NORMALIZE_WHITESPACE
+    <p><math xmlns="http://www.w3.org/1998/Math/MathML">
+      <msub> <mi>C</mi> <mi>σ</mi> </msub>
+    </math></p>
     >>> rst_to_html("one\\n\\ntwo")
     '<p>one</p>\\n<p>two</p>'
     """
-    paragraphs = [p.strip() for p in re.split(r"\n\s*\n", text.strip()) if p.strip()]
-    return "\n".join(f"<p>{_inline(p)}</p>" for p in paragraphs)
+    from docutils.core import publish_parts
+
+    if not text.strip():
+        return ""
+    parts = publish_parts(text, writer_name="html5", settings_overrides=DOCUTILS_SETTINGS)
+    return parts["fragment"].strip()
+
+
+def caption_markup(text: str):
+    """:func:`rst_to_html` as :class:`markupsafe.Markup`, for a template to print as it is
+    (the templates' ``caption`` filter).
+
+    Examples
+    --------
+    >>> caption_markup("*a* & b")
+    Markup('<p><em>a</em> &amp; b</p>')
+    """
+    from markupsafe import Markup
+
+    return Markup(rst_to_html(str(text or "")))

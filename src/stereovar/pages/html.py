@@ -1,36 +1,43 @@
 """The blocks every self-contained page shares: the document, a table, a figure, a link.
 
-A page is one HTML file with its own stylesheet (the tables' stylesheet of
-:func:`stereovar.io.tables.to_html` plus the page's), no script and nothing loaded from a
-server: figures are PNG files beside it (a relative path) or embedded in it
-(:func:`data_uri`), links are relative to the page's folder (:func:`relative_link`).
+A page is one HTML file with its own stylesheet (``base.html.j2``'s shared rules plus the
+page's), no script and nothing loaded from a server: figures are PNG files beside it (a
+relative path) or embedded in it (:func:`data_uri`), links are relative to the page's folder
+(:func:`relative_link`). :func:`document`, :func:`table` and :func:`figure` render the
+templates of :mod:`stereovar.pages.templates` for a page that still passes ready fragments;
+a new page extends ``base.html.j2`` and imports ``macros.html.j2`` itself.
 """
 
 from __future__ import annotations
 
 import base64
-import html
 import os
 from pathlib import Path
-
-from ..io.tables import to_html
 
 __all__ = ["data_uri", "document", "figure", "relative_link", "table"]
 
 _MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".svg": "image/svg+xml"}
 
 
+def _macros():
+    """The module of ``macros.html.j2`` (its macros as functions)."""
+    from .templates import environment
+
+    return environment().get_template("macros.html.j2").module
+
+
 def document(title: str, body: list[str], css: str = "") -> str:
-    """One self-contained HTML document.
+    """One self-contained HTML document (``document.html.j2``, extending ``base.html.j2``).
 
     Parameters
     ----------
     title : str
         The page's ``<title>`` (escaped here).
     body : list of str
-        The body's HTML fragments, in order, one per line.
+        The body's HTML fragments, in order, one per line (already HTML: they are printed
+        as they are).
     css : str, optional
-        The page's own stylesheet, after the tables' (:func:`stereovar.io.tables.to_html`).
+        The page's own stylesheet, after the shared one (``base.html.j2``).
 
     Returns
     -------
@@ -45,14 +52,18 @@ def document(title: str, body: list[str], css: str = "") -> str:
     >>> page.index("p { color: red; }") < page.index("</style>") < page.index("<p>hi</p>")
     True
     """
-    page = to_html([], ["quantity"], caption=title)
-    head = page[: page.index("<body>")].replace("</style>", css + "</style>", 1)
-    return head + "<body>\n" + "\n".join(body) + "\n</body>\n</html>\n"
+    from markupsafe import Markup
+
+    from .templates import render
+
+    return render(
+        "document.html.j2", title=title, css=Markup(css), body=[Markup(b) for b in body if b]
+    )
 
 
 def table(rows: list[dict], columns: list[str], caption: str = "", digits: int = 4) -> str:
-    """The ``<table>`` element of :func:`stereovar.io.tables.to_html`'s page (its numbers to
-    ``digits`` significant digits, headers, cells and caption escaped).
+    """A ``<table>`` (the ``table`` macro of ``macros.html.j2``): numbers to ``digits``
+    significant digits and right-aligned, headers, cells and caption escaped.
 
     Examples
     --------
@@ -60,12 +71,11 @@ def table(rows: list[dict], columns: list[str], caption: str = "", digits: int =
     >>> t.startswith("<table") and "1.23" in t and "&lt;x&gt;" in t
     True
     """
-    page = to_html(rows, columns, caption=caption, digits=digits)
-    return page[page.index("<body>") + len("<body>") : page.index("</body>")].strip()
+    return str(_macros().table(rows, columns, caption=caption, digits=digits))
 
 
 def figure(src: str, caption_html: str, *, alt: str, ident: str = "") -> str:
-    """A ``<figure>`` of one image with its caption.
+    """A ``<figure>`` of one image with its caption (the ``figure`` macro).
 
     Parameters
     ----------
@@ -83,14 +93,12 @@ def figure(src: str, caption_html: str, *, alt: str, ident: str = "") -> str:
     --------
     >>> print(figure("figures/a&b.png", "Fig. 1", alt="a", ident="fig-a"))
     ... # doctest: +NORMALIZE_WHITESPACE
-    <figure id="fig-a"><img src="figures/a&amp;b.png" alt="a"
-    style="max-width:100%"><figcaption>Fig. 1</figcaption></figure>
+    <figure id="fig-a"><img src="figures/a&amp;b.png"
+    alt="a"><figcaption>Fig. 1</figcaption></figure>
     """
-    attrs = f' id="{html.escape(ident)}"' if ident else ""
-    return (
-        f'<figure{attrs}><img src="{html.escape(src)}" alt="{html.escape(alt)}" '
-        f'style="max-width:100%"><figcaption>{caption_html}</figcaption></figure>'
-    )
+    from markupsafe import Markup
+
+    return str(_macros().figure(src, Markup(caption_html), alt, ident))
 
 
 def data_uri(path) -> str:
