@@ -1,0 +1,571 @@
+"""Progress of a workflow run, one line per stage, from Snakemake's log events.
+
+``stereovar run`` and ``stereovar audit`` run Snakemake with the logger plugin
+``stereovar`` (package :mod:`snakemake_logger_plugin_stereovar`), which hands each of
+Snakemake's log events to a :class:`Progress`: the plan (``RUN_INFO``: jobs per rule), each
+job as it starts (``JOB_INFO``: its rule and wildcards), ends (``JOB_FINISHED``) or fails
+(``JOB_ERROR``: its log files) and Snakemake's own errors (``ERROR``). A :class:`Progress`
+only keeps count and returns the text to show; nothing here writes, so every line can be
+checked from events alone.
+
+A stage is a group of workflow rules (:data:`RUN_STAGES`, :data:`AUDIT_STAGES`). Stages are
+reported in their order: a stage is done when every job planned for its rules has finished
+and the stages before it are done, so each stage's line is written once, as
+``<stage> ... done (<n> jobs; <k> of <N> in all)``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+from pathlib import Path
+
+#: The stages ``stereovar run`` reports, in order, and the workflow rules of each. A rule
+#: named nowhere counts as ``statistics``; ``all`` (the target, no work) counts nowhere.
+RUN_STAGES = {
+    "scenes": ("generate_scene", "scene_summary", "preview"),
+    "render": ("render", "render_moments", "render_profile"),
+    "ground truth": ("ground_truth",),
+    "statistics": ("variance", "warp", "correlation"),
+    "controls": ("estimator_check", "estimator_tables", "estimators"),
+    "intervention": ("intervention", "intervention_table", "margin_figure"),
+    "mitigations": (
+        "render_policy",
+        "render_aux",
+        "transform",
+        "mitigation_scene",
+        "mitigations_table",
+        "mitigations",
+    ),
+    "calibration": (
+        "calibration_scene",
+        "calibration_table",
+        "calibration",
+        "generator_calibration",
+        "generators_table",
+        "generators",
+    ),
+    "probe": (
+        "probe_model_frames",
+        "probe_planted",
+        "probe_train",
+        "probe_test",
+        "probe_table",
+        "probe",
+    ),
+    "tables": (
+        "statistics_table",
+        "cross_scene_table",
+        "spp_sweep_table",
+        "cross_renderer_table",
+        "claims",
+    ),
+    "pages": (
+        "teaser_figure",
+        "rho_vs_spp_figure",
+        "rho_vs_seeds_figure",
+        "statistics_dot_figure",
+        "material_scatter_figure",
+        "cross_renderer_figure",
+        "results_page",
+    ),
+    "export": ("export_scene", "export"),
+}
+
+#: The stages ``stereovar audit`` reports, in order, and the workflow rules of each.
+AUDIT_STAGES = {
+    "import": ("audit_import",),
+    "statistics": (
+        "variance",
+        "warp",
+        "correlation",
+        "statistics_table",
+        "cross_scene_table",
+        "spp_sweep_table",
+        "statistics_dot_figure",
+        "rho_vs_seeds_figure",
+        "audit_teaser",
+        "audit_thumbnail",
+    ),
+    "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
+    "intervention": ("intervention", "intervention_table", "margin_figure"),
+    "mitigations": (
+        "render_policy",
+        "render_aux",
+        "transform",
+        "mitigation_scene",
+        "mitigations_table",
+        "mitigations",
+    ),
+    "probe": ("probe_train", "probe_test", "probe_table", "probe"),
+    "verdict": ("audit_verdict",),
+}
+
+#: The stage maps by the name the logger plugin's ``stages`` setting gives.
+STAGE_MAPS = {"run": RUN_STAGES, "audit": AUDIT_STAGES}
+
+#: The stage a rule named in no stage counts in.
+DEFAULT_STAGE = "statistics"
+
+#: Rules that are targets only: their jobs count in no stage.
+TARGET_RULES = ("all",)
+
+#: Audit stages whose line says only ``done`` (one job per frame, or one job), and that say
+#: ``up to date`` when nothing of them runs.
+PLAIN_STAGES = ("import", "verdict")
+
+#: Snakemake's options after which it runs no job and prints what was asked (``stereovar
+#: run -- --unlock``): their output is the command's, not a run's.
+NO_RUN_OPTIONS = (
+    "--unlock",
+    "--cleanup-metadata",
+    "--cm",
+    "--list-rules",
+    "--list",
+    "-l",
+    "--list-target-rules",
+    "--lt",
+    "--list-changes",
+    "--lc",
+    "--list-input-changes",
+    "--li",
+    "--list-params-changes",
+    "--lp",
+    "--list-code-changes",
+    "--list-untracked",
+    "--lu",
+    "--summary",
+    "-S",
+    "--detailed-summary",
+    "-D",
+    "--dag",
+    "--rulegraph",
+    "--filegraph",
+    "--d3dag",
+    "--lint",
+    "--report",
+    "--containerize",
+    "--export-cwl",
+    "--print-compilation",
+    "--archive",
+    "--delete-all-output",
+    "--delete-temp-output",
+    "--cleanup-shadow",
+    "--conda-create-envs-only",
+    "--conda-cleanup-envs",
+    "--version",
+    "-v",
+    "--help",
+    "-h",
+)
+
+_STAMP = r"\d{4}-\d\d-\d\d[ T]\d\d:\d\d:\d\d(?:[,.]\d+)?"
+#: A job's own log line, ``<date> <time> LEVEL message`` (stereovar.jobs.common.run_job).
+JOB_LINE = re.compile(rf"{_STAMP} ([A-Z]+) (.*)")
+#: The first line of Snakemake's account of an exception: ``AuditError in file "x", line 4:``.
+_EXCEPTION_HEAD = re.compile(r"(\w+)(?: in (?:rule \S+ in )?(?:file|line) .*)?[:.]")
+#: Exceptions Snakemake raises to say that a job failed (the job's own error is in its log).
+JOB_FAILED = ("RuleException", "CalledProcessError")
+#: Snakemake's last words after jobs failed: said by the jobs' errors already.
+_AFTER_JOBS = "did not complete successfully"
+
+
+def reports_progress(snakemake_args) -> bool:
+    """Whether a run with these extra Snakemake options runs (or plans) jobs, so that its
+    output is progress; False for options that ask Snakemake for something else.
+
+    Examples
+    --------
+    >>> reports_progress(["-n", "--forcerun", "render"]), reports_progress(["--unlock"])
+    (True, False)
+    """
+    return not any(arg.split("=", 1)[0] in NO_RUN_OPTIONS for arg in snakemake_args)
+
+
+def is_dry_run(snakemake_args) -> bool:
+    """Whether these Snakemake options ask for a dry run.
+
+    Examples
+    --------
+    >>> is_dry_run(["-j1", "-n"]), is_dry_run(["--dry-run"]), is_dry_run(["-np"])
+    (True, True, True)
+    """
+    return any(
+        arg in ("--dry-run", "--dryrun")
+        or (arg.startswith("-") and not arg.startswith("--") and "n" in arg[1:])
+        for arg in snakemake_args
+    )
+
+
+def stage_map(name: str) -> dict:
+    """The stages of ``name`` (``run`` or ``audit``): :data:`STAGE_MAPS`."""
+    try:
+        return STAGE_MAPS[name]
+    except KeyError:
+        raise ValueError(f"unknown stages {name!r}; use one of {sorted(STAGE_MAPS)}") from None
+
+
+def rule_stage(rule, stages: dict):
+    """The stage of ``rule`` in ``stages``; None for a target rule (``all``) or no rule.
+
+    Examples
+    --------
+    >>> rule_stage("audit_import", AUDIT_STAGES), rule_stage("new_rule", AUDIT_STAGES)
+    ('import', 'statistics')
+    >>> rule_stage("all", RUN_STAGES) is None
+    True
+    """
+    if not rule or rule in TARGET_RULES:
+        return None
+    for stage, rules in stages.items():
+        if rule in rules:
+            return stage
+    return DEFAULT_STAGE if DEFAULT_STAGE in stages else None
+
+
+def job_stage(rule, wildcards, stages: dict, source: str = ""):
+    """The stage of one job: its rule's (:func:`rule_stage`), except that a job on a
+    mitigated copy of an audit's renders (wildcard ``renderer`` ``<source>/<mitigation>``)
+    counts as ``mitigations``.
+
+    Examples
+    --------
+    >>> job_stage("variance", {"renderer": "audit/a/denoise"}, AUDIT_STAGES, "audit/a")
+    'mitigations'
+    >>> job_stage("variance", {"renderer": "audit/a"}, AUDIT_STAGES, "audit/a")
+    'statistics'
+    """
+    stage = rule_stage(rule, stages)
+    renderer = str((wildcards or {}).get("renderer", ""))
+    if (
+        source
+        and stage is not None
+        and "mitigations" in stages
+        and renderer.startswith(source + "/")
+    ):
+        return "mitigations"
+    return stage
+
+
+def job_error(line: str):
+    """The message of a job's ``ERROR`` log line (without its ``error:``), else None.
+
+    Examples
+    --------
+    >>> job_error("2026-01-01 10:00:00,123 ERROR error: a.exr: cannot read it")
+    'a.exr: cannot read it'
+    >>> job_error("2026-01-01 10:00:00,123 INFO done in 1.00 s") is None
+    True
+    """
+    match = JOB_LINE.fullmatch(line.rstrip("\n"))
+    if not match or match.group(1) != "ERROR":
+        return None
+    message = match.group(2).strip()
+    return message[len("error:") :].strip() if message.startswith("error:") else message
+
+
+def log_error(path):
+    """The first error line of a job's log file (:func:`job_error`), else its last line;
+    None without one (or without the file)."""
+    try:
+        lines = Path(path).read_text(errors="replace").splitlines()
+    except OSError:
+        return None
+    errors = [m for m in map(job_error, lines) if m]
+    last = [line.strip() for line in lines if line.strip()]
+    return errors[0] if errors else (last[-1] if last else None)
+
+
+def exception_line(text: str, exception: str = "", ours=()):
+    """One line for Snakemake's account of an exception (its ``ERROR`` event): the first
+    line of the message after the ``<Name> in file ..., line N:`` head, with the exception's
+    name unless it is one of ``ours`` (the workflow's own one-line errors); None when the
+    exception only says that jobs failed (their logs say why).
+
+    Examples
+    --------
+    >>> exception_line('AuditError in file "/wf/common.smk", line 40:\\nf00.exr: gone',
+    ...                "AuditError", ours=("AuditError",))
+    'f00.exr: gone'
+    >>> exception_line("WorkflowError:\\nAt least one job did not complete successfully.")
+    >>> exception_line("MissingInputException in rule x:\\nMissing input files: a", "")
+    'MissingInputException: Missing input files: a'
+    """
+    lines = [line.strip() for line in str(text or "").splitlines()]
+    head = _EXCEPTION_HEAD.fullmatch(lines[0]) if lines else None
+    name = exception or (head.group(1) if head else "")
+    if name in JOB_FAILED:
+        return None
+    rest = [line for line in lines[1 if head else 0 :] if line]
+    if not rest:
+        return name or None
+    if _AFTER_JOBS in rest[0]:
+        return None
+    return rest[0] if name in ours or not name else f"{name}: {rest[0]}"
+
+
+def our_exceptions() -> tuple:
+    """The names of the workflow's own exceptions (:mod:`stereovar.errors`), whose message
+    is said without the name."""
+    from . import errors
+
+    return tuple(
+        name
+        for name, value in vars(errors).items()
+        if isinstance(value, type) and issubclass(value, errors.StereovarError)
+    )
+
+
+def _jobs(n: int) -> str:
+    return f"{n} job{'s' * (n != 1)}"
+
+
+class Progress:
+    """What a run has planned and done, per stage, and the lines that say so.
+
+    Each event method returns the text to write (possibly ``""``): whole lines, and in the
+    one open stage's line its start (``"statistics ... "``) and, later, its end. With
+    ``live`` (a terminal) the open line is rewritten in place with its count (``import: 3
+    frames ... frame 2 of 3``) instead.
+
+    Parameters
+    ----------
+    stages : dict
+        Stage name: rule names, in order (:data:`RUN_STAGES`, :data:`AUDIT_STAGES`).
+    labels : dict, optional
+        What a stage's line calls it (default: its name), e.g. ``{"import": "import: 2
+        frames × 2 views × 4 seeds"}``.
+    source : str
+        An audit's renderer wildcard (``audit/<name>``): jobs on its mitigated copies count
+        as ``mitigations`` (:func:`job_stage`).
+    live : bool
+        Rewrite the open line with counts (a terminal).
+    """
+
+    def __init__(self, stages: dict, *, labels=None, source: str = "", live: bool = False):
+        self.stages = stages
+        self.labels = dict(labels or {})
+        self.source = source
+        self.live = live
+        self.planned: dict = {}  # stage: jobs
+        self.rules: dict = {}  # stage: Counter of rules, as planned
+        self.finished: Counter = Counter()  # stage: jobs
+        self.job_stages: dict = {}  # job id: stage
+        self.job_rules: dict = {}  # job id: rule
+        self.failed: list = []  # {"rule", "jobid", "logs"} per failed job
+        self.errors: list = []  # {"exception", "message"} per Snakemake error
+        self.nothing = False  # Snakemake said there is nothing to be done
+        self.seen_plan = False
+        self.shown: list = []  # stages whose line is complete
+        self.open = None  # the stage whose line is begun, not yet ended
+        self._marks = 0  # per-frame marks written in the open (not live) line
+
+    # -- events ---------------------------------------------------------------------------
+
+    def plan(self, stats: dict) -> str:
+        """Snakemake's plan (``RUN_INFO``): jobs per rule, and ``total``."""
+        planned: dict = {}
+        rules: dict = {}
+        for rule, count in stats.items():
+            stage = rule_stage(rule, self.stages) if rule != "total" else None
+            if stage is not None:
+                planned[stage] = planned.get(stage, 0) + int(count)
+                rules.setdefault(stage, Counter())[rule] += int(count)
+        # jobs already moved to another stage (mitigated copies) stay moved
+        for jobid, stage in self.job_stages.items():
+            home = rule_stage(self.job_rules.get(jobid), self.stages)
+            if stage != home and home in planned:
+                planned[home] -= 1
+                rules[home][self.job_rules[jobid]] -= 1
+                planned[stage] = planned.get(stage, 0) + 1
+                rules.setdefault(stage, Counter())[self.job_rules[jobid]] += 1
+        for stage in set(planned) | set(self.finished):
+            planned[stage] = max(planned.get(stage, 0), self.finished[stage])
+        first = not self.seen_plan
+        self.planned, self.rules, self.seen_plan = planned, rules, True
+        text = ""
+        if first:
+            for stage in PLAIN_STAGES[:1]:
+                if stage in self.stages and not self.planned.get(stage) and self._ends(stage):
+                    text += f"{self.label(stage)} ... up to date\n"
+                    self.shown.append(stage)
+        return text + self.advance()
+
+    def job(self, jobid, rule: str, wildcards=None) -> str:
+        """A job starts (``JOB_INFO``; in a dry run, every planned job)."""
+        self.job_rules[jobid] = rule
+        stage = job_stage(rule, wildcards, self.stages, self.source)
+        if stage is None:
+            return ""
+        self.job_stages[jobid] = stage
+        home = rule_stage(rule, self.stages)
+        if stage == home or not self.seen_plan:
+            return ""
+        self.planned[home] = max(self.planned.get(home, 1) - 1, self.finished[home])
+        self.rules.get(home, Counter())[rule] -= 1
+        self.planned[stage] = self.planned.get(stage, 0) + 1
+        self.rules.setdefault(stage, Counter())[rule] += 1
+        return self.advance()
+
+    def done(self, jobid) -> str:
+        """A job finished (``JOB_FINISHED``)."""
+        stage = self.job_stages.get(jobid)
+        if stage is None:
+            stage = rule_stage(self.job_rules.get(jobid), self.stages)
+        if stage is None:
+            return ""
+        self.finished[stage] += 1
+        self.planned[stage] = max(self.planned.get(stage, 0), self.finished[stage])
+        return self.advance()
+
+    def fail(self, rule: str, jobid=None, logs=()) -> None:
+        """A job failed (``JOB_ERROR``), its log files ``logs``."""
+        self.failed.append({"rule": rule, "jobid": jobid, "logs": [str(p) for p in logs]})
+
+    def error(self, message: str, exception: str = "") -> None:
+        """Snakemake stopped with an exception (``ERROR``)."""
+        self.errors.append({"exception": exception or "", "message": str(message or "")})
+
+    # -- lines ----------------------------------------------------------------------------
+
+    def label(self, stage: str) -> str:
+        return self.labels.get(stage, stage)
+
+    def totals(self) -> tuple:
+        """Jobs finished and planned, all stages."""
+        return sum(self.finished.values()), sum(self.planned.values())
+
+    def _ends(self, stage: str) -> bool:
+        """Whether ``stage`` gets a line in this map (it is one of its stages)."""
+        return stage in self.stages
+
+    def _word(self, stage: str) -> str:
+        n = self.finished[stage]
+        if stage in PLAIN_STAGES:
+            return "done"
+        done, total = self.totals()
+        return f"done ({_jobs(n)}; {done} of {total} in all)"
+
+    def _count(self, stage: str) -> str:
+        """The open line's count, live: ``frame k of n`` for the import, else jobs."""
+        k, n = self.finished[stage], self.planned.get(stage, 0)
+        if stage == "import":
+            return f"frame {min(k + 1, n)} of {n}" if k < n else f"{n} of {n} frames"
+        return f"{k} of {_jobs(n)}"
+
+    def _begin(self, stage: str) -> str:
+        self.open, self._marks = stage, 0
+        if self.live:
+            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}"
+        return f"{self.label(stage)} ... "
+
+    def _end(self, word: str) -> str:
+        stage, self.open = self.open, None
+        self.shown.append(stage)
+        if self.live:
+            return f"\r\x1b[K{self.label(stage)} ... {word}\n"
+        return f"{word}\n"
+
+    def _step(self, stage: str) -> str:
+        """The open line, one more job of it finished and more to come."""
+        if self.live:
+            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}"
+        k, n = self.finished[stage], self.planned.get(stage, 0)
+        if stage != "import" or n < 2 or k * 20 // n <= self._marks:
+            return ""
+        self._marks = k * 20 // n  # at most 20 marks per line
+        return f"{k}/{n} "
+
+    def advance(self, final: bool = False) -> str:
+        """Lines for the stages that are now done, and the start of the next."""
+        text = ""
+        for stage in self.stages:
+            if stage in self.shown or not self.planned.get(stage):
+                continue
+            was_open = self.open == stage
+            if not was_open:
+                text += self._begin(stage)
+            if not final and self.finished[stage] < self.planned[stage]:
+                if was_open:
+                    text += self._step(stage)
+                return text
+            text += self._end(self._word(stage))
+        return text
+
+    def finish(self) -> str:
+        """The lines after the run: the open stage's end (``failed`` where a job of it
+        failed, ``stopped`` where the run stopped before it was done), a line for each stage
+        that failed before its line began, or ``Nothing to be done``."""
+        if self.failed or self.errors:
+            failed = {self._failed_stage(job) for job in self.failed} - {None}
+            text = ""
+            if self.open:
+                text += self._end("failed" if self.open in failed else "stopped")
+            for stage in self.stages:
+                if stage in failed and stage not in self.shown:
+                    text += self._begin(stage) + self._end("failed")
+            return text
+        done, total = self.totals()
+        if self.nothing or (self.seen_plan and total == 0):
+            text = ""
+            for stage in PLAIN_STAGES[:1]:
+                if self._ends(stage) and stage not in self.shown:
+                    text += f"{self.label(stage)} ... up to date\n"
+                    self.shown.append(stage)
+            return text + "Nothing to be done: every result is up to date\n"
+        if done >= total and self.seen_plan:
+            return self.advance(final=True)
+        return self._end("stopped") if self.open else ""
+
+    def _failed_stage(self, job: dict):
+        stage = self.job_stages.get(job.get("jobid"))
+        return stage or rule_stage(job["rule"], self.stages)
+
+    def plan_lines(self) -> str:
+        """A dry run's plan: one line per stage with its jobs per rule, and the total."""
+        if self.nothing or not self.seen_plan or not self.totals()[1]:
+            return "Nothing to be done: every result is up to date\n"
+        lines = []
+        for stage in self.stages:
+            n = self.planned.get(stage, 0)
+            if not n:
+                continue
+            rules = ", ".join(
+                f"{rule} {count}" for rule, count in self.rules.get(stage, {}).items() if count
+            )
+            lines.append(f"{self.label(stage)}: {_jobs(n)} ({rules})")
+        lines.append(f"{_jobs(self.totals()[1])} in all (a dry run: nothing was run)")
+        return "\n".join(lines) + "\n"
+
+    # -- errors ---------------------------------------------------------------------------
+
+    def job_logs(self) -> list:
+        """The log files of the jobs that failed, each once."""
+        return list(dict.fromkeys(p for job in self.failed for p in job["logs"]))
+
+    def error_lines(self, ours=None) -> list:
+        """One line per distinct error: each failed job's (the first error line of its
+        log, :func:`log_error`, else ``rule X failed``), then Snakemake's own
+        (:func:`exception_line`; ``ours`` are the exception names said without a name)."""
+        ours = our_exceptions() if ours is None else ours
+        messages = []
+        for job in self.failed:
+            message = next(filter(None, map(log_error, job["logs"])), None)
+            messages.append(message or f"rule {job['rule']} failed")
+        for error in self.errors:
+            line = exception_line(error["message"], error["exception"], ours)
+            if line:
+                messages.append(line)
+        return list(dict.fromkeys(" ".join(m.split()) for m in messages))
+
+    def summary(self) -> dict:
+        """What the run did, for the command that started it (JSON-serialisable)."""
+        done, total = self.totals()
+        return {
+            "stages": list(self.shown),
+            "done": done,
+            "total": total,
+            "nothing": self.nothing,
+            "failed": self.failed,
+            "errors": self.errors,
+        }
