@@ -163,7 +163,7 @@ _STAMP = r"\d{4}-\d\d-\d\d[ T]\d\d:\d\d:\d\d(?:[,.]\d+)?"
 #: A job's own log line, ``<date> <time> LEVEL message`` (stereovar.jobs.common.run_job).
 JOB_LINE = re.compile(rf"{_STAMP} ([A-Z]+) (.*)")
 #: The first line of Snakemake's account of an exception: ``AuditError in file "x", line 4:``.
-_EXCEPTION_HEAD = re.compile(r"(\w+)(?: in (?:rule \S+ in )?(?:file|line) .*)?[:.]")
+_EXCEPTION_HEAD = re.compile(r"(\w+)(?: in (?:rule \S+|file .*|line .*)(?: in .*)?)?[:.]")
 #: Exceptions Snakemake raises to say that a job failed (the job's own error is in its log).
 JOB_FAILED = ("RuleException", "CalledProcessError")
 #: Snakemake's last words after jobs failed: said by the jobs' errors already.
