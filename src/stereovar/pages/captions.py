@@ -34,7 +34,7 @@ DOCUTILS_SETTINGS = {
 def render_caption(text: str, config: dict) -> str:
     """A caption's Jinja expressions filled from ``config``, as Snakemake's report fills
     them (``snakemake.config``); an expression naming anything else, such as a job's
-    wildcards, renders empty.
+    wildcards or a key the config lacks, renders empty.
 
     Examples
     --------
@@ -42,10 +42,13 @@ def render_caption(text: str, config: dict) -> str:
     'SPP 64'
     >>> render_caption("{{ snakemake.config['scenes'] | length }} scenes", {"scenes": ["a", "b"]})
     '2 scenes'
+    >>> render_caption("frame {{ snakemake.wildcards.frame }}.", {})
+    'frame .'
     """
     import jinja2
 
-    template = jinja2.Environment(autoescape=False).from_string(text)
+    template = jinja2.Environment(autoescape=False, undefined=jinja2.ChainableUndefined)
+    template = template.from_string(text)
     return template.render(snakemake=SimpleNamespace(config=config))
 
 
