@@ -324,7 +324,7 @@ def test_the_header_says_whether_a_render_is_stored_as_half(tmp_path):
 
 
 def test_the_half_float_share_uses_the_import_seed_mean_and_skips_non_finite_pixels():
-    from stereovar.audit.importer import _half_quantised_fraction, _seed_mean
+    from stereovar.audit.decoding import half_quantised_fraction, seed_mean
 
     rng = np.random.default_rng(4)
     # 6 seeds of 5x4 px: half-float values around 1 spread by about one half-float step
@@ -335,7 +335,7 @@ def test_the_half_float_share_uses_the_import_seed_mean_and_skips_non_finite_pix
     valid = np.ones((5, 4), bool)
     valid[1, 3] = False
     n_bad = (~np.isfinite(stack)).any(axis=-1).sum(axis=(1, 2))
-    mean = _seed_mean(stack, n_bad)
+    mean = seed_mean(stack, n_bad)
     # brute force: a pixel counts when all its values are finite and, in every channel, the
     # sample sd over the 6 seeds is below 2 spacings of half floats at the seed mean
     count = 0
@@ -349,7 +349,7 @@ def test_the_half_float_share_uses_the_import_seed_mean_and_skips_non_finite_pix
         count += all(sd[c] < 2 * step[c] for c in range(3))
     expected = count / valid.sum()
     assert 0 < expected < 1
-    assert _half_quantised_fraction(stack, valid, mean) == pytest.approx(expected, abs=1e-12)
+    assert half_quantised_fraction(stack, valid, mean) == pytest.approx(expected, abs=1e-12)
 
 
 # -- C: segment ids above 2**24 ---------------------------------------------------------------

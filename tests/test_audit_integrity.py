@@ -17,7 +17,7 @@ import pytest
 import yaml
 
 from stereovar import cli
-from stereovar.audit import importer, run
+from stereovar.audit import decoding, importer, run
 from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import load_config
@@ -96,7 +96,7 @@ def test_a_file_replaced_while_it_is_imported_is_refused(tmp_path, monkeypatch, 
         write_field(spare, frames[0].disparity + 0.01)  # another estimate
         name = "read_field"
     replacement = spare.read_bytes()
-    real = getattr(importer, name)
+    real = getattr(decoding, name)
     swapped = []
 
     def replaced_on_first_read(path, **options):
@@ -105,7 +105,7 @@ def test_a_file_replaced_while_it_is_imported_is_refused(tmp_path, monkeypatch, 
             _replace_file(path, replacement, how)
         return real(path, **options)
 
-    monkeypatch.setattr(importer, name, replaced_on_first_read)
+    monkeypatch.setattr(decoding, name, replaced_on_first_read)
     with pytest.raises(AuditError) as err:
         import_audit(settings)
     message = str(err.value)
@@ -115,7 +115,7 @@ def test_a_file_replaced_while_it_is_imported_is_refused(tmp_path, monkeypatch, 
     assert not Path(import_record("synthetic", "f00")).exists()
 
     # the file is stable now: imported, and what is stored is what is recorded
-    monkeypatch.setattr(importer, name, real)
+    monkeypatch.setattr(decoding, name, real)
     import_audit(settings)
     assert recorded()[target] == file_sha256(target) == file_sha256(spare)
     gt = open_dataset("results/audit/synthetic/ground_truth/f00.zarr")

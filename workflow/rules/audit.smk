@@ -28,7 +28,7 @@ if AUDIT:
             # keys or writing a default out reruns nothing (the job reads config["audit"])
             settings=import_params(AUDIT),
             # changes when a file is replaced keeping its size and mtime (cp -p), not when
-            # it is only touched (stereovar.audit.importer.frame_fingerprint)
+            # it is only touched (stereovar.audit.hashing.frame_fingerprint)
             fingerprint=lambda wc: import_fingerprint(AUDIT, AUDIT_DISCOVERY, wc.scene),
         log:
             f"logs/audit/{AUDIT['name']}/import/{{scene}}.log",

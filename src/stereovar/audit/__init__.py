@@ -2,7 +2,10 @@
 
 ``layout`` finds an audit's files from path templates; ``importer`` writes them into the
 render and ground-truth store contracts (with provenance and SHA-256s, re-importing only what
-changed); ``ground_truth`` builds the imported ground truth; ``sign`` settles the disparity
+changed), from its parts: ``settings`` checks and digests the ``audit:`` settings,
+``hashing`` hashes every file as it is decoded and fingerprints a frame's files, ``decoding``
+decodes a frame's renders and ground truth, and ``records`` holds what an import finds and
+records; ``ground_truth`` builds the imported ground truth; ``sign`` settles the disparity
 convention photometrically; ``verdict`` decides whether the data carry the cue and ``page``
 lays the verdict out as one page; ``run`` makes an audit a workflow run (its discovery, config
 and targets, which ``stereovar audit`` drives); ``export`` writes this project's renders,

@@ -22,24 +22,18 @@ from .. import resources as sizing
 from ..errors import AuditError, ImageError
 from ..experiment import audit_source, ground_truth_store
 from ..io.images import image_size, regular_file
+from ..layout import import_record
 from ..rig import VIEWS
-from .importer import (
-    audit_spp,
-    check_settings,
-    frame_fingerprint,
-    frame_stores,
-    import_record,
-    import_settings,
-    settings_digest,
-)
+from .hashing import frame_fingerprint
 from .layout import Discovery, discover
+from .settings import audit_spp, check_settings, frame_stores, import_settings, settings_digest
 
 
 def discover_audit(settings: dict) -> Discovery:
     """What the workflow does with an audit's files while it is parsed: find them.
 
     The settings that need no file are checked (:func:`check_settings`, the numbers of
-    :func:`~stereovar.audit.importer.import_settings`) and the templates are globbed
+    :func:`~stereovar.audit.settings.import_settings`) and the templates are globbed
     (:func:`~stereovar.audit.layout.discover`: templates that match nothing, view names,
     missing ground truth, seed counts); no file is opened, hashed or decoded and nothing is
     written. The import is a job per frame (rule ``audit_import``,
@@ -150,7 +144,7 @@ def import_params(settings: dict) -> str:
     -------
     str
         The digest of the settings as the import applies them
-        (:func:`~stereovar.audit.importer.settings_digest`).
+        (:func:`~stereovar.audit.settings.settings_digest`).
     """
     return settings_digest(settings)
 
@@ -158,7 +152,7 @@ def import_params(settings: dict) -> str:
 def import_fingerprint(settings: dict, discovery: Discovery, frame: str) -> str:
     """The ``params`` of one frame's ``audit_import`` job that changes when a file is
     replaced keeping its size and mtime, not when it is only touched
-    (:func:`~stereovar.audit.importer.frame_fingerprint`)."""
+    (:func:`~stereovar.audit.hashing.frame_fingerprint`)."""
     return frame_fingerprint(settings, next(f for f in discovery.frames if f.name == frame))
 
 
@@ -170,8 +164,8 @@ def frame_pattern(discovery: Discovery) -> str:
 
 def import_outputs(settings: dict, n_seeds: int, frame: str = "{scene}") -> dict:
     """The outputs of one frame's import (``frame`` may be a wildcard): each view's render
-    store and the ground-truth store (:func:`~stereovar.audit.importer.frame_stores`), and
-    ``record``, the frame's :func:`~stereovar.audit.importer.import_record`."""
+    store and the ground-truth store (:func:`~stereovar.audit.settings.frame_stores`), and
+    ``record``, the frame's :func:`~stereovar.layout.import_record`."""
     settings = {**settings, **import_settings(settings)}
     return {
         **frame_stores(settings, frame, n_seeds),
