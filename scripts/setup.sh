@@ -2,7 +2,8 @@
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10,
 # `pip install -e ".[test,cycles,mitigations,probe,docs]"` (skipped while pyproject.toml is unchanged;
 # the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn;
-# probe is PyTorch 2.13.0, pinned exactly: a looser range pulls a CUDA build of several GB;
+# probe is PyTorch 2.13.0, pinned exactly (on Linux without a CPU torch wheel at hand, PyPI's
+# is the CUDA build: see pyproject.toml's probe extra);
 # docs is Sphinx and its extensions, for `make docs` and the documentation test),
 # and, where apt-get can install it, Debian's chromium for the results page's browser test.
 # Called by `make setup`, `make run` and `make test`; safe to run again.
