@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK
 """Command-line interface: ``stereovar <group> <command> ...``.
 
 Commands are grouped with argparse subparsers, one module per group:
@@ -6,6 +7,7 @@ Commands are grouped with argparse subparsers, one module per group:
 - :mod:`~stereovar.cli.scenes` -- ``scenes generate`` and ``scenes validate``;
 - :mod:`~stereovar.cli.audit` -- ``audit`` and ``export``;
 - :mod:`~stereovar.cli.probe` -- ``probe``;
+- :mod:`~stereovar.cli.completion` -- ``completion``: the shell's tab completion;
 - :mod:`~stereovar.cli.snakemake` -- what they share: the folder they work in, the
   workflow's folder and config, and running Snakemake;
 - :mod:`~stereovar.cli.monitor` -- how ``audit`` follows Snakemake's output;
@@ -18,12 +20,14 @@ namespace and return an exit status. Heavy modules (numpy, mitsuba, ...) are imp
 the handlers so that ``stereovar --help`` stays fast.
 
 Every :class:`~stereovar.errors.StereovarError` is printed as one line,
-``stereovar: error: <message>``, on stderr and the exit status is 2.
+``stereovar: error: <message>``, on stderr and the exit status is 2. A bare ``stereovar``
+prints the help, with examples and the documentation's address, and exits 0.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 # ``name as name``: re-exported, reached through the package: the constants, Snakemake's
@@ -32,6 +36,7 @@ import sys
 from ..errors import StereovarError
 from .audit import _audit_log as _audit_log
 from .audit import _register_audit
+from .completion import _register_completion
 from .monitor import AUDIT_STAGES as AUDIT_STAGES
 from .monitor import _AuditMonitor as _AuditMonitor
 from .probe import _register_probe
@@ -44,20 +49,39 @@ from .snakemake import _workflow_config as _workflow_config
 from .workflow import AUDIT_STARTER as AUDIT_STARTER
 from .workflow import _register_workflow
 
+#: The examples of ``stereovar --help``: command, what it does.
+EXAMPLES = (
+    ("stereovar init --example", "two synthetic frames and an audit.yaml for them, here"),
+    ("stereovar audit audit.yaml", "audit them: one line per stage, then the verdict"),
+    ("stereovar run -j2", "the default experiment on 2 cores, results under ./results"),
+)
+
+
+def _epilog() -> str:
+    """The examples and the documentation's address (:func:`stereovar.links.docs_page`)."""
+    from ..links import docs_page
+
+    width = max(len(command) for command, _ in EXAMPLES)
+    lines = [f"  {command:<{width}}  # {what}" for command, what in EXAMPLES]
+    return "\n".join(["examples:", *lines, "", f"documentation: {docs_page('getting-started')}"])
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with one subparser per command group."""
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="Cross-view Monte Carlo variance correlation in path-traced stereo.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,  # --version's line unwrapped
+        epilog=_epilog(),
+        # the examples' lines and --version's line unwrapped
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=_version())
-    subparsers = parser.add_subparsers(dest="command", metavar="GROUP", required=True)
+    subparsers = parser.add_subparsers(dest="command", metavar="GROUP")
     _register_workflow(subparsers)
     _register_scenes(subparsers)
     _register_audit(subparsers)
     _register_probe(subparsers)
+    _register_completion(subparsers)
     return parser
 
 
@@ -82,7 +106,9 @@ def main(argv=None) -> int:
     Returns
     -------
     int
-        0 on success, 2 on a usage error or a :class:`~stereovar.errors.StereovarError`.
+        0 on success (a bare ``stereovar``: the help), 2 on a usage error or a
+        :class:`~stereovar.errors.StereovarError`; ``audit --fail-on``:
+        :data:`~stereovar.cli.audit.FAIL_ON_STATUS` for a verdict at or past the level.
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     passthrough = []
@@ -90,9 +116,19 @@ def main(argv=None) -> int:
         cut = argv.index("--")
         argv, passthrough = argv[:cut], argv[cut + 1 :]
     parser = build_parser()
+    if "_ARGCOMPLETE" in os.environ:  # the shell asks for completions (stereovar completion)
+        import argcomplete
+
+        argcomplete.autocomplete(parser)  # answers and exits
     args = parser.parse_args(argv)
+    if args.command is None and not passthrough:
+        parser.print_help()
+        return 0
     if passthrough and not getattr(args, "passthrough", False):
-        parser.error(f"options after -- are for run and report only, not {args.command}")
+        parser.error(
+            "options after -- are for run and report only"
+            + (f", not {args.command}" if args.command else "")
+        )
     args.snakemake_args = passthrough
     try:
         return int(args.func(args) or 0)

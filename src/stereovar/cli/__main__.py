@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK
 """``python -m stereovar.cli``: the ``stereovar`` command."""
 
 import sys

@@ -11,6 +11,48 @@ from ..errors import StereovarError
 from .monitor import _JOB_LINE, _AuditMonitor
 from .snakemake import _MONITOR, PROG, _project_root, _run_snakemake, _workflow_config
 
+#: The exit status of ``stereovar audit --fail-on LEVEL`` when the verdict is at or past
+#: ``LEVEL``: distinct from a usage error or a refused input (2) and from a failed Snakemake
+#: run (its own status, 1).
+FAIL_ON_STATUS = 3
+
+#: The verdict's traffic lights (``light`` of the audit's ``summary.json``), least severe first;
+#: ``--fail-on`` takes the two that can fail a pipeline.
+SEVERITY = ("green", "amber", "red")
+FAIL_ON_LEVELS = SEVERITY[1:]
+
+
+def verdict_fails(light: str, level: str | None) -> bool:
+    """Whether an audit's verdict fails the gate ``--fail-on level``: its light is ``level``
+    or more severe (:data:`SEVERITY`). A light the gate does not know fails it too, so that a
+    verdict it cannot read never passes a pipeline; no level, no gate.
+
+    Parameters
+    ----------
+    light : str
+        The verdict's ``light`` (``summary.json``): ``"green"``, ``"amber"`` or ``"red"``.
+    level : str or None
+        ``"amber"`` (fails on amber and red), ``"red"`` (fails on red only) or None.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> verdict_fails("amber", "amber"), verdict_fails("amber", "red")
+    (True, False)
+    >>> verdict_fails("red", None)
+    False
+    """
+    if level is None:
+        return False
+    if level not in FAIL_ON_LEVELS:
+        raise ValueError(f"--fail-on takes {' or '.join(FAIL_ON_LEVELS)}, not {level!r}")
+    if light not in SEVERITY:
+        return True
+    return SEVERITY.index(light) >= SEVERITY.index(level)
+
 
 def _audit_log(root, name: str):
     """A new file for the whole Snakemake output of one ``stereovar audit``,
@@ -120,7 +162,8 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     monitor.finish(rc)
     paths = audit_paths(name)
     summary = root / paths["summary"]
-    lines = json.loads(summary.read_text())["summary"] if rc == 0 and not args.import_only else []
+    verdict = json.loads(summary.read_text()) if rc == 0 and not args.import_only else {}
+    lines = verdict.get("summary", [])
     # the import's warnings, each once: those the verdict's summary does not already say
     for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
         if not any(warning in line for line in lines):
@@ -149,6 +192,10 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         print("\n".join(lines))
         print(f"verdict page: {summary.parent / 'verdict.html'}")
     print(f"log: {shown_log}")
+    if not args.import_only and verdict_fails(verdict.get("light"), args.fail_on):
+        line = lines[0] if lines else f"the verdict's light is {verdict.get('light')!r}"
+        print(f"{PROG}: --fail-on {args.fail_on}: {line}", file=sys.stderr)
+        return FAIL_ON_STATUS
     return 0
 
 
@@ -196,6 +243,14 @@ def _register_audit(subparsers) -> None:
         "--import-only",
         action="store_true",
         help="run only the import jobs (one per frame: decode, check, sign-check, store)",
+    )
+    audit.add_argument(
+        "--fail-on",
+        choices=FAIL_ON_LEVELS,
+        metavar="{amber,red}",
+        help=f"for a CI gate: after the audit, exit with status {FAIL_ON_STATUS} and the "
+        "verdict line on stderr when the verdict is this light or worse (amber: amber or red; "
+        "red: red only)",
     )
     audit.add_argument(
         "-v",

@@ -32,6 +32,56 @@ audit:
 """
 
 
+#: The workflow's targets that ``stereovar run`` lists, each with what it makes and about how
+#: long it takes on 2 cores with the default config, its renders included (docs: Measured
+#: performance); ``calibration``, ``probe`` and ``export`` read the run's renders.
+RUN_TARGETS = {
+    "all": "the default experiment, claims and results/index.html (~20 min)",
+    "mitigations": "the mitigation table and its trade-off figure (~10 min)",
+    "calibration": "the verdict rules on matched nulls of the run (~4 min)",
+    "probe": "trains stereo matchers: do they learn the cue? (~15 min)",
+    "generators": "the cue under Kubric/BlenderProc/Infinigen defaults (~15 min)",
+    "estimators": "the moments estimator against the seeds estimator (~25 min)",
+    "export": "renders, variance, disparity as files an audit reads (seconds)",
+}
+
+
+def _run_epilog() -> str:
+    """The ``run --help`` list of :data:`RUN_TARGETS`, one item each (:class:`_ListFormatter`)."""
+    width = max(map(len, RUN_TARGETS))
+    lines = [f"  {name:<{width}}  {what}" for name, what in RUN_TARGETS.items()]
+    title = "targets (2 cores, default config; or any Snakemake target or path):"
+    return "\n".join([title, *lines])
+
+
+class _ListFormatter(argparse.HelpFormatter):
+    """argparse's help, with each line of a text that starts with two spaces kept as a list
+    item: ``  name  what``, its text wrapped under itself."""
+
+    def _fill_text(self, text, width, indent):
+        import re
+        import textwrap
+
+        out = []
+        for line in text.splitlines():
+            item = re.match(r"(  \S+\s+)(.*)", line)
+            if item is None:
+                out.append(super()._fill_text(line, width, indent))
+                continue
+            head = indent + item.group(1)
+            out.append(
+                textwrap.fill(
+                    item.group(2), width, initial_indent=head, subsequent_indent=" " * len(head)
+                )
+            )
+        return "\n".join(out)
+
+
+def _complete_targets(prefix: str = "", **_) -> list:
+    """Tab completion of ``run``'s targets (argcomplete's completer protocol)."""
+    return [name for name in RUN_TARGETS if name.startswith(prefix)]
+
+
 def _write_new(path, text: str) -> bool:
     """Write ``text`` to ``path`` atomically unless it exists; True if written."""
     from ..io.store import atomic_path
@@ -60,14 +110,18 @@ def _cmd_init(args: argparse.Namespace) -> int:
         from ..audit.synthetic import write_synthetic_audit
 
         folder = root / "data" / "synthetic"
-        for path in (folder, root / "audit.yaml"):
-            if path.exists():
-                raise StereovarError(
-                    f"{path} exists; remove it or run stereovar init --example in another directory"
-                )
-        settings, _ = write_synthetic_audit(os.path.relpath(folder, root))
-        fields = {**settings, "views": "{left: L, right: R}"}
-        print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
+        present = [path for path in (folder, root / "audit.yaml") if path.exists()]
+        if len(present) == 1:  # the example's data without its config, or the reverse
+            raise StereovarError(
+                f"{present[0]} exists; remove it or run stereovar init --example in another "
+                "directory"
+            )
+        if present:  # an example written before: both kept, as every file init writes
+            print(f"kept {folder} (it exists)")
+        else:
+            settings, _ = write_synthetic_audit(os.path.relpath(folder, root))
+            fields = {**settings, "views": "{left: L, right: R}"}
+            print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
     _write_new(root / "config.yaml", (_workflow() / "config.yaml").read_text())
     _write_new(root / "audit.yaml", AUDIT_STARTER.format(**fields))
     print("next: stereovar run -j2 (the default experiment) or stereovar audit audit.yaml")
@@ -141,8 +195,13 @@ def _register_workflow(subparsers) -> None:
         description="Run the stereovar workflow with the current directory as its working "
         "directory: config.yaml here if there is one (else the defaults), then --preset and "
         "--configfile configs. Options after -- go to snakemake unchanged.",
+        epilog=_run_epilog(),
+        formatter_class=_ListFormatter,
     )
-    run.add_argument("targets", nargs="*", metavar="TARGET", help="targets (default: all)")
+    targets = run.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="targets, listed below (default: all)"
+    )
+    targets.completer = _complete_targets
     run.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
     _add_configs(run)
     run.set_defaults(func=_cmd_run, passthrough=True)
