@@ -1,6 +1,7 @@
 # stereovar: cross-view Monte Carlo variance correlation in path-traced stereo.
-# Wiring only: configuration, validation and target lists live in workflow/rules/common.smk,
-# every number is computed in src/stereovar.
+# Wiring only: configuration and validation live in workflow/rules/common.smk, each feature's
+# input functions and targets in workflow/rules/inputs/, every number is computed in
+# src/stereovar.
 from snakemake.utils import min_version
 
 min_version("8.20")

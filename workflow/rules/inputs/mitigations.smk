@@ -1,0 +1,158 @@
+# Inputs, params and targets of the mitigations (mitigations.smk).
+
+
+# Mitigations (stereovar.mitigations): each row of results/tables/mitigations.* is a source
+# key (the renderer, or the renderer and a transform or seed policy), an SPP and its scenes,
+# measured by the seeds estimator, the intervention and the per-scene mitigation rows.
+MITIGATIONS = config["mitigations"]
+if AUDIT:
+    with exit_with_one_line():
+        MITIGATION_RUNS = audit_mitigation_runs(config) if AUDIT.get("mitigations") else []
+else:
+    MITIGATION_RUNS = mitigation_runs(config) if MITIGATIONS["names"] else []
+MITIGATION_SOURCE = get_renderer()  # the renderer, or the audit's source
+MITIGATION_TABLES = layout.mitigation_tables(MITIGATION_SOURCE)
+MITIGATION_HEADLINE = layout.mitigation_headline_tables(MITIGATION_SOURCE)
+MITIGATION_FIGURE = layout.mitigation_figure(MITIGATION_SOURCE)
+REFERENCE_SPP = MITIGATIONS["reference_spp"]
+AUX_SPP = MITIGATIONS["aux_spp"]
+
+
+
+def reference_from_moments(source):
+    """Whether a source's converged reference is a moments render of each view at
+    ``mitigations.reference_spp`` (a renderer with sample moments, rendering with the
+    independent sampler and the box filter), else a split-half reference of its own renders
+    (:func:`stereovar.statistics.utility.split_half_quality`: audits, Cycles)."""
+    from stereovar.config import moments_settings_error
+
+    render = config["render"]
+    return (
+        source in RENDERERS
+        and RENDERERS.get(source).sample_moments
+        and moments_settings_error(render["sampler"], render["rfilter"]) is None
+    )
+
+
+def source_aux_passes(source):
+    """The auxiliary passes a source gives (a renderer's ``aux_passes``; an audit none)."""
+    if source in RENDERERS:
+        return RENDERERS.get(source).aux_passes
+    return ()
+
+
+def transform_inputs(wildcards):
+    """Every render store of the wildcards' view of the source (all seeds: the seed mean and
+    variance are over them) and, when the transform reads albedo or normal and the source
+    renders them, the view's auxiliary passes."""
+    inputs = {
+        "renders": seed_stores(run_config(wildcards.renderer), wildcards.scene, wildcards.spp)[
+            wildcards.view
+        ]
+    }
+    t = get_transform(wildcards.transform)
+    wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
+    if wants and wants <= set(source_aux_passes(wildcards.renderer)):
+        inputs["aux"] = layout.aux_store(wildcards.renderer, wildcards.scene, wildcards.view)
+    return inputs
+
+
+def transform_options(wildcards):
+    """The options of the wildcards' transform that the config sets: the camera model of
+    ``controls.sensor`` (gain, read noise) for the transforms that add or model camera noise."""
+    import inspect
+
+    accepted = inspect.signature(get_transform(wildcards.transform).apply).parameters
+    sensor = config["controls"]["sensor"]
+    offered = {"gain": sensor["gain"], "read_noise": sensor["read_noise"]}
+    return {k: v for k, v in offered.items() if k in accepted}
+
+
+def mitigation_scene_inputs(wildcards):
+    """One scene's render stores of the wildcards' source key at its SPP, its ground truth
+    and each view's converged reference (:func:`reference_from_moments`)."""
+    source, _ = layout.split_source_key(wildcards.renderer)
+    if reference_from_moments(source):
+        reference = {
+            view: layout.moment_store(source, wildcards.scene, view, REFERENCE_SPP)
+            for view in VIEWS
+        }
+    else:
+        reference = seed_stores(run_config(source), wildcards.scene, wildcards.spp)
+    return {
+        **seed_stores(run_config(wildcards.renderer), wildcards.scene, wildcards.spp),
+        "ground_truth": ground_truth_input(wildcards),
+        **{f"reference_{view}": paths for view, paths in reference.items()},
+    }
+
+
+def mitigation_files(run):
+    """The per-scene files one mitigation row is summarised from."""
+    estimator = MITIGATION_ESTIMATOR
+    files = {
+        "correlation": [
+            layout.correlation_rows(run.source, estimator, s, run.spp, run.transform)
+            for s in run.scenes
+        ],
+        "scene_rows": [
+            layout.mitigation_rows(run.source, estimator, s, run.spp, run.transform)
+            for s in run.scenes
+        ],
+        # the intervention runs at intervention.spp only
+        "intervention": (
+            [layout.intervention_metrics(run.source, estimator, s, run.transform) for s in run.scenes]
+            if run.spp == INTERVENTION_SPP
+            else []
+        ),
+    }
+    return files
+
+
+def mitigation_table_inputs(wildcards):
+    """Every mitigation row's per-scene files, and the calibration's matched nulls."""
+    return {
+        "files": [
+            p for run in MITIGATION_RUNS for paths in mitigation_files(run).values() for p in paths
+        ],
+        "nulls": layout.calibration_nulls(MITIGATION_SOURCE),
+        "calibration": calibration_table_inputs(),
+    }
+
+
+def image_cost(run):
+    """Samples per pixel behind one mitigated image (``render_spp``: N x SPP when the
+    transform reads the seed mean or variance, which average the N renders) and the SPP of
+    the auxiliary pass it reads once per view (``aux_spp``; 0 without one)."""
+    render_spp, aux_spp = run.spp, 0
+    if run.mitigation.kind == "transform":
+        t = get_transform(run.transform)
+        if {"seed_mean", "seed_var"} & set(t.reads):
+            render_spp *= N_SEEDS
+        wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
+        if wants and wants <= set(source_aux_passes(run.source)):
+            aux_spp = AUX_SPP
+    return {"render_spp": render_spp, "aux_spp": aux_spp}
+
+
+def mitigation_table_params():
+    """What the table job needs per row beside the files: name, kind, description, SPP."""
+    return [
+        {
+            "mitigation": run.name,
+            "kind": run.mitigation.kind,
+            "description": run.mitigation.description,
+            "spp": run.spp,
+            "calibration_transform": run.transform if run.mitigation.kind == "transform" else "none",
+            **image_cost(run),
+            **mitigation_files(run),
+        }
+        for run in MITIGATION_RUNS
+    ]
+
+
+def mitigation_targets():
+    """`snakemake mitigations`: the mitigation table and its trade-off figure, the run's or
+    the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty)."""
+    if not MITIGATION_RUNS:
+        return []
+    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, MITIGATION_FIGURE]
