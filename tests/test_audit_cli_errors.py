@@ -11,7 +11,6 @@ Snakemake would. Snakemake itself runs twice: one import-only audit (module fixt
 ``imported``, a few seconds), after a run killed before its ``onstart`` left its lock, and
 one dry run on it."""
 
-import io
 import json
 import os
 import re
@@ -197,22 +196,27 @@ def test_a_full_disk_stops_before_snakemake(tmp_path, preflight_only, monkeypatc
     assert f"the disk of {tmp_path} is full (2.0 MB free" in line and "free space" in line
 
 
+def monitor_of(tmp_path, lines):
+    """The audit's run monitor after a Snakemake whose output (its log) was ``lines``."""
+    log = tmp_path / "run.log"
+    log.write_text("".join(line + "\n" for line in lines))
+    monitor = cli._Run(log)
+    monitor.root = tmp_path
+    return monitor
+
+
 def test_the_workflow_line_and_a_full_disk_traceback_reach_stderr(tmp_path):
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
-    for line in [
+    monitor = monitor_of(tmp_path, [
         "Building DAG of jobs...",
         "stereovar: removed the lock of an earlier run that was killed",
         "stereovar: config key 'audit.mitigations': unknown mitigation 'bogus'; use store "
         "transforms (denoise)",
-    ]:
-        monitor.feed(line + "\n")
+    ])
     assert monitor.errors(1) == [
         "config key 'audit.mitigations': unknown mitigation 'bogus'; use store transforms "
         "(denoise)"
     ]
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
-    monitor.root = tmp_path
-    for line in [
+    monitor = monitor_of(tmp_path, [
         "Building DAG of jobs...",
         "OSError: [Errno 28] No space left on device",
         "During handling of the above exception, another exception occurred:",
@@ -220,8 +224,7 @@ def test_the_workflow_line_and_a_full_disk_traceback_reach_stderr(tmp_path):
         '  File "snakemake/persistence/file.py", line 255, in _write_locks',
         "    with open(lockfile, 'w') as lock:",
         "OSError: [Errno 28] No space left on device",
-    ]:
-        monitor.feed(line + "\n")
+    ])
     (message,) = monitor.errors(1)
     assert message.startswith(f"the disk of {tmp_path} is full (") and "free space" in message
 
@@ -359,21 +362,28 @@ the --unlock argument.
 def test_the_unlock_command_quotes_the_config_paths(tmp_path):
     locked_state(tmp_path)
     config = str(tmp_path / "my audit's.yaml")
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
-    monitor.root, monitor.configfiles = tmp_path, [config]
-    for line in LOCK_TAIL.format(root=tmp_path).splitlines():
-        monitor.feed(line + "\n")
+    monitor = monitor_of(tmp_path, LOCK_TAIL.format(root=tmp_path).splitlines())
+    monitor.configfiles = [config]
     (message,) = monitor.errors(1)
     assert "no record" in message, message
     unlock = message.split("remove the lock with `", 1)[1].split("`", 1)[0]
     assert shlex.split(unlock) == ["stereovar", "run", "--configfile", config, "--", "--unlock"]
 
 
-def stand_in(monkeypatch, output: str, rc: int, before=None) -> None:
+def stand_in(monkeypatch, output: str, rc: int, before=None, failed=()) -> None:
     """Replace Snakemake with a process that prints ``output`` and exits with ``rc``, run
-    through the audit's monitor as Snakemake is (recorded while it runs);
+    through the audit's monitor as Snakemake is (recorded while it runs), and that reports
+    the jobs ``failed`` as the logger plugin does (its summary file);
     ``before(root)`` first: what the workflow does before it stops."""
-    script = f"import sys; sys.stdout.write({output!r}); sys.exit({rc})"
+    script = (
+        "import json, sys\n"
+        f"sys.stdout.write({output!r})\n"
+        "for arg in sys.argv:\n"
+        "    if arg.startswith('--logger-stereovar-summary='):\n"
+        "        with open(arg.split('=', 1)[1], 'w') as out:\n"
+        f"            json.dump({{'failed': {list(failed)!r}}}, out)\n"
+        f"sys.exit({rc})\n"
+    )
 
     def run(args, root):
         if before is not None:
@@ -560,7 +570,8 @@ def test_a_failed_import_says_where_the_old_verdict_went(tmp_path, monkeypatch, 
         log.parent.mkdir(parents=True, exist_ok=True)
         log.write_text(f"2026-01-01 00:00:00 ERROR error: {error}\n")
 
-    stand_in(monkeypatch, FAILED_IMPORT, 1, before=onstart)
+    failed = [{"rule": "audit_import", "jobid": 1, "logs": [str(log)]}]
+    stand_in(monkeypatch, FAILED_IMPORT, 1, before=onstart, failed=failed)
     rc = cli.main(["audit", config, "--import-only"])
     err = capsys.readouterr().err.splitlines()
     assert rc != 0

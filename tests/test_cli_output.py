@@ -2,7 +2,6 @@
 log file (Snakemake's whole output, never overwritten); -v shows that output live; a failed
 job gives its one-line error and the log's path."""
 
-import io
 import subprocess
 import sys
 
@@ -142,62 +141,14 @@ def test_new_log_files_do_not_clobber_one_of_the_same_second(tmp_path, monkeypat
 
 
 def test_an_error_before_any_job_is_one_line(tmp_path):
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: x")
-    for line in [
-        "Building DAG of jobs...",
-        'AuditError in file "/wf/workflow/rules/common.smk", line 40:',
+    # what the logger plugin recorded of Snakemake's error (its ERROR event)
+    monitor = cli._Run(tmp_path / "run.log")
+    monitor.summary = {"errors": [{
+        "exception": "AuditError",
+        "message": 'AuditError in file "/wf/workflow/rules/common.smk", line 40:\n'
         "data/renders/f00/L/seed_001.exr: gone since the files were found; render it again",
-        "",
-        "WorkflowError:",
-        "At least one job did not complete successfully.",
-    ]:
-        monitor.feed(line + "\n")
+    }]}
     assert monitor.errors(1) == [
         "data/renders/f00/L/seed_001.exr: gone since the files were found; render it again"
     ]
-    assert cli._AuditMonitor(io.StringIO(), import_label="x").errors(3) == [
-        "snakemake stopped with exit status 3"
-    ]
-
-
-def test_stages_follow_the_planned_jobs_and_mitigated_copies_count_as_mitigations(capsys):
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: 1 frame", source="audit/a")
-
-    def job(rule, jobid, renderer="audit/a"):
-        return [f"localrule {rule}:", f"    jobid: {jobid}", f"    wildcards: renderer={renderer}"]
-
-    transcript = [
-        "Job stats:",
-        "job            count",
-        "-----------  -------",
-        "audit_import       1",
-        "variance           2",
-        "audit_verdict      1",
-        "all                1",
-        "total              5",
-        "",
-        *job("audit_import", 1),
-        "Finished jobid: 1 (Rule: audit_import)",
-        *job("variance", 2),
-        *job("variance", 3, renderer="audit/a/denoise"),
-        "Finished jobid: 2 (Rule: variance)",
-        "Finished jobid: 3 (Rule: variance)",
-        *job("audit_verdict", 4),
-        "Finished jobid: 4 (Rule: audit_verdict)",
-        *job("all", 0),
-        "Finished jobid: 0 (Rule: all)",
-    ]
-    progress = []
-    for line in transcript:
-        monitor.feed(line + "\n")
-        progress.append(capsys.readouterr().err)
-    assert progress[transcript.index("total              5")] == "import: 1 frame ... "
-    done = transcript.index("Finished jobid: 2 (Rule: variance)")
-    assert progress[done] == "done (1 job)\nmitigations ... "
-    monitor.finish(0)
-    assert "".join(progress) + capsys.readouterr().err == (
-        "import: 1 frame ... done\n"
-        "statistics ... done (1 job)\n"
-        "mitigations ... done (1 job)\n"
-        "verdict ... done\n"
-    )
+    assert cli._Run(tmp_path / "none.log").errors(3) == ["snakemake stopped with exit status 3"]

@@ -177,7 +177,7 @@ def test_the_import_counts_its_frames(tmp_path):
     text = p.plan({**stats, "total": 4})
     for k in (1, 2, 3):
         text += p.job(k, "audit_import") + p.done(k)
-    assert text.splitlines()[0] == "import: 3 frames ... 1/3 2/3 done"
+    assert text.splitlines()[0] == "import: 3 frames ... 1/3 2/3 3/3 done"
     # on a terminal the line is rewritten: frame k of n while frame k runs
     live = Progress(AUDIT_STAGES, labels={"import": "import: 3 frames"}, live=True)
     steps = [live.plan({**stats, "total": 4}), live.job(1, "audit_import"), live.done(1)]

@@ -4,7 +4,6 @@ and the fix, or handled by a documented law, never run as code, never left to ha
 
 from __future__ import annotations
 
-import io
 import os
 import shlex
 import subprocess
@@ -15,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stereovar import cli
 from stereovar.config import validate_config
 from stereovar.controls.sensor import SensorFrames, SensorModel
 from stereovar.errors import ConfigError, MatcherFileError, StoreError
@@ -123,34 +121,6 @@ def test_counts_above_the_exact_range_have_the_poisson_mean_and_variance():
     sd = np.sqrt(4e12 + 4.0)
     assert abs(values.mean() - 4e12) < 5 * sd / np.sqrt(values.size)
     assert values.std(ddof=1) == pytest.approx(sd, rel=0.04)
-
-
-def test_a_stage_that_fails_before_its_line_began_is_named(capsys):
-    monitor = cli._AuditMonitor(io.StringIO(), import_label="import: 1 frame", source="audit/a")
-    transcript = [
-        "Job stats:",
-        "job            count",
-        "-----------  -------",
-        "audit_import       1",
-        "variance           1",
-        "transform          1",
-        "total              3",
-        "",
-        "localrule audit_import:",
-        "    jobid: 1",
-        "Finished jobid: 1 (Rule: audit_import)",
-        "rule transform:",
-        "    jobid: 3",
-        "    wildcards: renderer=audit/a, transform=sensor_only",
-        "Error in rule transform:",
-        "    jobid: 3",
-        "    log: logs/transform.log (check log file(s) for error details)",
-    ]
-    for line in transcript:
-        monitor.feed(line + "\n")
-    monitor.finish(1)
-    lines = capsys.readouterr().err.splitlines()
-    assert lines == ["import: 1 frame ... done", "statistics ... stopped", "mitigations ... failed"]
 
 
 # --- extreme camera settings -----------------------------------------------------------------

@@ -471,7 +471,7 @@ class Progress:
         if self.live:
             return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}"
         k, n = self.finished[stage], self.planned.get(stage, 0)
-        if stage != "import" or n < 2 or k * 20 // n <= self._marks:
+        if stage != "import" or n < 2 or k > n or k * 20 // n <= self._marks:
             return ""
         self._marks = k * 20 // n  # at most 20 marks per line
         return f"{k}/{n} "
@@ -489,6 +489,8 @@ class Progress:
                 if was_open:
                     text += self._step(stage)
                 return text
+            if was_open and not self.live:
+                text += self._step(stage)  # the last frame's mark
             text += self._end(self._word(stage))
         return text
 

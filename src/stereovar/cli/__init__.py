@@ -10,7 +10,8 @@ Commands are grouped with argparse subparsers, one module per group:
 - :mod:`~stereovar.cli.completion` -- ``completion``: the shell's tab completion;
 - :mod:`~stereovar.cli.snakemake` -- what they share: the folder they work in, the
   workflow's folder and config, and running Snakemake;
-- :mod:`~stereovar.cli.monitor` -- how ``audit`` follows Snakemake's output;
+- :mod:`~stereovar.cli.monitor` -- how a command follows a Snakemake run (the logger
+  plugin ``stereovar``: one line per stage, the errors of a failed run);
 - ``__main__`` -- ``python -m stereovar.cli``.
 
 To add a group (e.g. ``stereovar backend``), write a module with a
@@ -32,13 +33,12 @@ import sys
 
 # ``name as name``: re-exported, reached through the package: the constants, Snakemake's
 # runner (replaced here, it is replaced for every command: ``snakemake._run_snakemake``),
-# the audit's monitor, its hook and its log file, and the workflow's config.
+# the run's monitor, its hook and the audit's log file, and the workflow's config.
 from ..errors import StereovarError
 from .audit import _audit_log as _audit_log
 from .audit import _register_audit
 from .completion import _register_completion
-from .monitor import AUDIT_STAGES as AUDIT_STAGES
-from .monitor import _AuditMonitor as _AuditMonitor
+from .monitor import _Run as _Run
 from .probe import _register_probe
 from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR

@@ -8,8 +8,16 @@ import argparse
 import sys
 
 from ..errors import StereovarError
-from .monitor import _JOB_LINE, _AuditMonitor
-from .snakemake import _MONITOR, PROG, _project_root, _run_snakemake, _workflow_config
+from ..progress import JOB_LINE
+from .monitor import _Run, log_line
+from .snakemake import (
+    _MONITOR,
+    PROG,
+    _new_log,
+    _project_root,
+    _run_snakemake,
+    _workflow_config,
+)
 
 #: The exit status of ``stereovar audit --fail-on LEVEL`` when the verdict is at or past
 #: ``LEVEL``: distinct from a usage error or a refused input (2) and from a failed Snakemake
@@ -57,24 +65,7 @@ def verdict_fails(light: str, level: str | None) -> bool:
 def _audit_log(root, name: str):
     """A new file for the whole Snakemake output of one ``stereovar audit``,
     ``logs/audit/<name>/stereovar-audit-<time>.log`` under ``root`` (never one that exists)."""
-    import time
-
-    folder = root / "logs" / "audit" / name
-    stem = f"stereovar-audit-{time.strftime('%Y%m%d-%H%M%S')}"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        for k in range(1, 1000):
-            path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
-            try:
-                return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (caller closes)
-            except FileExistsError:
-                continue
-    except OSError as err:
-        raise StereovarError(
-            f"{folder}: cannot create the run's log file there ({err.strerror or err}); "
-            "make room or make it writable, then run the same command again"
-        ) from None
-    raise StereovarError(f"{folder}: cannot create a new log file there")
+    return _new_log(root / "logs" / "audit" / name, "stereovar-audit")
 
 
 def _import_warnings(root, name: str, frames) -> list:
@@ -88,7 +79,7 @@ def _import_warnings(root, name: str, frames) -> list:
         except OSError:
             continue
         for line in lines:
-            match = _JOB_LINE.fullmatch(line)
+            match = JOB_LINE.fullmatch(line)
             text = (match.group(2) if match else line).strip()
             if text.startswith("warning:"):
                 text = text[len("warning:") :].strip()
@@ -142,9 +133,11 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     if args.import_only:
         command += ["--until", "audit_import"]
     log_path, log = _audit_log(root, name)
+    log.close()  # Snakemake's output is appended to it as it comes
     shown_log = os.path.relpath(log_path)
-    monitor = _AuditMonitor(
-        log,
+    monitor = _Run(
+        log_path,
+        stages="audit",
         import_label=f"import: {discovery.summary()}",
         source=audit_source(name),
         verbose=args.verbose,
@@ -155,11 +148,6 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         rc = _run_snakemake(command, root)
     finally:
         _MONITOR.reset(token)
-        try:
-            log.close()
-        except OSError as err:  # a full disk: the end of the log is lost, not the run
-            monitor.log_error = monitor.log_error or err.strerror or str(err)
-    monitor.finish(rc)
     paths = audit_paths(name)
     summary = root / paths["summary"]
     verdict = json.loads(summary.read_text()) if rc == 0 and not args.import_only else {}
@@ -172,18 +160,14 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         print(f"warning: the log ends early: {monitor.log_error}", file=sys.stderr)
     if rc != 0:
         for message in monitor.errors(rc):
-            print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+            print(f"{PROG}: error: {message}", file=sys.stderr)
         previous = root / Path(paths["verdict_html"]).parent / PREVIOUS
         if not (root / paths["verdict_html"]).exists() and (previous / "verdict.html").exists():
             print(
                 f"the verdict before this run, set aside as out of date: {previous}/",
                 file=sys.stderr,
             )
-        jobs = monitor.job_logs()
-        print(
-            f"log: {shown_log}" + (f" (the failed job's: {', '.join(jobs)})" if jobs else ""),
-            file=sys.stderr,
-        )
+        print(log_line(shown_log, monitor.job_logs()), file=sys.stderr)
         return rc
     if args.import_only:
         records = root / Path(paths["summary"]).parent / "import"

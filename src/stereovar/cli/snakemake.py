@@ -11,6 +11,8 @@ from __future__ import annotations
 import contextvars
 import sys
 
+from ..errors import StereovarError
+
 PROG = "stereovar"
 
 
@@ -31,22 +33,75 @@ def _workflow():
 
 
 def _snakemake(args: list, root) -> int:
-    """Run ``snakemake --snakefile <workflow>/Snakefile ARGS`` in ``root``; its output goes to
-    the terminal, or, while a command has set :data:`_MONITOR` (``stereovar audit``), through
-    that monitor."""
+    """Run ``snakemake --snakefile <workflow>/Snakefile ARGS`` in ``root``.
+
+    While a command has set :data:`_MONITOR` (``stereovar audit``), through that
+    :class:`~stereovar.cli.monitor._Run`; else, for a run of jobs (or a dry run), through a
+    new one (:func:`_run_with_progress`): one line per stage, Snakemake's whole output in a
+    new log file; else (options that run nothing, such as ``--unlock``) with Snakemake's own
+    output on the terminal."""
     import subprocess
+
+    from ..progress import reports_progress
 
     snakefile = _workflow() / "Snakefile"
     cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(snakefile), *args]
     monitor = _MONITOR.get()
     if monitor is not None:
         return monitor.run(cmd, root)
+    if reports_progress(args):
+        return _run_with_progress(cmd, root)
     print("stereovar: running " + " ".join(cmd[1:]), file=sys.stderr)
     return subprocess.run(cmd, cwd=root, check=False).returncode
 
 
-#: The :class:`_AuditMonitor` that :func:`_snakemake` runs Snakemake through, if any.
+#: The :class:`~stereovar.cli.monitor._Run` that :func:`_snakemake` runs Snakemake through,
+#: if a command has set one.
 _MONITOR: contextvars.ContextVar = contextvars.ContextVar("stereovar_monitor", default=None)
+
+#: Whether the command asked for Snakemake's whole output live (``-v``).
+_VERBOSE: contextvars.ContextVar = contextvars.ContextVar("stereovar_verbose", default=False)
+
+
+def _new_log(folder, stem: str):
+    """A new log file ``<folder>/<stem>-<time>.log`` (never one that exists): its path and
+    the file, open for writing."""
+    import time
+
+    stem = f"{stem}-{time.strftime('%Y%m%d-%H%M%S')}"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for k in range(1, 1000):
+            path = folder / f"{stem}{'' if k == 1 else f'-{k}'}.log"
+            try:
+                return path, open(path, "x", encoding="utf-8")  # noqa: SIM115 (caller closes)
+            except FileExistsError:
+                continue
+    except OSError as err:
+        raise StereovarError(
+            f"{folder}: cannot create the run's log file there ({err.strerror or err}); "
+            "make room or make it writable, then run the same command again"
+        ) from None
+    raise StereovarError(f"{folder}: cannot create a new log file there")
+
+
+def _run_with_progress(cmd: list, root) -> int:
+    """Run Snakemake (``cmd``) with one line per stage of the workflow
+    (:data:`stereovar.progress.RUN_STAGES`) and its whole output in a new log file,
+    ``logs/stereovar-run-<time>.log``; after the run, a failed run's errors (one line
+    each) and the log's path."""
+    import os
+
+    from .monitor import _Run, log_line
+
+    path, log = _new_log(root / "logs", "stereovar-run")
+    log.close()
+    shown = os.path.relpath(path)
+    run = _Run(path, stages="run", verbose=_VERBOSE.get(), command=" ".join([PROG, *sys.argv[1:]]))
+    rc = run.run(cmd, root)
+    run.report(rc)
+    print(log_line(shown, run.job_logs() if rc else ()), file=sys.stderr)
+    return rc
 
 
 def _workflow_config(root, files) -> dict:

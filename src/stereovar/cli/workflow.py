@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 
 from ..errors import StereovarError
-from .snakemake import _project_root, _run_snakemake, _workflow
+from .snakemake import _VERBOSE, _project_root, _run_snakemake, _workflow
 
 #: The starter audit config ``stereovar init`` writes; ``{name}``, ``{renders}``, ``{views}``,
 #: ``{disparity}`` and ``{convention}`` are filled in (placeholders, or the example's files).
@@ -149,7 +149,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     options = ["-j", str(args.cores), *(args.targets or ["all"])]
     if files:
         options += ["--configfile", *files]
-    return _run_snakemake([*options, *args.snakemake_args], _project_root())
+    token = _VERBOSE.set(args.verbose)  # one line per stage, or (-v) Snakemake's output
+    try:
+        return _run_snakemake([*options, *args.snakemake_args], _project_root())
+    finally:
+        _VERBOSE.reset(token)
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -203,6 +207,13 @@ def _register_workflow(subparsers) -> None:
     )
     targets.completer = _complete_targets
     run.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")
+    run.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="show Snakemake's whole output live (it always goes to "
+        "logs/stereovar-run-<time>.log; without -v, one line per stage)",
+    )
     _add_configs(run)
     run.set_defaults(func=_cmd_run, passthrough=True)
     report = subparsers.add_parser(
