@@ -10,30 +10,32 @@
    and every warning and flag as a row of its own;
 4. one thumbnail per frame (a render and the disparity), so the reader sees that the right
    files were read;
-5. the details: the verdict paragraph, the seeding finding, the table with intervals, the
-   mitigations and the teasers.
+5. the details: the verdict paragraph, the seeding finding, the table with intervals, how
+   the verdict reads them (a short list) and the statistics against their controls;
+6. where the cue is strongest (:mod:`stereovar.audit.strongest`): the frames ranked, their
+   top tiles each beside its null, and their figure;
+7. the mitigations, the learned probe and the teasers.
 
 :func:`to_markdown_page` and :func:`to_html_page` write the same sections; the HTML page is
-self-contained (its own stylesheet, images by relative path), built from the blocks of
-:mod:`stereovar.pages.html`. Every text the sections carry (file paths, audit and frame
-names, warnings) is escaped on both pages: HTML-escaped on the HTML page, and on the
-Markdown page made inert (:func:`markdown_text`), so a folder named
-``d<img src=x onerror=alert(1)>`` is shown, not run.
+self-contained (its own stylesheet, images by relative path), the template
+``verdict.html.j2`` of :mod:`stereovar.pages.templates`. Captions and the rules are
+reStructuredText inline markup (:data:`CAPTIONS`, :data:`~stereovar.audit.verdict.RULE_ITEMS`),
+their math MathML on the HTML page and ``$...$`` in the Markdown. Every text the sections
+carry (file paths, audit and frame names, warnings) is escaped on both pages: HTML-escaped
+on the HTML page, and on the Markdown page made inert (:func:`markdown_text`), so a folder
+named ``d<img src=x onerror=alert(1)>`` is shown, not run.
 """
 
 from __future__ import annotations
 
-import html
 import math
 import re
 from pathlib import Path
 from urllib.parse import quote
 
 from ..io.tables import to_markdown
-from ..pages.html import document, figure
-from ..pages.html import table as _table_html
 from .importer import WARNING_KINDS
-from .verdict import FLAG_LABELS, LIGHTS, VERDICT_COLUMNS
+from .verdict import FLAG_LABELS, LIGHTS, RULE_ITEMS, VERDICT_COLUMNS
 
 FACT_COLUMNS = [
     "frame",
@@ -60,20 +62,80 @@ rests on was inconclusive, or won with a high error."""
 FLAG_COLUMNS = ["flag", "frame", "what"]
 """Columns of the flags table (one row per warning or flag)."""
 
-_CSS = """
-.light { display: flex; gap: 1em; align-items: flex-start; border: 1px solid #ccc;
-  border-radius: 6px; padding: 0.8em 1em; margin: 1em 0; max-width: 60em; }
-.light .dot { flex: none; width: 2.2em; height: 2.2em; border-radius: 50%; }
-.light p { margin: 0.3em 0; }
-.light .headline { font-size: 1.15em; font-weight: bold; }
-.banner { background: #fff3cd; border: 1px solid #e6a700; border-radius: 6px;
-  padding: 0.6em 1em; margin: 0.6em 0; max-width: 60em; }
-.thumbs { display: flex; flex-wrap: wrap; gap: 1em; }
-.thumbs figure { margin: 0; }
-p, li { max-width: 60em; }
-.flags td { white-space: normal; vertical-align: top; }
-.flags td.col2 { min-width: 30em; max-width: 60em; }
-"""
+CAPTIONS = {
+    "thumbnail": (
+        "**Frame {frame}.** The left view's first render and the imported disparity (with the "
+        "glass region where a material mask was given): the files the audit read."
+    ),
+    "teaser": (
+        "**Frame {frame}: the variance fields.** :math:`\\sigma^2_L` and :math:`\\sigma^2_R` "
+        "over the imported renders (Eq. 1), the right field warped into the left view by the "
+        "given disparity, :math:`\\hat\\sigma^2_{R \\to L}` (Eq. 2), and their joint "
+        "histogram over the valid set with Pearson's :math:`\\rho` (Eq. 3)."
+    ),
+    "statistics": (
+        "**Every statistic against its controls.** One row per statistic (above the dashed "
+        "line) and control (below it), one colour per frame: the dot is :math:`\\rho`, the "
+        "thin capped bar its spatial block-bootstrap 95% interval, the short thick bar the "
+        "Fisher-z interval, which assumes independent pixels. The controls are the null warps "
+        "(wrong alignments), the intensity-controlled and relative statistics, and a simulated "
+        "camera on the same clean images: a statistic means something only where it stands "
+        "apart from them."
+    ),
+    "strongest": (
+        "**Where the cue is strongest.** One row per top frame: the frame with its top "
+        "{tile}×{tile} px tiles outlined and numbered by rank (solid yellow: above the null at "
+        "its rank; dashed white: not), the local intensity-controlled :math:`\\rho` of every "
+        "tile, and the top tile's two residual fields, :math:`e_L` and "
+        ":math:`e_{R \\to L}`, side by side: where the views share a pattern, it shows in both."
+    ),
+    "mitigations": (
+        "**Mitigation trade-off.** One point per mitigation: the cue it leaves (the "
+        "intensity-controlled :math:`\\rho`, the :math:`C_\\sigma` lift over chance, the "
+        "residual correlation at zero disparity) against its PSNR, with 95% intervals; the "
+        "point to look for sits at the bottom right."
+    ),
+    "probe": (
+        "**Learned probe: accuracy per test input.** Winner-take-all accuracy of each training "
+        "condition's networks on each test input, per region, with 95% intervals over test "
+        "tiles and training seeds."
+    ),
+}
+"""Each figure's caption (reStructuredText inline markup, ``:math:`` roles): what it shows,
+by kind; ``{frame}`` and ``{tile}`` are filled in."""
+
+
+_RST_ACTIVE = re.compile(r"([\\`*_|<>\[\]])")
+
+
+def caption(kind: str, **fields) -> str:
+    """The caption of a figure of one :data:`CAPTIONS` kind, its ``{field}`` placeholders
+    filled in (braces of the math are left alone).
+
+    Examples
+    --------
+    >>> caption("thumbnail", frame="f00").startswith("**Frame f00.** The left view's")
+    True
+    """
+    text = CAPTIONS[kind]
+    for key, value in fields.items():
+        text = text.replace("{" + key + "}", _RST_ACTIVE.sub(r"\\\1", str(value)))
+    return text
+
+
+_MATH_ROLE = re.compile(r":math:`(.+?)`", re.S)
+
+
+def caption_markdown(text: str) -> str:
+    r"""A caption's inline markup as Markdown: ``:math:`x``` as ``$x$`` (GitHub's math),
+    ``**bold**`` kept, on one line.
+
+    Examples
+    --------
+    >>> caption_markdown("**A.** :math:`\\rho` < 1")
+    '**A.** $\\rho$ &lt; 1'
+    """
+    return _MATH_ROLE.sub(lambda m: f"${m.group(1)}$", markdown_text(text))
 
 
 _MARKDOWN_ACTIVE = re.compile(r"[&<>]|\](?=\()|[\r\n]+")
@@ -229,6 +291,69 @@ def flag_rows(flags: list[dict]) -> list[dict]:
     ]
 
 
+def _captioned(items, kind: str) -> list[tuple[str, str]]:
+    """``(path, caption)`` pairs: a pair is kept, a bare path gets the :data:`CAPTIONS` caption
+    of ``kind`` with the frame read from its name (``thumbnail_f00.png``: ``f00``)."""
+    out = []
+    for item in items:
+        if isinstance(item, str):
+            stem = Path(item).stem
+            frame = stem.split("_", 1)[1] if "_" in stem else stem
+            item = (item, caption(kind, frame=frame, tile=""))
+        out.append(tuple(item))
+    return out
+
+
+STRONGEST_FRAME_COLUMNS = ["rank", "frame", "ranked by", "value", "partial rho", "matched null"]
+"""Columns of the page's frame ranking."""
+
+STRONGEST_TILE_COLUMNS = ["frame", "rank", "tile (x, y)", "pixels", "local rho", "null at rank",
+                          "stands out"]
+"""Columns of the page's tile table."""
+
+
+def _iv(value, low, high) -> str:
+    if not (math.isfinite(value)):
+        return "n/a"
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return f"{value:.3f}"
+    return f"{value:.3f} [{low:.3f}, {high:.3f}]"
+
+
+def strongest_rows(ranking: list[dict], tiles: list[dict]) -> tuple[list[dict], list[dict]]:
+    """The page's rows of :mod:`stereovar.audit.strongest`: each number with its interval,
+    and beside it its control (the frame's matched null; the tile's null at its rank, with
+    its 95th percentile)."""
+    frames = [
+        {
+            "rank": r["rank"],
+            "frame": r["frame"],
+            "ranked by": "partial rho minus matched null"
+            if r["statistic"] == "difference"
+            else "partial rho (no matched null)",
+            "value": _iv(r["value"], r["low"], r["high"]),
+            "partial rho": _iv(r["partial"], math.nan, math.nan),
+            "matched null": _iv(r["null"], math.nan, math.nan),
+        }
+        for r in ranking
+    ]
+    rows = [
+        {
+            "frame": t["frame"],
+            "rank": t["rank"],
+            "tile (x, y)": f"{t['x0']}-{t['x1'] - 1}, {t['y0']}-{t['y1'] - 1}",
+            "pixels": t["n_pixels"],
+            "local rho": _iv(t["rho"], t["low"], t["high"]),
+            "null at rank": f"{t['null']:.3f} (95th pct {t['null_high']:.3f})"
+            if math.isfinite(t["null_high"])
+            else "n/a",
+            "stands out": "yes" if t["stands_out"] else "no",
+        }
+        for t in tiles
+    ]
+    return frames, rows
+
+
 def page_sections(
     *,
     name: str,
@@ -241,16 +366,26 @@ def page_sections(
     table: list[dict],
     caption: str,
     mitigations: list[str],
-    thumbnails: list[str],
-    figures: list[str],
+    thumbnails: list,
+    figures: list,
     probe: str = "",
+    statistics: tuple | None = None,
+    strongest: dict | None = None,
+    rules=RULE_ITEMS,
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
-    ``thumbnails`` and ``figures`` are paths relative to the page; ``probe`` is the learned
-    probe's verdict paragraph (``audit.probe: true``).
+    ``thumbnails`` and ``figures`` are ``(path, caption)`` pairs (a bare path: a thumbnail's
+    or a teaser's caption, :data:`CAPTIONS`), paths relative to the page; ``probe`` is the
+    learned probe's verdict paragraph (``audit.probe: true``); ``statistics`` the
+    statistics-against-controls figure as a pair; ``strongest``: ``text``, ``ranking`` and
+    ``tiles`` (:mod:`stereovar.audit.strongest`) and its figure as a pair or None;
+    ``rules``: how the verdict reads its numbers, one item each (inline markup).
     """
     banners = [f["text"] for f in flags if f["kind"] in BANNER_KINDS]
+    if strongest:
+        frames, tiles = strongest_rows(strongest["ranking"], strongest["tiles"])
+        strongest = {**strongest, "frame_rows": frames, "tile_rows": tiles}
     return {
         "title": f"Audit {name}: verdict",
         "banners": banners,
@@ -258,20 +393,43 @@ def page_sections(
         "found": found,
         "facts": import_facts(records),
         "flags": flag_rows(flags),
-        "thumbnails": thumbnails,
+        "thumbnails": _captioned(thumbnails, "thumbnail"),
         "verdict": result["text"],
         "seeding": seeding["text"],
         "table": table,
         "caption": caption,
+        "rules": list(rules),
+        "statistics": tuple(statistics) if statistics else None,
+        "strongest": strongest,
         "mitigations": mitigations,
         "probe": probe,
-        "figures": figures,
+        "figures": _captioned(figures, "teaser"),
     }
+
+
+def _normalised(s: dict) -> dict:
+    """Sections as :func:`page_sections` gives them, from sections made by hand: figures as
+    ``(path, caption)`` pairs, and the optional parts present."""
+    return {
+        "rules": [],
+        "statistics": None,
+        "strongest": None,
+        "probe": "",
+        **s,
+        "thumbnails": _captioned(s["thumbnails"], "thumbnail"),
+        "figures": _captioned(s["figures"], "teaser"),
+    }
+
+
+def _md_figure(item) -> list[str]:
+    path, text = item
+    return [_markdown_image(path), "", f"*{caption_markdown(text)}*", ""]
 
 
 def to_markdown_page(s: dict) -> str:
     """The page as Markdown; every text of the sections through :func:`markdown_text`, and
     through :func:`markdown_line` where it starts a line."""
+    s = _normalised(s)
     d = s["decision"]
     m = markdown_text
     lines = [f"# {m(s['title'])}", ""]
@@ -296,7 +454,8 @@ def to_markdown_page(s: dict) -> str:
         ]
     else:
         lines += ["No warnings or flags.", ""]
-    lines += [_markdown_image(t) for t in s["thumbnails"]] + [""]
+    for item in s["thumbnails"]:
+        lines += _md_figure(item)
     lines += [
         "## Details",
         "",
@@ -309,54 +468,46 @@ def to_markdown_page(s: dict) -> str:
         ),
         "",
     ]
+    if s["rules"]:
+        lines += ["### How the verdict reads these numbers", "",
+                  *[f"- {caption_markdown(r)}" for r in s["rules"]], ""]
+    if s.get("statistics"):
+        lines += _md_figure(s["statistics"])
+    st = s.get("strongest")
+    if st:
+        lines += ["## Where the cue is strongest", "", caption_markdown(st["text"]), ""]
+        lines += [to_markdown(_markdown_rows(st["frame_rows"]), STRONGEST_FRAME_COLUMNS), ""]
+        if st["tile_rows"]:
+            lines += [to_markdown(_markdown_rows(st["tile_rows"]), STRONGEST_TILE_COLUMNS), ""]
+        if st.get("figure"):
+            lines += _md_figure(st["figure"])
     if s["mitigations"]:
         lines += ["## Mitigations", "", *[f"- {markdown_line(f)}" for f in s["mitigations"]], ""]
     if s.get("probe"):
         lines += ["## Learned probe", "", markdown_line(s["probe"]), ""]
-    lines += [_markdown_image(f) for f in s["figures"]] + [""]
+    for item in s["figures"]:
+        lines += _md_figure(item)
     return "\n".join(lines)
 
 
-def _figure(path: str) -> str:
-    return figure(path, html.escape(Path(path).stem), alt=Path(path).stem)
-
-
 def to_html_page(s: dict) -> str:
-    """The page as one self-contained HTML document."""
-    d = s["decision"]
-    e = html.escape
-    body = [f"<h1>{e(s['title'])}</h1>"]
-    body += [f'<div class="banner"><b>Warning.</b> {e(b)}</div>' for b in s["banners"]]
-    body.append(
-        f'<div class="light" id="decision"><div class="dot" title="{e(d["light"])}" '
-        f'style="background:{LIGHTS[d["light"]]}"></div><div>'
-        f'<p class="headline">{e(d["headline"])}</p>'
-        + "".join(f"<p>{e(x)}</p>" for x in d["sentences"])
-        + "</div></div>"
+    """The page as one self-contained HTML document: the template ``verdict.html.j2``
+    (:mod:`stereovar.pages.templates`), every text escaped, captions and rules rendered from
+    their inline markup (:func:`stereovar.pages.captions.caption_markup`, math as MathML)."""
+    from ..pages.templates import render
+
+    s = _normalised(s)
+    light = s["decision"]["light"]
+    return render(
+        "verdict.html.j2",
+        title=s["title"],
+        s=s,
+        word=light.upper(),
+        colour=LIGHTS[light],
+        alt=lambda src: Path(src).stem,
+        fact_columns=FACT_COLUMNS,
+        flag_columns=FLAG_COLUMNS,
+        verdict_columns=VERDICT_COLUMNS,
+        strongest_frame_columns=STRONGEST_FRAME_COLUMNS,
+        strongest_tile_columns=STRONGEST_TILE_COLUMNS,
     )
-    body += [
-        "<h2>What was imported</h2>",
-        f"<p>{e(s['found'])}.</p>",
-        _table_html(s["facts"], FACT_COLUMNS),
-    ]
-    if s["flags"]:
-        body += [
-            "<h3>Warnings and flags</h3>",
-            f'<div class="flags">{_table_html(s["flags"], FLAG_COLUMNS)}</div>',
-        ]
-    else:
-        body.append("<p>No warnings or flags.</p>")
-    body.append('<div class="thumbs">' + "".join(map(_figure, s["thumbnails"])) + "</div>")
-    body += [
-        "<h2>Details</h2>",
-        f"<p><b>Verdict.</b> {e(s['verdict'])}</p>",
-        f"<p><b>Seeding.</b> {e(s['seeding'])}</p>",
-        _table_html(s["table"], VERDICT_COLUMNS, s["caption"]),
-    ]
-    if s["mitigations"]:
-        items = "".join(f"<li>{e(f)}</li>" for f in s["mitigations"])
-        body.append(f"<h2>Mitigations</h2>\n<ul>{items}</ul>")
-    if s.get("probe"):
-        body.append(f"<h2>Learned probe</h2>\n<p>{e(s['probe'])}</p>")
-    body += [_figure(f) for f in s["figures"]]
-    return document(s["title"], body, _CSS)

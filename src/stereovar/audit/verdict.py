@@ -42,6 +42,27 @@ RULES = (
     "frame: Wilson interval treating pixels as independent, too narrow)."
 )
 
+RULE_ITEMS = (
+    "**Monte Carlo-specific cue:** the intensity-controlled :math:`\\rho` minus its matched "
+    "null has a 95% interval above 0. The matched null is camera-law noise drawn from these "
+    "frames' own seed means, :math:`N` and disparity (``stereovar.calibration``).",
+    "**Intensity-controlled** :math:`\\rho`: Pearson's :math:`\\rho` of "
+    ":math:`\\ln\\sigma^2` after removing each view's conditional mean of "
+    ":math:`\\ln\\sigma^2` given :math:`\\ln\\mu`.",
+    "**Strength:** the word for that difference: at least 0.5 strong, 0.3 moderate, 0.1 weak, "
+    "else negligible.",
+    "**A matching cue beyond a camera:** the :math:`C_\\sigma` winner-take-all accuracy's "
+    "lift over chance has a 95% interval above 0 and above the same lift on simulated camera "
+    "frames.",
+    "**Intervals:** for :math:`\\rho`, the frames' spatial block-bootstrap intervals "
+    "combined; for the intervention, Student t over frames (one frame: a Wilson interval that "
+    "treats pixels as independent, too narrow).",
+    "**Calibration:** how often this rule fires on matched nulls, and from which planted "
+    "strength it detects a cue, is measured on these frames.",
+)
+""":data:`RULES` as the page lists them: one short item each, reStructuredText inline
+markup with ``:math:`` roles."""
+
 VERDICT_COLUMNS = ["quantity", "region", "value", "low", "high", "note"]
 
 ROWS = (

@@ -4,6 +4,7 @@ page and the export of renders."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 from .common import log
@@ -103,6 +104,123 @@ def thumbnail_job(left, ground_truth, out) -> None:
     save_figure(thumbnail_figure(image, gt, title=title), out, dpi=90)
 
 
+def _json_value(v):
+    """A table cell as a JSON value: numpy scalars as Python's, a non-finite number as null."""
+    import numpy as np
+
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    return v
+
+
+def _json_numbers(rows: list[dict]) -> list[dict]:
+    """Rows as JSON values (:func:`_json_value`)."""
+    return [{k: _json_value(v) for k, v in r.items()} for r in rows]
+
+
+def _scene_paths(paths) -> dict:
+    """Stores by the frame they hold (their ``scene`` attribute; nothing is read)."""
+    from ..io.store import open_dataset
+
+    out = {}
+    for p in paths or ():
+        out.setdefault(str(open_dataset(p).attrs.get("scene", "")), p)
+    return out
+
+
+def frame_residuals(variance, warped, ground_truth) -> tuple:
+    """One frame's left seed mean and its two :math:`\\ln\\sigma^2` residual fields after
+    intensity (:func:`stereovar.audit.strongest.residual_fields`) from its variance, warped
+    and ground-truth stores."""
+    import numpy as np
+
+    from ..audit.strongest import residual_fields
+    from ..io.contracts import read_alignment
+    from ..io.store import load_store
+    from ..statistics.fields import channel_mean, warped_intensity
+
+    v = load_store(variance, "variance store")
+    aligned = read_alignment(load_store(warped, "warped store"))
+    sigma_l = v["variance"].sel(view="left").transpose("y", "x").values
+    mean_left = mu_l = mu_w = None
+    if "mean" in v:
+        gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
+        gl = gt.sel(view="left")
+        means = {k: v["mean"].sel(view=k).transpose("y", "x", "channel").values
+                 for k in ("left", "right")}
+        mean_left = means["left"]
+        mu_l = channel_mean(mean_left)
+        mu_w = warped_intensity(
+            means["right"],
+            {k: gl[k].transpose("y", "x").values for k in ("disparity", "valid")},
+            sign=int(gt.attrs["disparity_sign"]),
+        )
+    e_left, e_right, controlled = residual_fields(sigma_l, aligned["warped"], aligned["omega"],
+                                                  mu_l, mu_w)
+    if mean_left is None:  # no seed mean: show the variance field itself
+        mean_left = np.repeat(np.sqrt(np.maximum(sigma_l, 0))[..., None], 3, axis=-1)
+    return mean_left, e_left, e_right, controlled
+
+
+def strongest_section(corr, nulls, *, variance=(), warped=(), ground_truth=(), figure=None,
+                      analysis=None) -> dict | None:
+    """Where the cue is strongest (:mod:`stereovar.audit.strongest`): the frames ranked, the
+    tiles of the top :data:`~stereovar.audit.strongest.TOP_FRAMES` frames whose stores are
+    given, and their figure written to ``figure``. None without correlation rows."""
+    from ..audit.strongest import TILE, TOP_FRAMES, frame_ranking, rank_tiles
+    from ..figures.strongest import strongest_figure
+    from .common import save_figure
+
+    ranking = frame_ranking(corr, nulls)
+    if not ranking:
+        return None
+    min_pixels = int(dict(analysis or {}).get("min_pixels", 30))
+    stores = [_scene_paths(p) for p in (variance, warped, ground_truth)]
+    shown, tiles, controlled = [], [], True
+    for r in ranking:
+        if len(shown) == TOP_FRAMES:
+            break
+        paths = [s.get(r["frame"]) for s in stores]
+        if paths[0] is None or paths[1] is None or not math.isfinite(r["value"]):
+            continue
+        image, e_left, e_right, ok = frame_residuals(*paths)
+        controlled &= ok
+        rows, summary = rank_tiles(e_left, e_right, frame=r["frame"], min_pixels=min_pixels)
+        log.info("%s: %d of %d tiles above the null at their rank", r["frame"],
+                 summary["n_stand_out"], summary["n_tiles"])
+        tiles += rows
+        shown.append({"frame": r["frame"], "image": image, "rho": summary["rho"], "rows": rows,
+                      "e_left": e_left, "e_right": e_right, "n_tiles": summary["n_tiles"],
+                      "n_stand_out": summary["n_stand_out"]})
+    by = ("the intensity-controlled :math:`\\rho` minus its matched null"
+          if ranking[0]["statistic"] == "difference"
+          else "the intensity-controlled :math:`\\rho` (no matched null for these frames)")
+    text = f"Frames ranked by {by}, with its 95% interval."
+    if shown:
+        residual = (
+            "the :math:`\\ln\\sigma^2` residuals after intensity" if controlled
+            else ":math:`\\ln\\sigma^2` (no seed mean: no intensity control)"
+        )
+        text += (
+            f" Within the top {len(shown)} frame{'s' * (len(shown) != 1)}, {TILE}×{TILE} px "
+            f"tiles ranked by the local correlation of {residual} across the views, each "
+            "beside the null at its rank: the same ranking with the right field moved far "
+            "out of line. A tile stands out when it is above the null's 95th percentile ("
+            + "; ".join(f"{f['frame']}: {f['n_stand_out']} of {f['n_tiles']} tiles"
+                        for f in shown)
+            + "). A tile's interval is its :math:`\\rho` plus or minus 1.96 times the null "
+            "tiles' standard deviation."
+        )
+        if figure:
+            save_figure(strongest_figure(shown, tile=TILE), figure, dpi=100)
+    return {"text": text, "ranking": ranking, "tiles": tiles,
+            "frames": [{k: f[k] for k in ("frame", "n_tiles", "n_stand_out")} for f in shown]}
+
+
 def verdict_job(
     correlations,
     interventions,
@@ -120,6 +238,11 @@ def verdict_job(
     probe_figure=None,
     calibration=None,
     nulls=None,
+    statistics_figure=None,
+    variance=(),
+    warped=(),
+    ground_truth=(),
+    analysis=None,
 ) -> dict:
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``.
 
@@ -135,8 +258,23 @@ def verdict_job(
     ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure; with
     ``calibration`` and ``nulls`` (the audit's calibration table and matched nulls,
     :mod:`stereovar.calibration`), the Monte Carlo-specific row the verdict rests on and the
-    calibration's sentence."""
-    from ..audit.page import import_flags, page_sections, to_html_page, to_markdown_page
+    calibration's sentence; with ``statistics_figure`` (the run's ``statistics_dots.png``),
+    every statistic against its controls; with the frames' ``variance``, ``warped`` and
+    ``ground_truth`` stores, where the cue is strongest (:func:`strongest_section`: the
+    frames ranked, the top tiles of the top frames, and their figure at
+    ``outputs["strongest"]`` when given). Every figure has a caption that says what it shows
+    (:data:`stereovar.audit.page.CAPTIONS`). ``summary.json`` carries ``schema_version`` and
+    is validated against its schema before it is written
+    (:mod:`stereovar.audit.summary_schema`)."""
+    from ..audit.page import (
+        caption,
+        import_flags,
+        page_sections,
+        to_html_page,
+        to_markdown_page,
+    )
+    from ..audit.strongest import TILE
+    from ..audit.summary_schema import SUMMARY_SCHEMA_VERSION, validate_summary
     from ..audit.verdict import (
         RULES,
         VERDICT_COLUMNS,
@@ -187,15 +325,27 @@ def verdict_job(
     table = as_table(rows)
     base = Path(outputs["md"]).parent
 
-    def relative(paths):
-        return [Path(t).relative_to(base).as_posix() for t in paths]
+    def relative(path):
+        return Path(path).relative_to(base).as_posix()
 
-    figures = relative(teasers) + (relative([mitigation_figure]) if mitigation_figure else [])
+    def frame_of(path):
+        return Path(path).stem.split("_", 1)[-1]
+
+    figures = [(relative(t), caption("teaser", frame=frame_of(t))) for t in teasers]
+    if mitigation_figure:
+        figures.append((relative(mitigation_figure), caption("mitigations")))
     probe_result = json.loads(Path(probe).read_text()) if probe else None
     if probe_figure:
-        figures += relative([probe_figure])
+        figures.append((relative(probe_figure), caption("probe")))
     if probe_result:
         lines.append(f"probe: {probe_result['paragraph']}")
+    strongest = strongest_section(
+        corr, null_rows, variance=variance, warped=warped, ground_truth=ground_truth,
+        figure=outputs.get("strongest"), analysis=analysis,
+    )
+    if strongest and strongest["frames"] and outputs.get("strongest"):
+        strongest["figure"] = (relative(outputs["strongest"]),
+                               caption("strongest", tile=TILE))
     sections = page_sections(
         name=name,
         found=found,
@@ -205,13 +355,19 @@ def verdict_job(
         records=records,
         flags=flags,
         table=table,
-        caption=f"Audit {name}: {found}. {RULES}",
+        caption=f"Audit {name}: {found}. Every statistic over the frames, with its 95% "
+        "interval and the control it is read against.",
         mitigations=findings,
-        thumbnails=relative(thumbnails),
+        thumbnails=[(relative(t), caption("thumbnail", frame=frame_of(t))) for t in thumbnails],
         figures=figures,
         probe=probe_result["paragraph"] if probe_result else "",
+        statistics=(relative(statistics_figure), caption("statistics"))
+        if statistics_figure
+        else None,
+        strongest=strongest,
     )
     summary = {
+        "schema_version": SUMMARY_SCHEMA_VERSION,
         "audit": name,
         "found": found,
         **result,
@@ -225,9 +381,16 @@ def verdict_job(
         "probe": probe_result,
         "calibration": calibrated,
         "rules": RULES,
-        "rows": json.loads(json.dumps(table, default=str).replace("NaN", "null")),
+        "rows": _json_numbers(table),
         "csv": to_csv(table, VERDICT_COLUMNS),
+        "strongest": {
+            "frames": _json_numbers(strongest["ranking"]),
+            "tiles": _json_numbers(strongest["tiles"]),
+        }
+        if strongest
+        else None,
     }
+    validate_summary(summary)
     md, page = to_markdown_page(sections), to_html_page(sections)
     write_file(outputs["md"], lambda tmp: Path(tmp).write_text(md))
     write_file(outputs["html"], lambda tmp: Path(tmp).write_text(page))

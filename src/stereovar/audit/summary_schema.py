@@ -1,0 +1,58 @@
+"""The versioned schema of an audit's ``summary.json``, checked on every write.
+
+``results/audit/{name}/summary.json`` is what a team's scripts and CI read (``stereovar audit
+--fail-on`` reads its ``light`` and its ``summary[0]`` line). Its JSON Schema ships in the
+package (``stereovar/schemas/audit_summary.schema.json``, :data:`SCHEMA_PATH`); the
+verdict job validates each summary against it before writing (:func:`validate_summary`), so a
+file that exists has the documented keys and types. The docs page ``summary_json`` describes
+each key.
+
+Versioning: ``schema_version`` is ``major.minor``. A minor version only adds keys; removing a
+key or changing its meaning makes a new major version, so a script written for ``1.x`` reads
+any ``1.y``.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+
+SUMMARY_SCHEMA_VERSION = "1.0"
+"""The version the verdict job writes."""
+
+SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "audit_summary.schema.json"
+"""The JSON Schema (draft 2020-12) of ``summary.json``."""
+
+
+@cache
+def summary_schema() -> dict:
+    """The JSON Schema of ``summary.json`` (:data:`SCHEMA_PATH`), parsed."""
+    return json.loads(SCHEMA_PATH.read_text())
+
+
+def validate_summary(summary: dict) -> None:
+    """Check an audit summary against :func:`summary_schema`.
+
+    Raises
+    ------
+    ValueError
+        The summary breaks the schema: one line naming the key and what is wrong.
+
+    Examples
+    --------
+    >>> validate_summary({"schema_version": "1.0"})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: summary.json breaks its schema ... at (top level): 'audit' is a required ...
+    """
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(summary_schema())
+    errors = sorted(validator.iter_errors(summary), key=lambda e: list(e.absolute_path))
+    if errors:
+        e = errors[0]
+        where = "/".join(map(str, e.absolute_path)) or "(top level)"
+        raise ValueError(
+            f"summary.json breaks its schema ({SCHEMA_PATH.name}) at {where}: {e.message}"
+        )
