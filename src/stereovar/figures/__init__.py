@@ -23,6 +23,9 @@ The caller saves the figure; nothing here reads or writes results.
     coupling and its image quality.
 ``preview``
     Both renders of a scene, its disparity and material map; the audit's thumbnails.
+``strongest``
+    The verdict page's frames and tiles where the cue is strongest, with the top tile's two
+    residual fields.
 
 Importing this package imports none of its modules (nor matplotlib).
 """
