@@ -307,6 +307,12 @@ def audit_thumbnail(name: str, frame: str) -> str:
     return f"{RESULTS}/{audit_source(name)}/figures/thumbnail_{frame}.png"
 
 
+def audit_strongest(name: str) -> str:
+    """The verdict page's figure of where the cue is strongest (the top frames with their top
+    tiles): ``results/audit/{name}/figures/strongest.png``."""
+    return f"{RESULTS}/{audit_source(name)}/figures/strongest.png"
+
+
 def audit_teaser(name: str, scene: str) -> str:
     """One frame's teaser of an audit: ``results/audit/{name}/figures/teaser_{scene}.png``."""
     return f"{RESULTS}/{audit_source(name)}/figures/teaser_{scene}.png"
