@@ -1,14 +1,11 @@
 # Configuration validation, wildcard constraints, the run's settings and the input functions
 # several features share; each feature's own are in inputs/<feature>.smk (included at the end).
 import json
-import math
 import re
-import shlex
 import sys
 from pathlib import Path
 from types import SimpleNamespace
 
-import yaml
 from snakemake.utils import validate
 
 from stereovar.config import validate_config_or_exit
@@ -59,9 +56,10 @@ from stereovar.mitigations import (
     keyed_transforms,
     mitigation_runs,
 )
-from stereovar.transforms import TRANSFORMS, get_transform
+from stereovar.transforms import TRANSFORMS
 from stereovar.rig import VIEWS
 from stereovar import resources as sizing
+from stereovar.workflow_inputs import resources as job_requests
 
 CONFIG_SCHEMA = "../schemas/config.schema.yaml"
 
@@ -111,7 +109,6 @@ if workflow.is_main_process:
 
 ENV = "../../envs/stereovar.yaml"
 SCENES = list(config["scenes"])
-GENERATED_SCENE = r"scene_\d{3}"
 
 
 # {renderer} is a source key (stereovar.layout): a renderer or an audit, optionally followed
@@ -261,15 +258,8 @@ def table_outputs(paths, prefix="", **report_args):
 
 def analysis_resources(images, n_reads):
     """Memory and runtime requests of an analysis job holding ``images`` images at once and
-    reading ``n_reads`` renders."""
-    return {
-        "mem_mb": lambda wildcards, attempt: sizing.analysis_mem_mb(
-            WIDTH, HEIGHT, images, attempt=attempt
-        ),
-        "runtime": lambda wildcards, attempt: sizing.analysis_runtime(
-            WIDTH, HEIGHT, n_reads, attempt=attempt
-        ),
-    }
+    reading ``n_reads`` renders (:func:`stereovar.workflow_inputs.resources.analysis_resources`)."""
+    return job_requests.analysis_resources(WIDTH, HEIGHT, images, n_reads)
 
 
 # Each feature's input functions, params, cluster requests and targets, beside its rule file

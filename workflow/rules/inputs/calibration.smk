@@ -31,28 +31,11 @@ def calibration_options():
 
 
 def calibration_resources():
-    """Memory (every frame of both views, the transformed stacks and the renders: 4N + 16
-    images, N the frames drawn per view) and runtime
-    (:func:`stereovar.resources.calibration_runtime`) of one scene's calibration."""
-    cal = config["calibration"]
-    denoisers = [
-        t for t in CALIBRATION_TRANSFORMS[1:] if get_transform(t).expensive
-    ]
-    runtime = lambda wildcards, attempt: sizing.calibration_runtime(
-        WIDTH,
-        HEIGHT,
-        CALIBRATION_DRAWS,
-        replicates=int(cal["replicates"]),
-        designs=2 + len(cal["strengths"]),
-        transforms=len(CALIBRATION_TRANSFORMS) - len(denoisers),
-        denoised_replicates=int(cal["denoised_replicates"]),
-        denoisers=len(denoisers),
-        attempt=attempt,
+    """Memory and runtime requests of one scene's calibration
+    (:func:`stereovar.workflow_inputs.resources.calibration_resources`)."""
+    return job_requests.calibration_resources(
+        WIDTH, HEIGHT, config["calibration"], CALIBRATION_DRAWS, CALIBRATION_TRANSFORMS
     )
-    return {
-        **analysis_resources(images=4 * CALIBRATION_DRAWS + 16, n_reads=2 * CALIBRATION_DRAWS),
-        "runtime": runtime,
-    }
 
 
 def calibration_scene_inputs(wildcards):
@@ -65,11 +48,7 @@ def calibration_scene_inputs(wildcards):
         ),
         "ground_truth": ground_truth_input(wildcards),
     }
-    wants = set()
-    for t in CALIBRATION_TRANSFORMS[1:]:
-        transform = get_transform(t)
-        wants |= {"albedo", "normal"} & {*transform.reads, *transform.optional_reads}
-    if wants and wants <= set(source_aux_passes(source)):
+    if mitigation_inputs.reads_aux(CALIBRATION_TRANSFORMS[1:], source):
         for view in VIEWS:
             inputs[f"aux_{view}"] = layout.aux_store(source, wildcards.scene, view)
     if wildcards.estimator == "seeds" and any(reads_seed_mean(t) for t in CALIBRATION_TRANSFORMS):

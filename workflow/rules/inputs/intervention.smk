@@ -16,16 +16,8 @@ def intervention_inputs(wildcards):
 
 
 def intervention_resources():
-    """Memory and runtime requests of one scene's intervention (D estimated before the
-    ground truth exists: the configured one, else 5% of the width plus the margin)."""
-    iv = config["intervention"]
-    d = iv["max_disparity"] or math.ceil(0.05 * WIDTH) + iv["disparity_margin"]
-    return {
-        "mem_mb": lambda wildcards, attempt: sizing.analysis_mem_mb(
-            WIDTH, HEIGHT, 24, attempt=attempt
-        ),
-        "runtime": lambda wildcards, attempt: sizing.intervention_runtime(
-            WIDTH, HEIGHT, INTERVENTION_N_SEEDS, d + 1, attempt=attempt
-        ),
-        "cpus_per_task": 2,
-    }
+    """Memory and runtime requests of one scene's intervention
+    (:func:`stereovar.workflow_inputs.resources.intervention_resources`)."""
+    return job_requests.intervention_resources(
+        WIDTH, HEIGHT, config["intervention"], INTERVENTION_N_SEEDS
+    )

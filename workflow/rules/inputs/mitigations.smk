@@ -3,7 +3,10 @@
 
 # Mitigations (stereovar.mitigations): each row of results/tables/mitigations.* is a source
 # key (the renderer, or the renderer and a transform or seed policy), an SPP and its scenes,
-# measured by the seeds estimator, the intervention and the per-scene mitigation rows.
+# measured by the seeds estimator, the intervention and the per-scene mitigation rows. What
+# an image reads and costs: stereovar.workflow_inputs.mitigations.
+from stereovar.workflow_inputs import mitigations as mitigation_inputs
+
 MITIGATIONS = config["mitigations"]
 if AUDIT:
     with exit_with_one_line():
@@ -21,24 +24,9 @@ AUX_SPP = MITIGATIONS["aux_spp"]
 
 def reference_from_moments(source):
     """Whether a source's converged reference is a moments render of each view at
-    ``mitigations.reference_spp`` (a renderer with sample moments, rendering with the
-    independent sampler and the box filter), else a split-half reference of its own renders
-    (:func:`stereovar.statistics.utility.split_half_quality`: audits, Cycles)."""
-    from stereovar.config import moments_settings_error
-
-    render = config["render"]
-    return (
-        source in RENDERERS
-        and RENDERERS.get(source).sample_moments
-        and moments_settings_error(render["sampler"], render["rfilter"]) is None
-    )
-
-
-def source_aux_passes(source):
-    """The auxiliary passes a source gives (a renderer's ``aux_passes``; an audit none)."""
-    if source in RENDERERS:
-        return RENDERERS.get(source).aux_passes
-    return ()
+    ``mitigations.reference_spp``, else a split-half reference of its own renders
+    (:func:`stereovar.workflow_inputs.mitigations.reference_from_moments`)."""
+    return mitigation_inputs.reference_from_moments(source, config["render"])
 
 
 def transform_inputs(wildcards):
@@ -50,22 +38,15 @@ def transform_inputs(wildcards):
             wildcards.view
         ]
     }
-    t = get_transform(wildcards.transform)
-    wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
-    if wants and wants <= set(source_aux_passes(wildcards.renderer)):
+    if mitigation_inputs.reads_aux([wildcards.transform], wildcards.renderer):
         inputs["aux"] = layout.aux_store(wildcards.renderer, wildcards.scene, wildcards.view)
     return inputs
 
 
 def transform_options(wildcards):
     """The options of the wildcards' transform that the config sets: the camera model of
-    ``controls.sensor`` (gain, read noise) for the transforms that add or model camera noise."""
-    import inspect
-
-    accepted = inspect.signature(get_transform(wildcards.transform).apply).parameters
-    sensor = config["controls"]["sensor"]
-    offered = {"gain": sensor["gain"], "read_noise": sensor["read_noise"]}
-    return {k: v for k, v in offered.items() if k in accepted}
+    ``controls.sensor`` (:func:`stereovar.workflow_inputs.mitigations.transform_options`)."""
+    return mitigation_inputs.transform_options(wildcards.transform, config["controls"]["sensor"])
 
 
 def mitigation_scene_inputs(wildcards):
@@ -120,18 +101,9 @@ def mitigation_table_inputs(wildcards):
 
 
 def image_cost(run):
-    """Samples per pixel behind one mitigated image (``render_spp``: N x SPP when the
-    transform reads the seed mean or variance, which average the N renders) and the SPP of
-    the auxiliary pass it reads once per view (``aux_spp``; 0 without one)."""
-    render_spp, aux_spp = run.spp, 0
-    if run.mitigation.kind == "transform":
-        t = get_transform(run.transform)
-        if {"seed_mean", "seed_var"} & set(t.reads):
-            render_spp *= N_SEEDS
-        wants = {"albedo", "normal"} & {*t.reads, *t.optional_reads}
-        if wants and wants <= set(source_aux_passes(run.source)):
-            aux_spp = AUX_SPP
-    return {"render_spp": render_spp, "aux_spp": aux_spp}
+    """Samples per pixel behind one mitigated image and the SPP of the auxiliary pass it reads
+    (:func:`stereovar.workflow_inputs.mitigations.image_cost`)."""
+    return mitigation_inputs.image_cost(run, N_SEEDS, AUX_SPP)
 
 
 def mitigation_table_params():

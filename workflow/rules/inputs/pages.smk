@@ -52,13 +52,7 @@ def page_captions():
 
 def page_results():
     """(figures, tables) of the results page: every figure (PNG) and every table file of
-    `all`; the mitigations' and the probe's figures are their sections' inputs."""
+    `all`; the mitigations' and the probe's figures are their sections' inputs
+    (:func:`stereovar.workflow_inputs.run.page_results`)."""
     own = {MITIGATION_FIGURE, PROBE_FIGURE, layout.results_page()}
-    targets = [Path(p) for p in all_targets() if p not in own]
-    figures = [str(p) for p in targets if p.parent.name == "figures" and p.suffix == ".png"]
-    tables = [
-        str(p)
-        for p in targets
-        if p.parent.name == "tables" and p.suffix[1:] in layout.TABLE_FORMATS
-    ]
-    return figures, tables
+    return run_inputs.page_results(all_targets(), own, layout.TABLE_FORMATS)

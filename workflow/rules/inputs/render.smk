@@ -47,43 +47,14 @@ def renderer_options():
 # GPU model stay out of the rules: they come from the profile (profiles/slurm*).
 
 
-def batch_size(wildcards):
-    """Seeds per view in the job's ``{batch}`` (1 for jobs without one)."""
-    batch = getattr(wildcards, "batch", None)
-    return len(batch_seeds(batch)) if batch else 1
-
-
 def render_resources(n_views=2, spp=None, gpu=True, cpus=None, moments=False):
     """Memory, runtime and (with ``gpu``) GPU requests of a job rendering ``n_views`` views
-    of each seed of its ``{batch}`` (one seed without one) at ``spp`` (the job's ``spp``
-    wildcard when None); ``moments``: one view's two half renders (``spp`` samples in
-    all) for the moments estimator."""
-
-    def runtime(wildcards, attempt):
-        return sizing.render_runtime(
-            WIDTH,
-            HEIGHT,
-            int(wildcards.spp if spp is None else spp),
-            n_views * batch_size(wildcards),
-            samples_per_second=CLUSTER["render_samples_per_second"],
-            attempt=attempt,
-        )
-
-    def mem_mb(wildcards, attempt):
-        if moments:
-            return sizing.moments_mem_mb(WIDTH, HEIGHT, attempt=attempt)
-        return sizing.render_mem_mb(WIDTH, HEIGHT, batch=batch_size(wildcards), attempt=attempt)
-
-    requests = {
-        "mem_mb": mem_mb,
-        "runtime": runtime,
-        "cpus_per_task": CLUSTER["render_threads"] if cpus is None else cpus,
-    }
-    if gpu and CLUSTER["gpus_per_render"]:
-        requests["gpu"] = CLUSTER["gpus_per_render"]
-        if CLUSTER["gpu_model"]:
-            requests["gpu_model"] = CLUSTER["gpu_model"]
-    return requests
+    of each seed of its ``{batch}`` at ``spp`` (the job's ``spp`` wildcard when None);
+    ``moments``: one view's two half renders
+    (:func:`stereovar.workflow_inputs.resources.render_resources`)."""
+    return job_requests.render_resources(
+        WIDTH, HEIGHT, CLUSTER, n_views=n_views, spp=spp, gpu=gpu, cpus=cpus, moments=moments
+    )
 
 
 def render_stores(renderer=None):

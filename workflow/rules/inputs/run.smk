@@ -1,19 +1,15 @@
 # The run around the jobs: the rebuild command's arguments, a killed run's lock, the checks
 # of `onstart` (preflight) and the summary of `onsuccess` (Snakefile), and the --report warning.
+from stereovar.workflow_inputs import run as run_inputs
 
 
 def snakemake_arguments():
     """This run's ``--configfile`` and ``--config`` options, as a shell fragment: the
-    rebuild commands printed for a damaged store repeat them."""
-    parts = [f"--configfile {shlex.quote(str(f))}" for f in workflow.overwrite_configfiles]
-    overrides = workflow.config_settings.config or {}
-    if overrides:
-        entries = []
-        for key, value in overrides.items():
-            text = yaml.safe_dump(value, default_flow_style=True, width=10**6).strip()
-            entries.append(shlex.quote(f"{key}={text.removesuffix('...').strip()}"))
-        parts.append("--config " + " ".join(entries))
-    return " ".join(parts)
+    rebuild commands printed for a damaged store repeat them
+    (:func:`stereovar.workflow_inputs.run.snakemake_arguments`)."""
+    return run_inputs.snakemake_arguments(
+        workflow.overwrite_configfiles, workflow.config_settings.config
+    )
 
 
 # Repeated by the rebuild command of any damaged-store message of this run's jobs.

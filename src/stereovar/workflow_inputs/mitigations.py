@@ -1,0 +1,71 @@
+"""What a mitigated or calibrated image reads and costs: the converged reference of a source,
+the auxiliary passes (albedo, normal) a transform reads when its source renders them, the
+options a transform takes from the config, and the samples behind one mitigated image.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+from ..config import moments_settings_error
+from ..renderers import RENDERERS
+from ..transforms import get_transform
+
+#: The auxiliary passes a transform may read.
+AUX = frozenset({"albedo", "normal"})
+
+
+def reference_from_moments(source: str, render: dict) -> bool:
+    """Whether a source's converged reference is a moments render of each view at
+    ``mitigations.reference_spp``: a renderer with sample moments, rendering with the
+    independent sampler and the box filter (``render``: the ``render:`` config section).
+    Otherwise the reference is a split-half one of its own renders
+    (:func:`stereovar.statistics.utility.split_half_quality`: audits, Cycles)."""
+    return bool(
+        source in RENDERERS
+        and RENDERERS.get(source).sample_moments
+        and moments_settings_error(render["sampler"], render["rfilter"]) is None
+    )
+
+
+def source_aux_passes(source: str) -> tuple:
+    """The auxiliary passes a source gives (a renderer's ``aux_passes``; an audit none)."""
+    if source in RENDERERS:
+        return RENDERERS.get(source).aux_passes
+    return ()
+
+
+def reads_aux(transforms, source: str) -> bool:
+    """Whether any of ``transforms`` (names) reads albedo or normal, required or optional,
+    and ``source`` renders every auxiliary pass they read: then their jobs get the passes as
+    inputs."""
+    wants = set()
+    for name in transforms:
+        t = get_transform(name)
+        wants |= AUX & {*t.reads, *t.optional_reads}
+    return bool(wants) and wants <= set(source_aux_passes(source))
+
+
+def transform_options(transform: str, sensor: dict) -> dict:
+    """The options of ``transform`` that the config sets: the camera model of
+    ``controls.sensor`` (``gain``, ``read_noise``), for the transforms whose ``apply`` takes
+    them (those that add or model camera noise)."""
+    accepted = inspect.signature(get_transform(transform).apply).parameters
+    offered = {"gain": sensor["gain"], "read_noise": sensor["read_noise"]}
+    return {k: v for k, v in offered.items() if k in accepted}
+
+
+def image_cost(run, n_seeds: int, aux_spp: int) -> dict:
+    """Samples per pixel behind one mitigated image of mitigation row ``run``
+    (:func:`stereovar.mitigations.mitigation_runs`): ``render_spp``, N x SPP when the
+    transform reads the seed mean or variance (which average the N = ``n_seeds`` renders),
+    else the SPP; and ``aux_spp``, the SPP of the auxiliary pass it reads once per view
+    (``mitigations.aux_spp``; 0 without one)."""
+    render_spp, aux = run.spp, 0
+    if run.mitigation.kind == "transform":
+        t = get_transform(run.transform)
+        if {"seed_mean", "seed_var"} & set(t.reads):
+            render_spp *= n_seeds
+        if reads_aux([run.transform], run.source):
+            aux = aux_spp
+    return {"render_spp": render_spp, "aux_spp": aux}
