@@ -4,7 +4,6 @@ synthetic results, then on the tiny run, and in headless Chromium."""
 from __future__ import annotations
 
 import base64
-import html
 import json
 import math
 import re
@@ -17,6 +16,7 @@ import pytest
 from stereovar import layout
 from stereovar.io.tables import read_rows, write_tables
 from stereovar.jobs.claims import results_page_job
+from stereovar.pages.names import claim_name
 from stereovar.pages.results import CONTROL_GROUPS, REGIONS
 from stereovar.statistics.claims import CLAIMS_COLUMNS, load_claims
 
@@ -140,12 +140,33 @@ def formats(paths: list[str]) -> dict:
     return dict(zip(layout.TABLE_FORMATS, paths, strict=True))
 
 
+SCENES = ["scene_000", "scene_001", "scene_002"]
+
+
+def scene_partials(seed: int = 0) -> tuple[list[dict], list[dict]]:
+    """Each synthetic scene's intensity-controlled rho with its bootstrap interval (the
+    correlation rows' columns), and its matched null through ``none`` (the calibration's
+    ``calibration_nulls.csv`` columns)."""
+    rng = np.random.default_rng(1000 + seed)
+    corr, nulls = [], []
+    for scene in SCENES:
+        rho, half = float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.02, 0.08))
+        corr.append({"scene": scene, "region": "all", "method": "partial", "rho": rho,
+                     "boot_low": rho - half, "boot_high": rho + 0.8 * half})
+        nulls.append({"scene": scene, "transform": "none", "region": "all",
+                      "method": "partial", "null_rho": float(rng.uniform(-0.02, 0.05)),
+                      "null_se": float(rng.uniform(0.001, 0.01)), "n": 16,
+                      "chance_sd": float(rng.uniform(0.01, 0.05)), "margin": 0.08})
+    return corr, nulls
+
+
 def synthetic_results(
     root: Path,
     *,
     mitigations: bool = False,
     probe: bool = False,
     generators: bool = False,
+    nulls: bool = True,
     seed: int = 0,
 ) -> dict:
     """Write a run's results under ``root/results`` as the workflow would (claims table,
@@ -185,9 +206,25 @@ def synthetic_results(
                 "boot_high": rho + float(rng.uniform(0.01, 0.1)),
                 "std_rho": 0.1, "n_scenes": 3, "mean_rho_corrected": rho,
             })
+    # the intensity-controlled rho over all pixels as the statistics table makes it from the
+    # scenes' rows: the mean with their bootstrap intervals combined
+    from stereovar.statistics.across import combined_interval
+
+    corr, null_rows = scene_partials(seed)
+    mean, low, high = combined_interval(*([r[k] for r in corr] for k in ("rho", "boot_low",
+                                                                           "boot_high")))
+    for row in statistics:
+        if (row["region"], row["method"]) == ("all", "partial"):
+            row |= {"mean_rho": mean, "boot_low": low, "boot_high": high}
+    if nulls:
+        from stereovar.calibration.summary import NULL_COLUMNS
+
+        path = layout.calibration_nulls()
+        write_tables(null_rows, NULL_COLUMNS, {"csv": path})
+        tables = [*tables, path]
     summary = {
         "config_digest": "ab" * 32, "renderer": "mitsuba", "estimator": "seeds", "spp": 2,
-        "n_seeds": 4, "scenes": ["scene_000", "scene_001", "scene_002"],
+        "n_seeds": 4, "scenes": SCENES,
         "interval": "95% spatial block bootstrap (scenes combined)",
         "statistics": statistics,
     }
@@ -271,12 +308,12 @@ def synthetic(tmp_path, monkeypatch):
 
 
 def check_claims(page: Page, claims: list[dict]) -> None:
-    """Every claims-table row is on the page: its claim, paper value, our value with its
-    interval, its control and its verdict."""
+    """Every claims-table row is on the page: its claim by name, paper value, our value with
+    its interval, its control and its verdict."""
     assert list(page.claims) == [str(c["id"]) for c in claims]
     for c in claims:
         claim, paper, ours, control, verdict = page.claims[str(c["id"])]
-        assert claim.startswith(html.unescape(str(c["claim"])))
+        assert claim.startswith(claim_name(str(c["id"]), str(c["claim"])))
         assert verdict == c["verdict"]
         expected = shown_interval(c["ours"], c["ours_low"], c["ours_high"])
         if not expected:
@@ -288,30 +325,55 @@ def check_claims(page: Page, claims: list[dict]) -> None:
         if isinstance(c["paper"], (int, float)) and math.isfinite(c["paper"]):
             assert close(numbers(paper)[0], c["paper"])
         if c["control"] and math.isfinite(float(c["control_value"] or math.nan)):
-            assert control.startswith(str(c["control"]))
-            tail = numbers(control[len(str(c["control"])):])
-            assert close(tail[0], float(c["control_value"]))
+            name, _, value = control.rpartition(":")
+            assert name and "_" not in name, control  # the control in words
+            assert close(numbers(value)[0], float(c["control_value"]))
 
 
-def check_headline(page: Page, summary: dict) -> None:
-    """The headline rho with its interval, and each control of the summary beside it with
-    its interval, per region."""
+def expected_matched(corr: list[dict], nulls: list[dict]) -> tuple[float, float, float, float]:
+    """The Monte Carlo-specific rho over all pixels as the mitigation table computes it
+    (scene by scene, then combined): (null, difference, low, high)."""
+    from stereovar.statistics.mitigations import matched_difference
+
+    return matched_difference(corr, nulls, transform="none", region="all")
+
+
+def check_headline(page: Page, summary: dict, matched=None) -> None:
+    """The headline with its interval and its control: the Monte Carlo-specific rho beside
+    its matched null when the run has one (``matched``: :func:`expected_matched`), else rho
+    after the warp; and each control of the summary by region with its interval."""
     stats = {(r["region"], r["method"]): r for r in summary["statistics"]}
     main = stats[("all", "warp")]
     text = " ".join(page.text_by_id["headline"].split())
-    rho = re.search(r"ρ = (\S+)", text)
-    assert rho and close(float(rho.group(1)), main["mean_rho"])
+    value = re.search(r"ρ = (\S+)", page.text_by_id["headline-value"])
     interval = re.search(r"95% interval \[(\S+), (\S+)\]", text)
-    assert interval and close(float(interval.group(1)), main["boot_low"])
-    assert close(float(interval.group(2)), main["boot_high"])
+    control = " ".join(page.text_by_id["headline-control"].split())
+    if matched is not None:
+        null, diff, low, high = matched
+        assert value and close(float(value.group(1)), diff)
+        assert interval and close(float(interval.group(1)), low)
+        assert close(float(interval.group(2)), high)
+        assert "matched null" in control and close(numbers(control)[0], null)
+        warp = " ".join(page.text_by_id["headline-warp"].split())
+        assert close(numbers(warp.split(":", 1)[1])[0], main["mean_rho"])
+    else:
+        assert value and close(float(value.group(1)), main["mean_rho"])
+        assert interval and close(float(interval.group(1)), main["boot_low"])
+        assert close(float(interval.group(2)), main["boot_high"])
     # one row per statistic: its label, then a cell per region
     controls = {m for _, _, methods in CONTROL_GROUPS for m, _ in methods}
     expected_controls = controls & {m for _, m in stats}
     shown = {m: cells[1:] for m, cells in page.controls.items()}
-    assert set(shown) == {"warp", *expected_controls}
+    own = {"mc_specific", "matched_null"} if matched is not None else set()
+    assert set(shown) == {"warp", *own, *expected_controls}
     assert {"sensor_sim", "partial", "null_shift"} <= expected_controls  # baseline, intensity, null
     for method, cells in shown.items():
         assert len(cells) == len(REGIONS)
+        if method in own:
+            null, diff, low, high = matched
+            want = [diff, low, high] if method == "mc_specific" else [null]
+            assert all(close(g, v) for g, v in zip(numbers(cells[0]), want, strict=True))
+            continue
         for region, cell in zip(REGIONS, cells, strict=True):
             row = stats.get((region, method)) or {}
             expected = shown_interval(*(row.get(k) for k in ("mean_rho", "boot_low", "boot_high")))
@@ -326,10 +388,14 @@ def check_headline(page: Page, summary: dict) -> None:
 def check_links(page: Page, results: Path) -> None:
     """Every link is relative and resolves to a file under ``results``; nothing is loaded
     from elsewhere and the page runs no script."""
+    from stereovar.links import docs_base
+
     assert page.scripts == 0
     for href in page.links:
         if href.startswith("#"):
             assert href[1:] in page.text_by_id, href
+            continue
+        if href.startswith(docs_base()):  # the documentation (stereovar.links), never a path
             continue
         assert "://" not in href and not href.startswith("/"), href
         target = (results / href).resolve()
@@ -349,17 +415,27 @@ def test_page_shows_every_claim_with_its_interval_control_and_verdict(synthetic)
     assert {c["verdict"] for c in claims} == set(VERDICTS)
 
 
-def test_headline_rho_comes_with_its_interval_and_controls(synthetic):
+def test_headline_is_the_monte_carlo_specific_rho_beside_its_matched_null(synthetic):
     _, kwargs, text, page = synthetic()
     summary = json.loads(Path(kwargs["summary"]).read_text())
-    check_headline(page, summary)
+    check_headline(page, summary, expected_matched(*scene_partials()))
     assert summary["interval"] in " ".join(page.text_by_id["headline"].split())
-    # the headline and the claims come before the figures
+    # the conclusion, the headline and the claims come before the figures
+    assert text.index('id="conclusion"') < text.index('id="headline"')
     assert text.index('id="headline"') < text.index('id="claims"') < text.index('id="figures"')
 
 
+def test_without_a_matched_null_the_headline_is_rho_after_the_warp_not_called_specific(
+    synthetic,
+):
+    _, kwargs, _, page = synthetic(nulls=False)
+    check_headline(page, json.loads(Path(kwargs["summary"]).read_text()))
+    shown = " ".join((page.text_by_id["conclusion"] + page.text_by_id["headline"]).split())
+    assert "Not calibrated" in shown and "Monte Carlo-specific ρ =" not in shown
+
+
 def test_a_headline_without_its_interval_says_so(synthetic):
-    root, kwargs, _, _ = synthetic()
+    root, kwargs, _, _ = synthetic(nulls=False)
     summary = json.loads(Path(kwargs["summary"]).read_text())
     for row in summary["statistics"]:
         if (row["region"], row["method"]) == ("all", "warp"):
@@ -368,6 +444,37 @@ def test_a_headline_without_its_interval_says_so(synthetic):
     _, page = build_page(root, kwargs)
     text = " ".join(page.text_by_id["headline"].split())
     assert "no interval" in text and "95% interval [" not in text
+
+
+@pytest.mark.parametrize("nulls", [True, False], ids=["matched null", "no null"])
+def test_a_number_explained_by_a_control_says_so_beside_it(synthetic, nulls):
+    root, kwargs, _, _ = synthetic(nulls=nulls)
+    claims = read_rows(kwargs["claims"])
+    for c in claims:  # rho over all pixels explained, the rest not
+        c["verdict"] = "explained by a control" if c["id"] == "rho_all" else "holds"
+    write_tables(claims, CLAIMS_COLUMNS, formats(layout.claims_tables()), caption="c")
+    _, page = build_page(root, kwargs)
+    warp = page.controls["warp"]
+    assert "explained by a control" in warp[1]  # all valid pixels
+    assert "explained by a control" not in " ".join(warp[2:])
+    beside = page.text_by_id["headline-warp" if nulls else "headline-control"]
+    assert "explained by a control" in beside.lower()
+    if nulls:  # the big number is then the Monte Carlo-specific one, not the explained one
+        assert "matched null" in page.text_by_id["headline-control"]
+
+
+def test_the_page_opens_with_a_one_line_conclusion(synthetic):
+    _, kwargs, text, page = synthetic()
+    body = text[text.index("<body>"):]
+    assert re.match(r"<body>\s*<h1>[^<]*</h1>\s*<p class=\"conclusion\" id=\"conclusion\"", body)
+    conclusion = " ".join(page.text_by_id["conclusion"].split())
+    null, diff, low, high = expected_matched(*scene_partials())
+    word = {"remains": "Cue present", "removed": "No cue"}.get(
+        "remains" if low > 0 else "removed" if -0.08 < low and high < 0.08 else "", "Undecided")
+    assert conclusion.startswith(word)
+    got = numbers(conclusion.split("ρ =", 1)[1])
+    assert all(close(g, v) for g, v in zip(got, (diff, low, high, null), strict=False))
+    assert "matched null" in conclusion and len(got) >= 4
 
 
 def test_figures_are_embedded_with_their_captions(synthetic):
@@ -386,11 +493,12 @@ def test_links_resolve_relative_to_results_and_cover_every_table(synthetic):
     check_links(page, results)
     linked = {(results / h).resolve() for h in page.links if not h.startswith("#")}
     assert {(root / t).resolve() for t in kwargs["tables"]} <= linked
+    assert [h for h in page.links if "://" in h]  # the documentation is linked
 
 
 def test_snakemake_report_is_linked_once_it_exists(synthetic):
     root, kwargs, text, page = synthetic()
-    assert "snakemake --report results/report.html" in html.unescape(text)
+    assert "<code>stereovar report</code>" in text and "snakemake --report" not in text
     assert "report.html" not in page.links
     (root / layout.snakemake_report()).write_text("<html></html>")
     _, page = build_page(root, kwargs)

@@ -164,7 +164,7 @@ def probe_claim(verdict: dict) -> dict:
     return {
         "id": "probe",
         "claim": "a trained matcher uses the cue",
-        "section": "5 (left open)",
+        "section": "Sec. 5 (sec:conclusion), left open",
         "kind": "probe",
         "paper": "open",
         "null": 0.0,
@@ -233,6 +233,63 @@ def _page_figure(path, captions: dict) -> dict:
     }
 
 
+PAGE_INTRO = (
+    "**stereovar** renders path-traced stereo scenes and measures how the per-pixel Monte "
+    "Carlo variance fields of the two views correlate once aligned by the ground-truth "
+    "disparity, and how much of that is Monte Carlo's own rather than what camera noise "
+    "would give."
+)
+"""The results page's paragraph on what the run is (reStructuredText)."""
+
+
+def report_command(report) -> str:
+    """The command that writes Snakemake's report at ``report``.
+
+    Examples
+    --------
+    >>> report_command("results/report.html"), report_command("out/r.html")
+    ('stereovar report', 'stereovar report -o out/r.html')
+    """
+    from ..layout import snakemake_report
+
+    return "stereovar report" if str(report) == snakemake_report() else (
+        f"stereovar report -o {report}"
+    )
+
+
+def claim_statistics(claims: list[dict]) -> dict:
+    """Claim id to the (region, method) of the :math:`\\rho` it tests, for the claims whose
+    statistic is a :math:`\\rho` (the page marks those numbers when a control explains
+    them).
+
+    Examples
+    --------
+    >>> claim_statistics([{"id": "a", "statistic": {"name": "rho", "region": "all",
+    ...                    "method": "warp"}}, {"id": "b", "statistic": {"name": "seed_change"}}])
+    {'a': ('all', 'warp')}
+    """
+    return {
+        c["id"]: (c["statistic"]["region"], c["statistic"]["method"])
+        for c in claims
+        if c.get("statistic", {}).get("name") == "rho"
+    }
+
+
+def _calibration_nulls(tables, calibration) -> str | None:
+    """The calibration's matched nulls (``calibration_nulls.csv``): among ``tables``, else
+    beside the calibration table (the same job writes both); None when there are none."""
+    from pathlib import Path
+
+    for path in tables:
+        if Path(str(path)).name == "calibration_nulls.csv":
+            return str(path)
+    if calibration:
+        beside = Path(str(calibration)).with_name("calibration_nulls.csv")
+        if beside.is_file():
+            return str(beside)
+    return None
+
+
 def results_page_job(
     claims,
     summary,
@@ -268,6 +325,7 @@ def results_page_job(
     from ..io.store import write_file
     from ..io.tables import read_rows
     from ..layout import snakemake_report
+    from ..links import docs_page
     from ..pages.html import relative_link
     from ..pages.results import page_sections, to_html_page
     from ..statistics.claims import KINDS, load_claims
@@ -283,12 +341,8 @@ def results_page_job(
 
     mitigation_section = None
     if mitigations:
-        from ..statistics.mitigations import headline_table, mitigation_findings
-
-        mitigation_rows = read_rows(mitigations)
         mitigation_section = {
-            "lines": mitigation_findings(mitigation_rows),
-            "headline": headline_table(mitigation_rows),
+            "rows": read_rows(mitigations),
             "figure": _page_figure(mitigation_figure, captions) if mitigation_figure else None,
             "tables": section_tables("mitigations"),
         }
@@ -309,6 +363,7 @@ def results_page_job(
             "tables": _page_tables(generators, out),
         }
     report = report or snakemake_report()
+    nulls = _calibration_nulls(tables, calibration)
     sections = page_sections(
         summary=document,
         claims=claim_rows,
@@ -316,18 +371,28 @@ def results_page_job(
         rules=[*(claims_file.rules[k] for k in KINDS), claims_file.intervals],
         figures=[_page_figure(f, captions) for f in figures],
         tables=all_tables,
-        intro=captions.get("workflow", ""),
+        intro=PAGE_INTRO,
         mitigations=mitigation_section,
         probe=probe_section,
         generators=generator_section,
         report=relative_link(report, out) if Path(report).is_file() else None,
-        report_command=f"snakemake --report {report}",
+        report_command=report_command(report),
         calibration=headline(read_rows(calibration)) if calibration else "",
+        nulls=read_rows(nulls) if nulls else None,
+        claim_statistics=claim_statistics(claims_file.claims),
+        docs={
+            "page": docs_page("outputs", "the-results-page"),
+            "calibration": docs_page("calibration"),
+            "mitigations": docs_page("mitigations"),
+            "probe": docs_page("probe"),
+            "generators": docs_page("generators"),
+        },
     )
     page = to_html_page(sections)
     write_file(Path(out), lambda tmp: Path(tmp).write_text(page, encoding="utf-8"))
-    log.info("headline rho %s; %d claims, %d figures, %d tables%s%s",
-             sections["headline"]["text"], len(claim_rows), len(figures), len(all_tables),
-             "; mitigations" if mitigation_section else "", "; probe" if probe_section else "")
+    log.info("%s: %s", sections["conclusion"]["word"], sections["conclusion"]["text"])
+    log.info("%d claims, %d figures, %d tables%s%s", len(claim_rows), len(figures),
+             len(all_tables), "; mitigations" if mitigation_section else "",
+             "; probe" if probe_section else "")
     log.info("wrote %s (%.0f KiB): open it in a browser", out, len(page.encode()) / 1024)
     return sections

@@ -1,41 +1,49 @@
 """The main run's results page, ``results/index.html``: what a person opens after a run.
 
 :func:`page_sections` puts the run's results in reading order, and :func:`to_html_page`
-writes them as one self-contained page (figures embedded, links relative to ``results/``):
+renders them with the template ``results.html.j2`` (:mod:`stereovar.pages.templates`) as one
+self-contained page (figures embedded, links relative to ``results/``):
 
-1. what the run is (the report's ``workflow.rst``) and its settings (renderer, estimator,
-   scenes, N and SPP, the config digest);
-2. the headline :math:`\\rho` (all valid pixels, Eq. 3) with its 95% interval, and beside it
-   the controls that bear on it (:data:`CONTROL_GROUPS`: the sensor baseline, the
-   intensity-controlled :math:`\\rho`, the null warps) in every region, each with its
-   interval (:func:`headline`, :func:`control_rows`), so the number is never read alone;
-3. the claims table (:func:`claim_cells`), on a band of colour :data:`CLAIMS_BAND`, what
-   it holds and the verdicts' rules (folded) below it;
-4. the figures with their captions (``workflow/report/*.rst``);
-5. the mitigations and the learned probe, when they have run;
-6. links to every table in each format, and to Snakemake's report or how to make it.
+1. a one-line conclusion (:func:`conclusion`): whether the views' Monte Carlo variance fields
+   correlate beyond their matched null, with the number that says so, its interval and its
+   control;
+2. the run's settings (renderer, estimator, scenes, N and SPP, the config digest);
+3. the headline (:func:`matched_headline`): the Monte Carlo-specific :math:`\\rho`, the
+   intensity-controlled :math:`\\rho` minus its matched null through the same path, with its
+   95% interval and the null beside it; then every control by region with its interval
+   (:func:`control_rows`), each number the claims call "explained by a control" marked so
+   beside it; and the calibration's sentence;
+4. the claims table (:func:`claim_cells`), each claim by name and section name
+   (:mod:`stereovar.pages.names`), on a band of colour :data:`CLAIMS_BAND`;
+5. the figures with their captions (``workflow/report/*.rst``, MathML math);
+6. the mitigations (one compact table, :func:`mitigation_rows`), the learned probe and the
+   generator profiles, when they have run;
+7. links to every table in each format, and to Snakemake's report or the command that makes it.
 
-Importing this module pulls in no third-party package.
+A number is called Monte Carlo-specific only as a difference from its matched null
+(the calibration's camera-law noise through the same statistic): without the calibration's
+nulls the page says so, and headlines :math:`\\rho` after the warp with its controls.
 """
 
 from __future__ import annotations
 
-import html
 import math
 
-from .captions import rst_to_html
-from .html import document, figure
+from .names import claim_name, control_name, readable, section_name
 
 __all__ = [
     "CLAIMS_BAND",
     "CONTROL_GROUPS",
     "REGIONS",
     "claim_cells",
+    "conclusion",
     "control_rows",
     "headline",
     "interval_text",
-    "significant",
+    "matched_headline",
+    "mitigation_rows",
     "page_sections",
+    "significant",
     "to_html_page",
 ]
 
@@ -47,23 +55,31 @@ REGIONS = {"all": "all valid pixels", "non_glass": "non-glass", "glass": "glass"
 """Regions of the headline table, in order, with their labels."""
 
 HEADLINE_METHOD = "warp"
-"""The statistic of the headline: Pearson's :math:`\\rho` after the warp (Eq. 3)."""
+"""The paper's statistic: Pearson's :math:`\\rho` after the warp (Eq. 3)."""
+
+MATCHED_METHOD = "partial"
+"""The statistic whose difference from its matched null is the Monte Carlo-specific part:
+the intensity-controlled :math:`\\rho` (camera noise follows intensity, which both views
+share)."""
+
+Z = 1.959963984540054
+"""The standard normal's 0.975 quantile (95% intervals)."""
 
 CONTROL_GROUPS = (
     (
-        "sensor baseline",
-        "the same statistic on a simulated camera's noise over the same N frames: what any "
-        "stereo pair shows",
-        (("sensor_sim", "simulated camera"),),
-    ),
-    (
         "intensity-controlled",
-        "ρ of ln σ² once ln μ is regressed out of each view: the Monte Carlo-specific part",
+        "ρ of ln σ² with ln μ regressed out of each view; the Monte Carlo-specific ρ is it "
+        "minus the same on camera-law noise drawn from this run's frames",
         (("partial", "partial ρ"),),
     ),
     (
+        "sensor baseline",
+        "the same on a simulated camera's noise: what any stereo pair shows",
+        (("sensor_sim", "simulated camera"),),
+    ),
+    (
         "null warps",
-        "wrong alignments: the warp matters when these sit well below ρ",
+        "wrong alignments, which sit well below ρ when the warp matters",
         (
             ("null_shift", "disparity shifted"),
             ("null_flip", "right field flipped"),
@@ -79,8 +95,26 @@ VERDICT_CLASSES = {
     "does not hold": "fails",
     "explained by a control": "explained",
     "not testable at this scale": "untestable",
+    "remains": "remains",
+    "removed": "removed",
+    "inconclusive": "inconclusive",
+    "reversed": "remains",
+    "n/a": "na",
 }
-"""CSS class of each claims verdict (others, such as the probe's yes/no, are plain)."""
+"""CSS class of each verdict (others, such as the probe's yes/no, are plain)."""
+
+EXPLAINED = "explained by a control"
+"""The claims' verdict that the page repeats beside the number it concerns."""
+
+CONCLUSIONS = {
+    "remains": ("Cue present", "remains"),
+    "reversed": ("Below the null", "inconclusive"),
+    "removed": ("No cue", "removed"),
+    "inconclusive": ("Undecided", "inconclusive"),
+    "n/a": ("Not calibrated", "na"),
+}
+"""The conclusion's word and colour class for each verdict on the Monte Carlo-specific
+:math:`\\rho` (:func:`stereovar.statistics.mitigations.mc_cue_state`)."""
 
 TABLE_LABELS = {
     "claims": "Claims of the paper on this run",
@@ -92,61 +126,27 @@ TABLE_LABELS = {
     "spp_sweep_fit": "Table 2: fit against SPP",
     "intervention": "Table 3: the residual-shuffle intervention",
     "cross_renderer": "The renderers side by side",
-    "mitigations": "Mitigations",
+    "mitigations": "Mitigations: every region, control and Table 3 column",
+    "mitigations_headline": "Mitigations: the table on this page",
     "probe": "Learned probe",
+    "probe_training": "Learned probe: training",
+    "generators": "Generator profiles",
     "calibration": "Calibration: false positives, power and coverage of every rule",
     "calibration_nulls": "Calibration: each scene's matched null per transform",
 }
 """Labels of the tables the page links, by file name."""
 
-_CSS = f"""
-body {{ max-width: 78em; margin: 0 auto; padding: 0 1.2em 3em; line-height: 1.4; }}
-h1 {{ margin: 0.6em 0 0.1em; font-size: 1.7em; }}
-h2 {{ margin: 1.6em 0 0.5em; border-bottom: 1px solid #ddd; padding-bottom: 0.2em; }}
-p, li {{ max-width: 70em; }}
-nav {{ font-size: 0.9em; margin: 0.3em 0 0.8em; }}
-nav a {{ margin-right: 1em; }}
-.run {{ color: #555; margin: 0.2em 0 0.8em; }}
-.intro p {{ margin: 0.2em 0; color: #333; font-size: 0.92em; }}
-code {{ font-size: 0.92em; background: #f3f3f3; padding: 0 0.2em; border-radius: 3px; }}
-.headline {{ display: flex; flex-wrap: wrap; gap: 1.5em; align-items: flex-start;
-  border: 1px solid #ccc; border-radius: 6px; padding: 0.8em 1.2em; }}
-.headline .rho {{ flex: 0 0 17em; }}
-.headline .calibration {{ flex: 1 0 100%; margin: 0; font-size: 0.92em; }}
-.headline .what {{ color: #555; font-size: 0.9em; margin: 0; }}
-.headline .value {{ font-size: 2.3em; font-weight: 600; margin: 0.1em 0 0; }}
-.headline .interval {{ font-size: 1.15em; margin: 0 0 0.4em; }}
-.headline .tally {{ font-size: 0.9em; margin: 0.4em 0 0; }}
-.headline div.controls {{ flex: 1 1 30em; }}
-table.controls {{ font-size: 0.88em; width: 100%; }}
-table.controls th, table.controls td {{ padding: 0.15em 0.7em; }}
-table.controls tr.main td {{ font-weight: 600; }}
-.headline .notes {{ font-size: 0.8em; color: #555; margin: 0.4em 0 0; }}
-table.controls tbody tr {{ background: none; }}
-table.claims {{ background: {CLAIMS_BAND}; width: 100%; font-size: 0.9em; }}
-table.claims thead th, table.claims tbody tr, table.claims tbody tr:hover {{
-  background: none; }}
-table.claims td {{ white-space: normal; vertical-align: top; }}
-table.claims td.num {{ white-space: nowrap; text-align: right; }}
-.nowrap {{ white-space: nowrap; }}
-table.claims .sub {{ color: #555; font-size: 0.88em; }}
-.verdict {{ display: inline-block; padding: 0.05em 0.5em; border-radius: 1em;
-  white-space: nowrap; background: #fff; border: 1px solid #bbb; }}
-.verdict.holds {{ background: #d4edda; border-color: #5cb85c; }}
-.verdict.fails {{ background: #f8d7da; border-color: #d9534f; }}
-.verdict.explained {{ background: #fff3cd; border-color: #e6a700; }}
-.verdict.untestable {{ background: #eeeeee; border-color: #aaa; color: #444; }}
-.about p {{ font-size: 0.88em; color: #444; margin: 0.5em 0; max-width: 70em; }}
-details {{ margin: 0.5em 0; font-size: 0.9em; max-width: 70em; }}
-figure {{ margin: 1.4em 0; }}
-figure img {{ border: 1px solid #eee; }}
-figcaption {{ font-size: 0.9em; color: #333; max-width: 70em; }}
-figcaption p {{ margin: 0.3em 0; }}
-h3.group {{ color: #555; font-weight: 600; font-size: 1em; margin: 1.2em 0 0; }}
-table.links td {{ white-space: normal; }}
-table.mitigations td {{ white-space: normal; vertical-align: top; }}
-table.links a {{ margin-right: 0.6em; }}
-"""
+MITIGATION_COLUMNS = {
+    "mitigation": "mitigation",
+    "samples": "samples per image",
+    "mc_specific": "Monte Carlo-specific ρ [95%]",
+    "null": "matched null",
+    "ships": "in what it ships",
+    "verdict": "verdict",
+    "psnr": "PSNR, dB [95%]",
+    "budget": "raw render at equal budget, dB",
+}
+"""The compact mitigation table's columns and headers (:func:`mitigation_rows`)."""
 
 
 def _f(value) -> float:
@@ -202,8 +202,8 @@ def _statistic(statistics: list[dict], region: str, method: str) -> dict | None:
 
 
 def headline(statistics: list[dict]) -> dict:
-    """The headline of ``summary.json``'s ``statistics``: :math:`\\rho` after the warp over
-    all valid pixels, the mean over scenes with its combined bootstrap interval.
+    """:math:`\\rho` after the warp over all valid pixels (Eq. 3) from ``summary.json``'s
+    ``statistics``: the mean over scenes with its combined bootstrap interval.
 
     Returns
     -------
@@ -229,15 +229,144 @@ def headline(statistics: list[dict]) -> dict:
     }
 
 
-def control_rows(statistics: list[dict]) -> list[dict]:
-    """The headline table: the headline statistic, then each control of
-    :data:`CONTROL_GROUPS` that ``statistics`` holds, with its interval in every region.
+def matched_headline(
+    statistics: list[dict],
+    nulls: list[dict],
+    *,
+    region: str = "all",
+    method: str = MATCHED_METHOD,
+    transform: str = "none",
+    scenes=None,
+) -> dict:
+    """The Monte Carlo-specific :math:`\\rho`: the statistic ``method`` over ``region``
+    (``summary.json``'s mean over scenes) minus its matched null through the same path (the
+    calibration's ``calibration_nulls.csv``, ``transform`` ``none``: the renders as
+    rendered), with its 95% interval.
+
+    .. math::
+
+        \\Delta = \\bar\\rho - \\frac1S\\sum_s \\bar\\rho_{0,s}, \\qquad
+        \\Delta \\pm z_{0.975}\\sqrt{\\Bigl(\\frac{h - \\ell}{2 z_{0.975}}\\Bigr)^2
+            + \\frac{1}{S^2}\\sum_s \\bigl(\\mathrm{se}_{0,s}^2 + s_{\\text{chance},s}^2\\bigr)}
+
+    with :math:`[\\ell, h]` the statistic's interval from the scenes' block bootstraps
+    combined (:func:`stereovar.statistics.across.combined_interval`). This is
+    :func:`stereovar.statistics.mitigations.matched_difference` (each scene's difference
+    with :func:`stereovar.calibration.summary.difference_interval`, combined over scenes)
+    written with the scenes' mean: the same number and interval as the mitigation table's
+    ``none`` row. The verdict is :func:`stereovar.statistics.mitigations.mc_cue_state`'s
+    against the calibration's equivalence margin.
+
+    Parameters
+    ----------
+    statistics : list of dict
+        ``summary.json``'s ``statistics`` (``region``, ``method``, ``mean_rho``,
+        ``boot_low``, ``boot_high``, ``n_scenes``).
+    nulls : list of dict
+        :data:`stereovar.calibration.summary.NULL_COLUMNS` rows.
+    scenes : iterable of str, optional
+        The run's scenes: only their nulls count.
+
+    Returns
+    -------
+    dict
+        ``value``, ``low``, ``high``, ``null`` (the scenes' mean null), ``margin``,
+        ``statistic`` (the statistic's own value, low, high), ``n_scenes``, ``verdict`` and
+        ``text``; ``value`` NaN and ``verdict`` ``n/a`` when the run has no such null.
+
+    Examples
+    --------
+    >>> stats = [{"region": "all", "method": "partial", "mean_rho": 0.5, "boot_low": 0.4,
+    ...           "boot_high": 0.6, "n_scenes": 1}]
+    >>> nulls = [{"scene": "a", "transform": "none", "region": "all", "method": "partial",
+    ...           "null_rho": 0.1, "null_se": 0.0, "chance_sd": 0.0, "margin": 0.05}]
+    >>> h = matched_headline(stats, nulls)
+    >>> h["text"], h["null"], h["verdict"]
+    ('0.400 [0.300, 0.500]', 0.1, 'remains')
+    """
+    from ..statistics.mitigations import mc_cue_state
+
+    row = _statistic(statistics, region, method) or {}
+    value, low, high = (_f(row.get(k)) for k in ("mean_rho", "boot_low", "boot_high"))
+    wanted = set(scenes) if scenes else None
+    chosen = [
+        r for r in nulls
+        if (r.get("transform"), r.get("region"), r.get("method")) == (transform, region, method)
+        and (wanted is None or r.get("scene") in wanted)
+        and math.isfinite(_f(r.get("null_rho")))
+    ]
+    margins = [_f(r.get("margin")) for r in chosen if math.isfinite(_f(r.get("margin")))]
+    out = {
+        "value": math.nan, "low": math.nan, "high": math.nan, "null": math.nan,
+        "margin": margins[0] if margins else math.nan,
+        "statistic": (value, low, high), "n_scenes": row.get("n_scenes"),
+        "verdict": "n/a", "text": "n/a",
+    }
+    if not chosen or not math.isfinite(value):
+        return out
+    s = len(chosen)
+    null = sum(_f(r["null_rho"]) for r in chosen) / s
+
+    def sq(key):
+        return sum(_f(r.get(key)) ** 2 for r in chosen if math.isfinite(_f(r.get(key))))
+
+    diff = value - null
+    out |= {"value": diff, "null": null, "text": interval_text(diff, math.nan, math.nan)}
+    if math.isfinite(low) and math.isfinite(high):
+        se = math.sqrt(((high - low) / (2 * Z)) ** 2 + (sq("null_se") + sq("chance_sd")) / s**2)
+        out |= {"low": diff - Z * se, "high": diff + Z * se}
+        out["text"] = interval_text(diff, out["low"], out["high"])
+        out["verdict"] = mc_cue_state(out["low"], out["high"], out["margin"])
+    return out
+
+
+def explained_statistics(claims: list[dict], claim_statistics: dict) -> dict:
+    """The statistics the claims call "explained by a control", by (region, method): the
+    claim's name and its control, so the page says so beside the number.
+
+    Parameters
+    ----------
+    claims : list of dict
+        The claims table's rows (``id``, ``verdict``, ``control``).
+    claim_statistics : dict
+        Claim id to the (region, method) of the :math:`\\rho` it tests.
+
+    Examples
+    --------
+    >>> explained_statistics([{"id": "rho_all", "verdict": "explained by a control",
+    ...                        "control": "sensor_sim rho"}], {"rho_all": ("all", "warp")})
+    {('all', 'warp'): "ρ of a simulated camera's noise"}
+    """
+    return {
+        tuple(claim_statistics[c["id"]]): control_name(c.get("control") or "") or "its control"
+        for c in claims
+        if c.get("verdict") == EXPLAINED and c.get("id") in claim_statistics
+    }
+
+
+def control_rows(
+    statistics: list[dict], matched: dict | None = None, explained: dict | None = None
+) -> list[dict]:
+    """The headline table by region: the Monte Carlo-specific :math:`\\rho` and its matched
+    null (over all valid pixels, where the calibration has them), :math:`\\rho` after the warp,
+    then each control of :data:`CONTROL_GROUPS` that ``statistics`` holds, each with its
+    interval in every region.
+
+    Parameters
+    ----------
+    statistics : list of dict
+        ``summary.json``'s ``statistics``.
+    matched : dict, optional
+        :func:`matched_headline` over all valid pixels.
+    explained : dict, optional
+        :func:`explained_statistics`: a cell it names says "explained by a control".
 
     Returns
     -------
     list of dict
-        ``method``, ``group`` (empty for the headline), ``label`` and ``cells`` (region to
-        :func:`interval_text`).
+        ``method``, ``group`` (``headline``, ``matched``, ``paper`` or a control group),
+        ``label``, ``cells`` (region to text) and ``explained`` (region to the control that
+        explains the cell's number).
 
     Examples
     --------
@@ -248,6 +377,7 @@ def control_rows(statistics: list[dict]) -> list[dict]:
     >>> control_rows(stats)[1]["cells"]
     {'all': '0.500 [0.400, 0.600]', 'non_glass': 'n/a', 'glass': '0.500 [0.400, 0.600]'}
     """
+    explained = explained or {}
 
     def cells(method):
         return {
@@ -258,30 +388,102 @@ def control_rows(statistics: list[dict]) -> list[dict]:
             for region in REGIONS
         }
 
-    rows = [{"method": HEADLINE_METHOD, "group": "", "label": "ρ after the warp (Eq. 3)",
-             "cells": cells(HEADLINE_METHOD)}]
+    def marks(method):
+        return {g: explained[(g, method)] for g in REGIONS if (g, method) in explained}
+
+    rows = []
+    if matched and math.isfinite(matched["value"]):
+        none = {g: "no null" for g in REGIONS if g != "all"}
+        rows += [
+            {"method": "mc_specific", "group": "headline", "label": "Monte Carlo-specific ρ",
+             "cells": {"all": matched["text"], **none}, "explained": {}},
+            {"method": "matched_null", "group": "matched",
+             "label": "its matched null (camera-law noise)",
+             "cells": {"all": f"{matched['null']:.3f}", **none}, "explained": {}},
+        ]
+    rows.append({"method": HEADLINE_METHOD, "group": "paper", "label": "ρ after the warp (Eq. 3)",
+                 "cells": cells(HEADLINE_METHOD), "explained": marks(HEADLINE_METHOD)})
     present = {r.get("method") for r in statistics}
     for group, _, methods in CONTROL_GROUPS:
         rows += [
-            {"method": m, "group": group, "label": f"{group}: {label}", "cells": cells(m)}
+            {"method": m, "group": group, "label": f"{group}: {label}", "cells": cells(m),
+             "explained": marks(m)}
             for m, label in methods
             if m in present
         ]
     return rows
 
 
-def claim_cells(row: dict) -> dict:
-    """One claims-table row (:data:`stereovar.statistics.claims.CLAIMS_COLUMNS`) as the
-    page shows it: numbers to 3 significant digits with their 95% intervals.
+def conclusion(matched: dict, warp: dict, explained: dict | None = None) -> dict:
+    """The page's one-line conclusion: a word for the verdict on the Monte Carlo-specific
+    :math:`\\rho` (:data:`CONCLUSIONS`) and one sentence with the number, its interval and
+    its control (the matched null); without a matched null, :math:`\\rho` after the warp with
+    its interval, not called Monte Carlo-specific, and its control where the claims say
+    that the control explains it.
+
+    Parameters
+    ----------
+    matched : dict
+        :func:`matched_headline`.
+    warp : dict
+        :func:`headline`.
+    explained : dict, optional
+        :func:`explained_statistics`.
 
     Examples
     --------
-    >>> c = claim_cells({"claim": "rho = 0.754", "section": "Sec. 3.2", "paper": 0.754,
+    >>> m = {"value": 0.4, "low": 0.3, "high": 0.5, "null": 0.001, "margin": 0.1,
+    ...      "verdict": "remains", "text": "0.400 [0.300, 0.500]", "n_scenes": 4}
+    >>> c = conclusion(m, {"text": "0.745 [0.6, 0.9]"})
+    >>> c["word"], c["text"]  # doctest: +NORMALIZE_WHITESPACE
+    ('Cue present', 'Monte Carlo-specific ρ = 0.400 [0.300, 0.500] beyond its matched null
+    0.001 (all valid pixels, 4 scenes).')
+    """
+    verdict = matched.get("verdict", "n/a")
+    word, cls = CONCLUSIONS.get(verdict, CONCLUSIONS["n/a"])
+    n = matched.get("n_scenes")
+    where = "all valid pixels" + (f", {n} scenes" if n not in (None, "") else "")
+    number = f"Monte Carlo-specific ρ = {matched.get('text', 'n/a')}"
+    null = f"matched null {_f(matched.get('null')):.3f}"
+    margin = _f(matched.get("margin"))
+    if verdict == "remains":
+        text = f"{number} beyond its {null} ({where})."
+    elif verdict == "reversed":
+        text = f"{number}: below its {null} ({where})."
+    elif verdict == "removed":
+        text = f"{number} against its {null}, within the calibration's margin ±{margin:.3f}."
+    elif verdict == "inconclusive":
+        reach = f"past the margin ±{margin:.3f}" if math.isfinite(margin) else "with no margin"
+        text = f"{number} against its {null}: the interval covers 0 but reaches {reach}."
+    else:
+        control = (explained or {}).get(("all", HEADLINE_METHOD))
+        text = (
+            f"No matched null in this run, so no ρ here is called Monte Carlo-specific; "
+            f"ρ after the warp = {warp.get('text', 'n/a')}"
+            + (f", explained by a control ({control})." if control else ".")
+        )
+    return {"word": word, "cls": cls, "text": text, "verdict": verdict}
+
+
+def claim_cells(row: dict) -> dict:
+    """One claims-table row (:data:`stereovar.statistics.claims.CLAIMS_COLUMNS`) as the
+    page shows it: the claim by name (:func:`stereovar.pages.names.claim_name`), where the
+    paper makes it by section name, numbers to 3 significant digits with their 95%
+    intervals, the control in words.
+
+    Examples
+    --------
+    >>> c = claim_cells({"id": "rho_all", "claim": "rho (all) = 0.754",
+    ...     "section": "Sec. 3.2 (sec:exp-main)", "paper": 0.754,
     ...     "ours": 0.7012, "ours_low": 0.65, "ours_high": 0.75, "control": "sensor_sim rho",
     ...     "control_value": 0.01, "control_low": -0.02, "control_high": 0.04,
     ...     "verdict": "does not hold", "note": ""})
-    >>> c["ours"], c["control"], c["control_value"], c["verdict_class"]
-    ('0.701 [0.65, 0.75]', 'sensor_sim rho', '0.01 [-0.02, 0.04]', 'fails')
+    >>> c["claim"], c["section"]
+    ('ρ over all valid pixels is 0.754', 'Sec. 3.2, cross-scene correlation')
+    >>> c["ours"], c["verdict_class"]
+    ('0.701 [0.65, 0.75]', 'fails')
+    >>> c["control"], c["control_value"]
+    ("ρ of a simulated camera's noise", '0.01 [-0.02, 0.04]')
     """
     paper = row.get("paper")
     control_value = interval_text(
@@ -290,17 +492,64 @@ def claim_cells(row: dict) -> dict:
     verdict = str(row.get("verdict", ""))
     return {
         "id": str(row.get("id", "")),
-        "claim": str(row.get("claim", "")),
-        "section": str(row.get("section", "")),
-        "note": str(row.get("note") or ""),
+        "claim": claim_name(str(row.get("id", "")), str(row.get("claim", ""))),
+        "section": section_name(str(row.get("section", ""))),
+        "note": readable(str(row.get("note") or "")),
         "paper": significant(_f(paper)) if math.isfinite(_f(paper)) else str(paper or ""),
         "ours": interval_text(row.get("ours"), row.get("ours_low"), row.get("ours_high"),
                               fmt="sig"),
-        "control": str(row.get("control") or "") or "none",
+        "control": control_name(str(row.get("control") or "")) or "none",
         "control_value": control_value if row.get("control") else "",
         "verdict": verdict,
         "verdict_class": VERDICT_CLASSES.get(verdict, ""),
     }
+
+
+def _iv(row: dict, column: str, digits: int = 3) -> str:
+    value, low, high = (_f(row.get(k)) for k in (column, f"{column}_low", f"{column}_high"))
+    return interval_text(value, low, high, fmt=f".{digits}f")
+
+
+def mitigation_rows(rows: list[dict], region: str = "all") -> list[dict]:
+    """The compact mitigation table (:data:`MITIGATION_COLUMNS`) over ``region``: per
+    mitigation its samples per image, the Monte Carlo-specific :math:`\\rho` with its 95%
+    interval beside its matched null, what a seed-mean transform ships, the verdict, and the
+    PSNR cost beside a raw render at the same samples per image
+    (:func:`stereovar.statistics.mitigations.equal_budget_psnr`). The full table is
+    ``results/tables/mitigations.csv``.
+
+    Examples
+    --------
+    >>> rows = [{"mitigation": "none", "region": "all", "render_spp": 32, "spp": 32,
+    ...          "kind": "baseline", "mc_specific": 0.5, "mc_specific_low": 0.4,
+    ...          "mc_specific_high": 0.6, "null_partial": 0.001, "mc_cue": "remains",
+    ...          "psnr": 19.5, "psnr_low": 16.1, "psnr_high": 22.9}]
+    >>> r = mitigation_rows(rows)[0]
+    >>> r["mc_specific"], r["null"], r["verdict"], r["psnr"], r["budget"]
+    ('0.500 [0.400, 0.600]', '0.001', 'remains', '19.5 [16.1, 22.9]', '')
+    """
+    from ..statistics.mitigations import equal_budget_psnr
+
+    chosen = [r for r in rows if r.get("region") == region]
+    out = []
+    for r in chosen:
+        budget, how = equal_budget_psnr(chosen, r)
+        same = r.get("mitigation") == "none" or r.get("kind") == "spp"
+        null = _f(r.get("null_partial"))
+        samples = _f(r.get("render_spp"))
+        out.append({
+            "mitigation": readable(str(r.get("mitigation", ""))),
+            "samples": f"{samples:.0f}" if math.isfinite(samples) else "",
+            "mc_specific": _iv(r, "mc_specific"),
+            "null": f"{null:.3f}" if math.isfinite(null) else "n/a",
+            "ships": _iv(r, "shipped_mc_specific")
+            if math.isfinite(_f(r.get("shipped_mc_specific"))) else "as measured",
+            "verdict": str(r.get("mc_cue", "")),
+            "verdict_class": VERDICT_CLASSES.get(str(r.get("mc_cue", "")), ""),
+            "psnr": _iv(r, "psnr", 1),
+            "budget": f"{budget:.1f} ({how})" if math.isfinite(budget) and not same else "",
+        })
+    return out
 
 
 def page_sections(
@@ -316,8 +565,11 @@ def page_sections(
     probe: dict | None = None,
     generators: dict | None = None,
     report: str | None = None,
-    report_command: str = "snakemake --report results/report.html",
+    report_command: str = "stereovar report",
     calibration: str = "",
+    nulls: list[dict] | None = None,
+    claim_statistics: dict | None = None,
+    docs: dict | None = None,
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
@@ -328,7 +580,7 @@ def page_sections(
     claims : list of dict
         The claims table's rows (``results/tables/claims.csv``).
     claims_text, intro : str
-        The claims table's and the run's captions (reStructuredText).
+        The claims table's caption and a paragraph on the run (reStructuredText).
     rules : list of str
         The verdicts' rules and the intervals, as the claims table's caption states them.
     figures : list of dict
@@ -337,8 +589,9 @@ def page_sections(
     tables : list of dict
         ``name``, ``group`` and ``links`` (format to a path relative to the page).
     mitigations, probe : dict, optional
-        When they have run: ``lines`` (mitigations) or ``paragraph`` (probe), ``figure``
-        (as in ``figures``, or None) and ``tables`` (as in ``tables``).
+        When they have run: ``rows`` (the mitigation table's rows) and ``lines``
+        (:func:`stereovar.statistics.mitigations.mitigation_findings`), or ``paragraph``
+        (probe); ``figure`` (as in ``figures``, or None) and ``tables`` (as in ``tables``).
     generators : dict, optional
         When the ``generators`` target has run: ``rows``
         (:func:`stereovar.statistics.generators.compact_table`), ``figure`` and ``tables``.
@@ -347,16 +600,51 @@ def page_sections(
     report_command : str, optional
         The command that makes the report.
     calibration : str, optional
-        The calibration's sentence (:func:`stereovar.calibration.summary.headline`), shown
-        under the headline.
+        The calibration's sentence (:func:`stereovar.calibration.summary.headline`).
+    nulls : list of dict, optional
+        The calibration's matched nulls (``calibration_nulls.csv``): with them the headline
+        is the Monte Carlo-specific :math:`\\rho` (:func:`matched_headline`).
+    claim_statistics : dict, optional
+        Claim id to the (region, method) of the :math:`\\rho` it tests
+        (:func:`explained_statistics`).
+    docs : dict, optional
+        Documentation addresses by topic (``page``, ``calibration``, ``mitigations``,
+        ``probe``, ``generators``; :func:`stereovar.links.docs_page`).
     """
     statistics = list(summary.get("statistics") or [])
     tally: dict[str, int] = {}
     for row in claims:
         tally[str(row.get("verdict", ""))] = tally.get(str(row.get("verdict", "")), 0) + 1
     scenes = list(summary.get("scenes") or [])
+    explained = explained_statistics(claims, claim_statistics or {})
+    matched = matched_headline(statistics, nulls or [], scenes=scenes or None)
+    warp = headline(statistics)
+    mitigation_section = None
+    if mitigations:
+        from ..statistics.mitigations import mitigation_findings
+
+        rows = list(mitigations.get("rows") or [])
+        table = mitigation_rows(rows)
+        columns = [c for c in MITIGATION_COLUMNS
+                   if c != "ships" or any(r["ships"] != "as measured" for r in table)]
+        findings = mitigation_findings(rows) if rows else list(mitigations.get("lines") or [])
+        n_rows = len([r for r in rows if r.get("region") == "all"])
+        mitigation_section = {
+            "rows": table,
+            "columns": columns,
+            "labels": MITIGATION_COLUMNS,
+            "summary": findings[n_rows:] if rows else findings,
+            "figure": mitigations.get("figure"),
+            "tables": _labelled(mitigations.get("tables") or []),
+        }
+    if probe:
+        probe = {**probe, "tables": _labelled(probe.get("tables") or [])}
+    if generators:
+        generators = {**generators, **_generator_table(generators.get("rows") or []),
+                      "tables": _labelled(generators.get("tables") or [])}
     return {
         "title": "stereovar: results of this run",
+        "conclusion": conclusion(matched, warp, explained),
         "run": {
             "renderer": summary.get("renderer", ""),
             "estimator": summary.get("estimator", ""),
@@ -366,272 +654,51 @@ def page_sections(
             "config_digest": str(summary.get("config_digest") or ""),
         },
         "intro": intro,
-        "headline": headline(statistics),
+        "headline": warp,
+        "matched": matched,
+        "explained": explained,
         "interval": str(summary.get("interval") or "95% interval"),
-        "controls": control_rows(statistics),
+        "controls": control_rows(statistics, matched, explained),
+        "control_notes": [(group, note) for group, note, _ in CONTROL_GROUPS],
         "tally": tally,
         "claims": [claim_cells(r) for r in claims],
         "claims_text": claims_text,
         "rules": list(rules),
         "figures": list(figures),
-        "mitigations": mitigations,
+        "mitigations": mitigation_section,
         "probe": probe,
         "generators": generators,
-        "tables": list(tables),
+        "tables": _labelled(tables),
         "report": report,
         "report_command": report_command,
         "calibration": calibration,
+        "calibration_links": next(
+            (t["links"] for t in tables if t["name"] == "calibration" and t.get("links")), {}
+        ),
+        "docs": dict(docs or {}),
     }
 
 
-def _e(text) -> str:
-    return html.escape(str(text))
+def _labelled(tables: list[dict]) -> list[dict]:
+    """``tables`` with each one's label (:data:`TABLE_LABELS`)."""
+    return [{**t, "label": TABLE_LABELS.get(t["name"], readable(t["name"]))} for t in tables]
 
 
-def _run_line(run: dict) -> str:
-    scenes = run["scenes"]
-    shown = ", ".join(scenes[:6]) + (f" and {len(scenes) - 6} more" if len(scenes) > 6 else "")
-    parts = [
-        f"renderer <b>{_e(run['renderer'])}</b>",
-        f"estimator <b>{_e(run['estimator'])}</b>",
-        f"{len(scenes)} scene{'s' if len(scenes) != 1 else ''} ({_e(shown)})",
-        f"N = {_e(run['n_seeds'])} seeds at SPP {_e(run['spp'])}",
-    ]
-    if run["config_digest"]:
-        parts.append(f"config <code>{_e(run['config_digest'][:12])}</code>")
-    return '<p class="run">' + " · ".join(parts) + "</p>"
-
-
-def _headline_html(s: dict) -> str:
-    h = s["headline"]
-    if math.isfinite(h["rho"]):
-        value = f"ρ = {h['rho']:.3f}"
-        interval = (
-            f"95% interval [{h['low']:.3f}, {h['high']:.3f}]"
-            if math.isfinite(h["low"]) and math.isfinite(h["high"])
-            else "no interval (too few tiles or scenes)"
-        )
-    else:
-        value, interval = "ρ: n/a", "no headline statistic in this run"
-    n = h["n_scenes"]
-    tally = ", ".join(f"{count} {verdict}" for verdict, count in s["tally"].items())
-    left = (
-        '<div class="rho">'
-        '<p class="what">Cross-view variance correlation, all valid pixels, after the '
-        "warp (Eq. 3)</p>"
-        f'<p class="value">{_e(value)}</p><p class="interval">{_e(interval)}</p>'
-        f'<p class="what">{_e(s["interval"])}'
-        + (f"; mean over {_e(n)} scenes" if n not in (None, "") else "")
-        + ". Read it against the controls beside it.</p>"
-        + (f'<p class="tally"><a href="#claims">Claims</a>: {_e(tally)}.</p>' if tally else "")
-        + "</div>"
-    )
-    head = "".join(f"<th>{_e(label)}</th>" for label in REGIONS.values())
-    rows = []
-    for r in s["controls"]:
-        cells = "".join(f'<td class="num">{_e(r["cells"][g])}</td>' for g in REGIONS)
-        cls = ' class="main"' if not r["group"] else ""
-        rows.append(f'<tr{cls} data-method="{_e(r["method"])}"><td>{_e(r["label"])}</td>'
-                    f"{cells}</tr>")
-    shown = {r["group"] for r in s["controls"]}
-    notes = "; ".join(
-        f"<b>{_e(group)}</b>: {_e(note)}" for group, note, _ in CONTROL_GROUPS if group in shown
-    )
-    controls = (
-        '<div class="controls"><table class="controls"><caption>ρ and its controls by region, '
-        f"with 95% intervals</caption><thead><tr><th>statistic</th>{head}</tr></thead>"
-        f"<tbody>{''.join(rows)}</tbody></table>"
-        + (f'<p class="notes">{notes}.</p>' if notes else "")
-        + "</div>"
-    )
-    calibration = (
-        f'<p class="calibration"><b>Calibration</b>: {_e(s["calibration"])} '
-        '(<code>tables/calibration.md</code>)</p>'
-        if s.get("calibration")
-        else ""
-    )
-    return (
-        f'<section id="headline" class="headline">{left}{controls}{calibration}</section>'
-    )
-
-
-def _claims_html(s: dict) -> str:
-    rows = []
-    for c in s["claims"]:
-        sub = " · ".join(x for x in (c["section"], c["note"]) if x)
-        verdict = (
-            f'<span class="verdict {c["verdict_class"]}">{_e(c["verdict"])}</span>'
-            if c["verdict"]
-            else ""
-        )
-        rows.append(
-            f'<tr data-claim="{_e(c["id"])}"><td>{_e(c["claim"])}'
-            + (f'<div class="sub">{_e(sub)}</div>' if sub else "")
-            + f'</td><td class="num">{_e(c["paper"])}</td><td class="num">{_e(c["ours"])}</td>'
-            f"<td>{_e(c['control'])}"
-            + (f': <span class="nowrap">{_e(c["control_value"])}</span>'
-               if c["control_value"] not in ("", "n/a") else "")
-            + f"</td><td>{verdict}</td></tr>"
-        )
-    table = (
-        '<table class="claims" id="claims-table"><thead><tr><th>claim</th><th>paper</th>'
-        "<th>ours [95% interval]</th><th>control [95% interval]</th><th>verdict</th></tr>"
-        f"</thead><tbody>{''.join(rows)}</tbody></table>"
-    )
-    rules = "".join(f"<p>{_e(r)}</p>" for r in s["rules"])
-    return (
-        '<section id="claims"><h2>Claims of the paper on this run</h2>'
-        + table
-        + f'<div class="about">{rst_to_html(s["claims_text"])}</div>'
-        + (f"<details><summary>How the verdicts are given</summary>{rules}</details>"
-           if rules else "")
-        + "</section>"
-    )
-
-
-def _figure_html(f: dict) -> str:
-    caption = rst_to_html(f.get("caption") or "") or f"<p>{_e(f['name'])}</p>"
-    return figure(f["src"], caption, alt=f["name"], ident=f"figure-{f['name']}")
-
-
-def _links_html(tables: list[dict]) -> str:
-    if not tables:
-        return "<p>No tables.</p>"
-    rows = []
-    for t in tables:
-        links = " ".join(
-            f'<a href="{_e(href)}">{_e(fmt)}</a>' for fmt, href in t["links"].items()
-        )
-        label = TABLE_LABELS.get(t["name"], t["name"])
-        rows.append(
-            f"<tr><td>{_e(label)}</td><td><code>{_e(t['name'])}</code></td>"
-            f"<td>{_e(t['group'])}</td><td>{links}</td></tr>"
-        )
-    return (
-        '<table class="links"><thead><tr><th>table</th><th>file</th><th>run</th>'
-        f"<th>formats</th></tr></thead><tbody>{''.join(rows)}</tbody></table>"
-    )
-
-
-def _mitigation_headline_html(rows: list[dict]) -> str:
-    """The mitigation headline table
-    (:func:`stereovar.statistics.mitigations.headline_table`), all pixels."""
-    if not rows:
-        return ""
-    columns = list(rows[0])
-    head = "".join(f"<th>{_e(c)}</th>" for c in columns)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{_e(r[c])}</td>" for c in columns) + "</tr>" for r in rows
-    )
-    return (
-        '<table class="mitigations"><thead><tr>' + head + "</tr></thead><tbody>" + body
-        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals. The Monte "
-        "Carlo-specific rho is the intensity-controlled rho minus its matched null through "
-        "the same transform; <em>removed</em> means its interval lies inside the "
-        "calibration's equivalence margin, <em>inconclusive</em> that it covers 0 but "
-        "reaches past it. The full table (every region and control) is linked below.</p>"
-    )
-
-
-def _generator_table_html(rows: list[dict]) -> str:
-    """The generator table (:func:`stereovar.statistics.generators.compact_table`), all
-    pixels."""
-    if not rows:
-        return ""
+def _generator_table(rows: list[dict]) -> dict:
+    """The generator table's columns, without a probe column that says only "not run"."""
     from ..statistics.generators import PROBE_NOT_RUN
 
-    columns = list(rows[0])
-    probe = ""
-    if all(r.get("probe") == PROBE_NOT_RUN for r in rows):  # a column of "not run" says less
+    columns = list(rows[0]) if rows else []
+    probe_not_run = bool(rows) and all(r.get("probe") == PROBE_NOT_RUN for r in rows)
+    if probe_not_run:
         columns.remove("probe")
-        probe = " The learned probe was not run on these profiles (docs: Generator profiles)."
-    head = "".join(f"<th>{_e(c)}</th>" for c in columns)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{_e(r[c])}</td>" for c in columns) + "</tr>" for r in rows
-    )
-    return (
-        '<table class="mitigations"><thead><tr>' + head + "</tr></thead><tbody>" + body
-        + "</tbody></table><p class=\"what\">All valid pixels; 95% intervals." + probe
-        + " Each row is "
-        "Cycles under one generator's own defaults (its SPP scaled to the budget where it is "
-        "above it). The Monte Carlo-specific rho is the intensity-controlled rho minus the "
-        "same statistic on the profile's own matched null, whose value stands beside it; the "
-        "residual coupling at zero disparity is what one seed shared by both views "
-        "couples.</p>"
-    )
+    labels = {c: c.replace("rho", "ρ") for c in columns}
+    return {"columns": columns, "labels": labels, "probe_not_run": probe_not_run}
 
 
 def to_html_page(s: dict) -> str:
-    """The page as one self-contained HTML document (no script)."""
-    nav = [("headline", "Headline"), ("claims", "Claims"), ("figures", "Figures")]
-    nav += [("mitigations", "Mitigations")] if s["mitigations"] else []
-    nav += [("probe", "Learned probe")] if s["probe"] else []
-    nav += [("generators", "Generators")] if s.get("generators") else []
-    nav += [("tables", "Tables"), ("report", "Snakemake report")]
-    body = [
-        f"<h1>{_e(s['title'])}</h1>",
-        f'<div class="intro">{rst_to_html(s["intro"])}</div>' if s["intro"] else "",
-        _run_line(s["run"]),
-        "<nav>" + "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in nav) + "</nav>",
-        _headline_html(s),
-        _claims_html(s),
-        '<section id="figures"><h2>Figures</h2>',
-    ]
-    group = None
-    for f in s["figures"]:
-        if f["group"] != group:
-            group = f["group"]
-            body.append(f'<h3 class="group">{_e(group)}</h3>')
-        body.append(_figure_html(f))
-    body.append("</section>")
-    m = s["mitigations"]
-    if m:
-        items = "".join(f"<li>{_e(x)}</li>" for x in m["lines"])
-        body += [
-            '<section id="mitigations"><h2>Mitigations</h2>',
-            _mitigation_headline_html(m.get("headline") or []),
-            f"<ul>{items}</ul>",
-            _figure_html(m["figure"]) if m.get("figure") else "",
-            _links_html(m.get("tables") or []),
-            "</section>",
-        ]
-    p = s["probe"]
-    if p:
-        body += [
-            '<section id="probe"><h2>Learned probe</h2>',
-            f"<p>{_e(p['paragraph'])}</p>",
-            _figure_html(p["figure"]) if p.get("figure") else "",
-            _links_html(p.get("tables") or []),
-            "</section>",
-        ]
-    g = s.get("generators")
-    if g:
-        body += [
-            '<section id="generators"><h2>Generator profiles</h2>',
-            _generator_table_html(g["rows"]),
-            _figure_html(g["figure"]) if g.get("figure") else "",
-            _links_html(g.get("tables") or []),
-            "</section>",
-        ]
-    body += [
-        '<section id="tables"><h2>Tables</h2>',
-        "<p>Every table of the run, in each format (CSV at full precision; Markdown, LaTeX "
-        "and HTML to 4 significant digits), relative to this page's folder.</p>",
-        _links_html(s["tables"]),
-        "</section>",
-        '<section id="report"><h2>Snakemake report</h2>',
-    ]
-    command = f"<code>{_e(s['report_command'])}</code>"
-    if s["report"]:
-        body.append(
-            f'<p><a href="{_e(s["report"])}">Snakemake\'s report</a> holds every table and '
-            f"figure with the workflow and each job's provenance ({command} remakes it).</p>"
-        )
-    else:
-        body.append(
-            "<p>Snakemake's report, with every table and figure, the workflow and each job's "
-            f"provenance, was not made when this page was written: run {command} in the run's "
-            "folder.</p>"
-        )
-    body.append("</section>")
-    return document(s["title"], [b for b in body if b], _CSS)
+    """The page as one self-contained HTML document (``results.html.j2``, no script)."""
+    from .templates import render
+
+    return render("results.html.j2", s=s, title=s["title"], band=CLAIMS_BAND,
+                  regions=REGIONS)
