@@ -24,18 +24,12 @@ import json
 import os
 import re
 import shutil
+import sys
 import tempfile
+import time
 from pathlib import Path
 
 import yaml
-from snakemake.api import SnakemakeApi
-from snakemake.settings.types import (
-    ConfigSettings,
-    DAGSettings,
-    OutputSettings,
-    Quietness,
-    ResourceSettings,
-)
 
 REPO = Path(__file__).resolve().parents[1]
 #: The user targets, each a listing of the same name; ``audit`` is ``all`` on the synthetic
@@ -119,6 +113,15 @@ def job_line(job) -> str:
 
 def job_lines(targets, configfiles=(), cores: int = 2) -> list[str]:
     """The sorted job lines of a dry run of ``targets`` in the current folder."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import (
+        ConfigSettings,
+        DAGSettings,
+        OutputSettings,
+        Quietness,
+        ResourceSettings,
+    )
+
     with SnakemakeApi(OutputSettings(quiet={Quietness.ALL})) as api:
         workflow = api.workflow(
             resource_settings=ResourceSettings(cores=cores),
@@ -172,7 +175,9 @@ def listings(root: Path, names) -> dict[str, list[str]]:
                 folders[kind] = make(root / kind)
             os.chdir(folders[kind])
             configs = [AUDIT_CONFIG] if kind == "audit" else []
+            start = time.perf_counter()
             out[name] = job_lines(LISTINGS[name], configs)
+            print(f"{name}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
     finally:
         os.chdir(here)
     return out
