@@ -11,6 +11,9 @@ own):
 ``source_tree.rst``
     every package and module under ``src/stereovar`` with the first sentence of its
     docstring, and the data files shipped with them;
+``workflow_map.rst``
+    each rule file of ``workflow/rules`` with its rules and the input functions it calls
+    (``workflow/rules/inputs/``), and the library modules those ask;
 ``result_paths.rst``, ``layout_doc.rst``
     every path of :mod:`stereovar.layout`, obtained by calling its functions with the
     wildcards as arguments, and the module's own description;
@@ -315,6 +318,56 @@ def source_tree(src: Path) -> str:
     return "\n".join(lines) + "\n"
 
 
+# --- the workflow's rule files and their input functions ------------------------------------
+
+_RULE = re.compile(r"^(?:rule|checkpoint) (\w+):", re.M)
+_FUNCTION = re.compile(r"^def (\w+)\(", re.M)
+_LIBRARY = re.compile(r"^from stereovar\.workflow_inputs import (\w+) as (\w+)", re.M)
+
+
+def workflow_map(rules: Path) -> str:
+    """Two tables from ``workflow/rules``: each rule file with its rules and the files whose
+    functions it calls (``common.smk``, shared, and ``inputs/<feature>.smk``), then each
+    input file with its functions and the :mod:`stereovar.workflow_inputs` modules it asks."""
+    sources = {"common.smk": (rules / "common.smk").read_text(encoding="utf-8")}
+    for path in sorted(rules.glob("inputs/*.smk")):
+        sources[f"inputs/{path.name}"] = path.read_text(encoding="utf-8")
+    defined = {name: set(_FUNCTION.findall(text)) for name, text in sources.items()}
+    aliases = {a: m for text in sources.values() for m, a in _LIBRARY.findall(text)}
+    rows = []
+    for path in sorted(rules.glob("*.smk")):
+        text = path.read_text(encoding="utf-8")
+        names = _RULE.findall(text)
+        if not names:
+            continue
+        words = set(re.findall(r"\b(\w+)\b", text))
+        used = [f"``{n}``" for n, funcs in defined.items() if funcs & words]
+        rows.append([
+            f"``{path.name}``",
+            ", ".join(f"``{r}``" for r in names),
+            ", ".join(used) or "--",
+        ])
+    lines = [
+        ".. This file is generated from workflow/rules by docs/_ext/stereovar_docs.py.",
+        "",
+    ]
+    lines += list_table(["rule file", "rules", "functions from"], rows, [18, 52, 30])
+    rows = []
+    for name, text in sources.items():
+        library = [
+            f":mod:`stereovar.workflow_inputs.{m}`"
+            for a, m in sorted(aliases.items(), key=lambda am: am[1])
+            if re.search(rf"\b{a}\.", text)
+        ]
+        rows.append([
+            f"``{name}``",
+            ", ".join(f"``{f}``" for f in sorted(defined[name])) or "--",
+            ", ".join(library) or "--",
+        ])
+    lines += list_table(["file", "functions", "library"], rows, [22, 50, 28])
+    return "\n".join(lines) + "\n"
+
+
 # --- the result paths -----------------------------------------------------------------------
 
 
@@ -536,6 +589,7 @@ def generate(app) -> None:
         config = yaml.safe_load(config_file.read_text(encoding="utf-8")) or {}
     write_if_changed(out / "config_keys.rst", config_reference(schema, config))
     write_if_changed(out / "source_tree.rst", source_tree(repo / "src"))
+    write_if_changed(out / "workflow_map.rst", workflow_map(repo / "workflow" / "rules"))
     layout = importlib.import_module("stereovar.layout")
     write_if_changed(out / "result_paths.rst", result_paths(layout))
     write_if_changed(out / "layout_doc.rst", layout_doc(layout))
