@@ -283,5 +283,13 @@ def test_audit_fail_on_exits_with_the_verdict_line(audited, capsys, light, level
         assert gate == []
 
 
+def test_fail_on_with_import_only_is_refused_before_anything_runs(audited, capsys):
+    """An import makes no verdict: a gate on it would pass every time."""
+    assert audited("red", "--fail-on", "red", "--import-only") == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1 and "--import-only" in err
+    assert not Path("results").exists()
+
+
 def test_fail_on_status_is_none_of_the_others():
     assert FAIL_ON_STATUS not in (0, 1, 2)

@@ -110,6 +110,10 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     from ..layout import audit_source
     from ..schema import load_yaml
 
+    if args.fail_on and args.import_only:  # the gate would pass without a verdict
+        raise StereovarError(
+            "--fail-on needs the verdict, which --import-only does not make; drop one of them"
+        )
     root = _project_root()
     config = Path(args.config)
     if not config.is_file():
@@ -176,7 +180,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         print("\n".join(lines))
         print(f"verdict page: {summary.parent / 'verdict.html'}")
     print(f"log: {shown_log}")
-    if not args.import_only and verdict_fails(verdict.get("light"), args.fail_on):
+    if verdict_fails(verdict.get("light"), args.fail_on):
         line = lines[0] if lines else f"the verdict's light is {verdict.get('light')!r}"
         print(f"{PROG}: --fail-on {args.fail_on}: {line}", file=sys.stderr)
         return FAIL_ON_STATUS
