@@ -24,7 +24,8 @@ VERDICTS = ("holds", "does not hold", "explained by a control", "not testable at
 METHODS = ("warp", *(m for _, _, methods in CONTROL_GROUPS for m, _ in methods))
 RUN_FIGURES = ("fig1_teaser", "rho_vs_seeds")
 CAPTIONS = {
-    "fig1_teaser": "**Fig. 1.** The teaser of ``scene_000``: σ²_L against σ²_R.",
+    "fig1_teaser": "**Fig. 1.** The teaser of ``scene_000``: :math:`\\sigma^2_L` against "
+    ":math:`\\hat\\sigma^2_{R\\to L}`.",
     "rho_vs_seeds": "rho against the number of seeds N'.",
     "mitigations": "**Mitigation trade-off.** The cue each mitigation leaves.",
     "probe": "**Learned probe.** Accuracy per test input.",
@@ -247,11 +248,17 @@ def synthetic_results(
     (root / "results/figures").mkdir()
     if mitigations:
         rows = [
-            {"mitigation": m, "region": "all", "partial": p, "partial_low": p - 0.1,
-             "partial_high": p + 0.1, "mc_cue": cue, "residual_rho_zero": 0.0,
-             "residual_rho_zero_low": -0.1, "residual_rho_zero_high": 0.1,
-             "psnr": q, "psnr_low": q - 1, "psnr_high": q + 1}
-            for m, p, cue, q in (("none", 0.5, "remains", 30.0), ("denoise", 0.02, "removed", 33.0))
+            {"mitigation": m, "kind": kind, "region": region, "spp": 32, "render_spp": 32,
+             "partial": p, "partial_low": p - 0.1, "partial_high": p + 0.1,
+             "null_partial": null, "mc_specific": p - null, "mc_specific_low": p - null - 0.03,
+             "mc_specific_high": p - null + 0.02, "margin": 0.05, "mc_cue": cue,
+             "residual_rho_zero": 0.0, "residual_rho_zero_low": -0.1,
+             "residual_rho_zero_high": 0.1, "psnr": q, "psnr_low": q - 1, "psnr_high": q + 1}
+            for m, kind, p, null, cue, q in (
+                ("none", "baseline", 0.5, 0.001, "remains", 30.0),
+                ("denoise", "transform", 0.81, 0.8, "removed", 33.0),
+            )
+            for region in ("all", "glass")
         ]
         paths = layout.mitigation_tables()
         write_tables(rows, list(rows[0]), formats(paths))
@@ -484,7 +491,10 @@ def test_figures_are_embedded_with_their_captions(synthetic):
         assert base64.b64decode(image["src"].split(",", 1)[1]) == Path(path).read_bytes()
         name = Path(path).stem
         caption = " ".join(page.text_by_id[f"figure-{name}"].split())
-        assert caption == re.sub(r"\*\*|``", "", CAPTIONS[name])
+        if ":math:" in CAPTIONS[name]:  # typeset as MathML: σ, its sub- and superscript
+            assert caption.startswith("Fig. 1. The teaser of scene_000: σ L 2 against σ")
+        else:
+            assert caption == re.sub(r"\*\*|``", "", CAPTIONS[name])
 
 
 def test_links_resolve_relative_to_results_and_cover_every_table(synthetic):
@@ -520,6 +530,38 @@ def test_mitigations_and_probe_sections_appear_when_they_have_run(synthetic):
     assert text.index('id="figures"') < text.index('id="mitigations"') < text.index('id="probe"')
 
 
+def test_one_compact_mitigation_table_with_the_full_table_linked(synthetic):
+    _, kwargs, text, page = synthetic(mitigations=True)
+    section = text[text.index('<section id="mitigations">'):]
+    section = section[: section.index("</section>")]
+    assert section.count("<table") == 1  # once, not twice
+    header = re.findall(r"<th>(.*?)</th>", section)
+    assert len(header) <= 8 and "matched null" in header and "verdict" in header
+    body = section[section.index("<tbody>"): section.index("</tbody>")]
+    cells = [[" ".join(re.sub(r"<[^>]+>", " ", c).split()) for c in re.findall(
+        r"<td[^>]*>(.*?)</td>", row)] for row in re.findall(r"<tr>(.*?)</tr>", body, re.S)]
+    rows = [r for r in read_rows(kwargs["mitigations"]) if r["region"] == "all"]
+    assert len(cells) == len(rows)  # one row per mitigation, all valid pixels
+    column = {name: header.index(name) for name in header}
+    for shown, row in zip(cells, rows, strict=True):
+        assert shown[column["mitigation"]] == row["mitigation"]
+        specific = numbers(shown[column["Monte Carlo-specific ρ [95%]"]])
+        assert all(close(g, v) for g, v in zip(specific, [row["mc_specific"],
+                   row["mc_specific_low"], row["mc_specific_high"]], strict=True))
+        assert close(numbers(shown[column["matched null"]])[0], row["null_partial"])
+        assert shown[column["verdict"]] == row["mc_cue"]
+        assert close(numbers(shown[column["PSNR, dB [95%]"]])[0], row["psnr"])
+    assert "tables/mitigations.csv" in re.findall(r'href="([^"]+)"', section)
+
+
+def test_claims_read_by_name_and_section_name_not_by_identifier(synthetic):
+    _, kwargs, _, page = synthetic()
+    for claim in read_rows(kwargs["claims"]):
+        name_and_section = page.claims[str(claim["id"])][0]
+        assert not re.search(r"_|\b(sec|tab|fig):|decorr\.", name_and_section), name_and_section
+    assert "Sec. 3.4, causal evidence" in " ".join(c[0] for c in page.claims.values())
+
+
 def test_the_generator_section_appears_once_the_generators_have_run(synthetic):
     _, _, text, _ = synthetic()
     assert 'id="generators"' not in text
@@ -542,11 +584,56 @@ VIEWPORT = (1280, 900)
 CLAIMS_PROBE = """JSON.stringify((() => {
   const table = document.getElementById("claims-table");
   const r = table ? table.getBoundingClientRect() : {left: 0, top: 0, right: 0, bottom: 0};
+  const box = (id) => {
+    const e = document.getElementById(id);
+    if (!e) return null;
+    const b = e.getBoundingClientRect();
+    return [b.top, b.bottom];
+  };
+  const scrolls = (e) => ["auto", "scroll"].includes(getComputedStyle(e).overflowX);
+  const overflow = [...document.querySelectorAll("body *")]
+    .filter(e => e.clientWidth > 0 && !scrolls(e) && e.scrollWidth > e.clientWidth + 1)
+    .map(e => `${e.tagName}#${e.id}.${e.className}: ${e.textContent.slice(0, 80)}`);
   return {rect: [r.left, r.top, r.right, r.bottom],
           ids: [...document.querySelectorAll("#claims-table tr[data-claim]")]
-                 .map(row => row.dataset.claim)};
+                 .map(row => row.dataset.claim),
+          overflow: overflow,
+          page_width: document.documentElement.scrollWidth,
+          text: document.body.innerText,
+          images: [...document.images].map(i => [i.alt, i.complete, i.naturalWidth]),
+          math: document.querySelectorAll("math").length,
+          conclusion: box("conclusion"), headline: box("headline-value")};
 })())"""
-"""What the page shows of the claims table: its box in the viewport and its rows' claims."""
+"""What the page shows: the claims table's box in the viewport and its rows' claims; every
+element whose text overflows its box (scroll containers aside), the page's width, the
+visible text, each image's load, the MathML elements, and the boxes of the conclusion and
+the headline number."""
+
+TEX_MARKERS = ("_{", "^{", "\\", "$")
+"""What TeX leaves in text that was not typeset."""
+
+
+def browser_problems(shown: dict) -> list[str]:
+    """What the page fails of the checks in a 1280 px window, by name: text overflowing its
+    box (scroll containers aside), a page wider than the window, TeX in the visible text, an
+    image not loaded, the conclusion or the headline number off the first screen."""
+    problems = [f"overflow: {e}" for e in shown["overflow"]]
+    if shown["page_width"] > VIEWPORT[0]:
+        problems.append(f"page width {shown['page_width']}")
+    problems += [f"tex: {m}" for m in TEX_MARKERS if m in shown["text"]]
+    if not shown["images"] or not all(done and width > 0 for _, done, width in shown["images"]):
+        problems.append(f"images: {shown['images']}")
+    for key in ("conclusion", "headline"):
+        if not (shown[key] and 0 <= shown[key][0] < shown[key][1] <= VIEWPORT[1]):
+            problems.append(f"{key} off the first screen: {shown[key]}")
+    return problems
+
+
+def check_in_browser(shown: dict, screenshot_path=None) -> None:
+    """The page passes :func:`browser_problems`'s checks."""
+    where = f" (screenshot {screenshot_path})" if screenshot_path else ""
+    assert browser_problems(shown) == [], where
+
 
 HIDDEN = {
     "display none": "table.claims { display: none; }",
@@ -581,9 +668,10 @@ def band_share(screenshot: bytes, rect, *, min_height: int = 120) -> float:
 
 def claims_visibility(headless_chromium, page: Path) -> tuple[float, list[str], object]:
     """Open ``page`` in Chromium: (band share of the claims table in the first viewport,
-    the claims its rows name, the load)."""
+    the claims its rows name, the load, with ``shown``: what :data:`CLAIMS_PROBE` found)."""
     load = headless_chromium(page, width=VIEWPORT[0], height=VIEWPORT[1], expression=CLAIMS_PROBE)
     shown = json.loads(load.value)
+    load.shown = shown
     return band_share(load.screenshot, shown["rect"]), shown["ids"], load
 
 
@@ -594,8 +682,9 @@ VISIBLE = 0.4
 
 @pytest.fixture
 def synthetic_page(synthetic):
-    """The synthetic results' page with the mitigations and the probe (a path)."""
-    root, _, _, _ = synthetic(mitigations=True, probe=True)
+    """The synthetic results' page with the mitigations, the probe and the generator profiles
+    (a path)."""
+    root, _, _, _ = synthetic(mitigations=True, probe=True, generators=True)
     return root / layout.results_page()
 
 
@@ -603,7 +692,10 @@ def test_synthetic_page_loads_in_chromium_with_the_claims_table_visible(
     headless_chromium, synthetic_page, tmp_path
 ):
     share, ids, load = claims_visibility(headless_chromium, synthetic_page)
+    (tmp_path / "first_screen.png").write_bytes(load.screenshot)
     assert load.errors == []
+    check_in_browser(load.shown, tmp_path / "first_screen.png")
+    assert load.shown["math"] >= 2  # the caption's equations typeset
     assert share >= VISIBLE, share
     assert ids == [str(r["id"]) for r in read_rows(synthetic_page.parent / "tables/claims.csv")]
 
@@ -620,13 +712,26 @@ def test_the_visibility_check_fails_when_the_claims_table_is_hidden(
     assert share < VISIBLE, (how, share)
 
 
-def test_a_missing_image_is_a_console_error(headless_chromium, synthetic_page):
-    """The error check sees what a broken page would log (a figure that is not there)."""
+BROKEN = {
+    "overflow": ("</body>", '<p style="width: 8em; white-space: nowrap">a line that cannot wrap '
+                 "and runs out of its box</p></body>"),
+    "tex": ("</body>", "<p>σ̂²_{R→L}</p></body>"),
+    "conclusion off": ('id="conclusion"', 'style="margin-top: 1200px" id="conclusion"'),
+    "images": ("</body>", '<img src="missing.png" alt="missing"></body>'),
+}
+"""Ways to break the page, each of which the browser checks must catch."""
+
+
+def test_the_browser_checks_fail_on_a_broken_page(headless_chromium, synthetic_page):
     text = synthetic_page.read_text(encoding="utf-8")
+    for old, new in BROKEN.values():
+        text = text.replace(old, new, 1)
     broken = synthetic_page.with_name("broken.html")
-    broken.write_text(text.replace("</body>", '<img src="missing.png" alt=""></body>'))
-    load = headless_chromium(broken, width=VIEWPORT[0], height=VIEWPORT[1])
-    assert any("missing.png" in e for e in load.errors), load.errors
+    broken.write_text(text, encoding="utf-8")
+    _, _, load = claims_visibility(headless_chromium, broken)
+    found = {p.split(":")[0].split(" off")[0] for p in browser_problems(load.shown)}
+    assert {"overflow", "tex", "conclusion", "headline", "images"} <= found, found
+    assert any("missing.png" in e for e in load.errors)
 
 
 # ----------------------------------------------------------------------------- the tiny run
