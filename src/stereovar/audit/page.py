@@ -304,11 +304,12 @@ def _captioned(items, kind: str) -> list[tuple[str, str]]:
     return out
 
 
-STRONGEST_FRAME_COLUMNS = ["rank", "frame", "ranked by", "value", "partial rho", "matched null"]
+STRONGEST_FRAME_COLUMNS = ["rank", "frame", "ranked by", "value (95% interval)",
+                           "intensity-controlled rho", "matched null"]
 """Columns of the page's frame ranking."""
 
-STRONGEST_TILE_COLUMNS = ["frame", "rank", "tile (x, y)", "pixels", "local rho", "null at rank",
-                          "stands out"]
+STRONGEST_TILE_COLUMNS = ["frame", "rank", "tile (x, y)", "pixels", "local rho (95% interval)",
+                          "null at its rank", "stands out"]
 """Columns of the page's tile table."""
 
 
@@ -328,11 +329,11 @@ def strongest_rows(ranking: list[dict], tiles: list[dict]) -> tuple[list[dict], 
         {
             "rank": r["rank"],
             "frame": r["frame"],
-            "ranked by": "partial rho minus matched null"
+            "ranked by": "intensity-controlled rho minus matched null"
             if r["statistic"] == "difference"
-            else "partial rho (no matched null)",
-            "value": _iv(r["value"], r["low"], r["high"]),
-            "partial rho": _iv(r["partial"], math.nan, math.nan),
+            else "intensity-controlled rho (no matched null)",
+            "value (95% interval)": _iv(r["value"], r["low"], r["high"]),
+            "intensity-controlled rho": _iv(r["partial"], math.nan, math.nan),
             "matched null": _iv(r["null"], math.nan, math.nan),
         }
         for r in ranking
@@ -343,8 +344,8 @@ def strongest_rows(ranking: list[dict], tiles: list[dict]) -> tuple[list[dict], 
             "rank": t["rank"],
             "tile (x, y)": f"{t['x0']}-{t['x1'] - 1}, {t['y0']}-{t['y1'] - 1}",
             "pixels": t["n_pixels"],
-            "local rho": _iv(t["rho"], t["low"], t["high"]),
-            "null at rank": f"{t['null']:.3f} (95th pct {t['null_high']:.3f})"
+            "local rho (95% interval)": _iv(t["rho"], t["low"], t["high"]),
+            "null at its rank": f"{t['null']:.3f} (95th pct {t['null_high']:.3f})"
             if math.isfinite(t["null_high"])
             else "n/a",
             "stands out": "yes" if t["stands_out"] else "no",

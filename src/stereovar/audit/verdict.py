@@ -71,7 +71,7 @@ ROWS = (
     ("spearman", "Spearman rho", "robust to fireflies"),
     ("log", "log-Pearson rho", "robust to fireflies"),
     ("trimmed", "Pearson rho without the top 0.1%", "robust to fireflies"),
-    ("partial", "intensity-controlled rho", "the Monte Carlo-specific part"),
+    ("partial", "intensity-controlled rho", "intensity removed; read against its matched null"),
     ("relative", "rho of sigma^2 / mu^2", "not a Monte Carlo test: fails the calibration"),
     ("sensor_sim", "camera baseline: simulated sensor, same N", "what a camera shows"),
     ("sensor", "camera baseline: analytic a*mu + b", "what a camera shows"),
