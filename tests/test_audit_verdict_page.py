@@ -269,3 +269,12 @@ def test_the_docs_page_describes_every_key_of_the_schema():
     assert f'"{SUMMARY_SCHEMA_VERSION}"' in docs
     guide = (Path(__file__).parents[1] / "docs" / "guide.md").read_text()
     assert "\nsummary_json\n" in guide
+
+
+def test_the_declared_strongest_figure_exists_when_nothing_can_be_ranked(tmp_path):
+    outputs = {k: tmp_path / f"verdict.{k}" for k in ("md", "html")}
+    outputs.update(summary=tmp_path / "summary.json", strongest=tmp_path / "strongest.png")
+    summary = verdict_job([], [], [], outputs, name="empty", found="0 frames")
+    assert summary["strongest"] is None and outputs["strongest"].stat().st_size > 0
+    validate_summary(json.loads(outputs["summary"].read_text()))
+    assert 'id="strongest"' not in outputs["html"].read_text()

@@ -35,6 +35,7 @@ def strongest_figure(frames: list[dict], *, tile: int):
         One per row: ``frame`` (name), ``image`` (H, W, 3 linear RGB: the left seed mean),
         ``rho`` (the tiles' :math:`\\rho_t` map), ``rows`` (the ranked tiles,
         :data:`stereovar.audit.strongest.TILE_COLUMNS`), ``e_left`` and ``e_right`` (H, W).
+        None: a figure that says so (the workflow declares the file).
     tile : int
         The tile side in pixels.
 
@@ -47,8 +48,14 @@ def strongest_figure(frames: list[dict], *, tile: int):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    n = max(len(frames), 1)
-    height, width = frames[0]["image"].shape[:2] if frames else (1, 1)
+    if not frames:
+        fig, ax = plt.subplots(figsize=(6.0, 1.2), constrained_layout=True)
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no frame with a defined intensity-controlled ρ to rank tiles in",
+                ha="center", va="center")
+        return fig
+    n = len(frames)
+    height, width = frames[0]["image"].shape[:2]
     aspect = height / width
     fig, axes = plt.subplots(
         n, 4, figsize=(12.0, n * max(2.2, 2.9 * aspect) + 0.4), squeeze=False,

@@ -177,6 +177,8 @@ def strongest_section(corr, nulls, *, variance=(), warped=(), ground_truth=(), f
 
     ranking = frame_ranking(corr, nulls)
     if not ranking:
+        if figure:  # the rule declares it: say there is nothing to rank
+            save_figure(strongest_figure([], tile=TILE), figure, dpi=100)
         return None
     min_pixels = int(dict(analysis or {}).get("min_pixels", 30))
     stores = [_scene_paths(p) for p in (variance, warped, ground_truth)]
@@ -215,8 +217,8 @@ def strongest_section(corr, nulls, *, variance=(), warped=(), ground_truth=(), f
             + "). A tile's interval is its :math:`\\rho` plus or minus 1.96 times the null "
             "tiles' standard deviation."
         )
-        if figure:
-            save_figure(strongest_figure(shown, tile=TILE), figure, dpi=100)
+    if figure:
+        save_figure(strongest_figure(shown, tile=TILE), figure, dpi=100)
     return {"text": text, "ranking": ranking, "tiles": tiles,
             "frames": [{k: f[k] for k in ("frame", "n_tiles", "n_stand_out")} for f in shown]}
 
