@@ -144,8 +144,10 @@ def claims_job(
         document["probe"] = probe_verdict
     text = json.dumps(document, indent=2) + "\n"
     write_file(Path(summary), lambda tmp: Path(tmp).write_text(text))
+    from ..pages.names import claim_name
+
     for c in claims:
-        log.info("%-70s %s", c["claim"], c["verdict"])
+        log.info("%-70s %s", claim_name(str(c["id"]), str(c["claim"])), c["verdict"])
     return claims
 
 
