@@ -58,7 +58,8 @@ def estimator_figure(field_rows, stat_rows, *, region: str = "all"):
     for k, (key, label, colour, marker) in enumerate(FIELD_SERIES):
         values = [_finite(r.get(key)) for r in fields]
         ax_f.plot(x + (k - 1.5) * 0.08, values, marker, color=colour, label=label, ls="none")
-    ax_f.set_xticks(x, labels, fontsize="x-small")
+    turn = {"rotation": 45, "ha": "right", "rotation_mode": "anchor"} if len(fields) > 4 else {}
+    ax_f.set_xticks(x, labels, fontsize="x-small", **turn)
     ax_f.set_ylabel("correlation over the view's pixels")
     ax_f.set_ylim(min(0.0, *[v for r in fields for v in _values(r)]) - 0.05, 1.02)
     ax_f.grid(True, axis="y", alpha=0.3)
@@ -103,7 +104,8 @@ def estimator_figure(field_rows, stat_rows, *, region: str = "all"):
             ax_s.errorbar(
                 means[ok],
                 y[ok] + shift,
-                xerr=[means[ok] - lo[ok], hi[ok] - means[ok]],
+                # the mean of equal values can round past them: no negative bar
+                xerr=np.maximum([means[ok] - lo[ok], hi[ok] - means[ok]], 0.0),
                 fmt="o",
                 color=colour,
                 mfc=colour if filled else "white",

@@ -35,6 +35,8 @@ def generators_figure(rows: list[dict]):
     -------
     matplotlib.figure.Figure
     """
+    from matplotlib.ticker import MaxNLocator
+
     plt = _pyplot()
     chosen = [r for r in rows if r["region"] == "all"]
     n = max(len(chosen), 1)
@@ -57,6 +59,7 @@ def generators_figure(rows: list[dict]):
                     ax.plot(null, y, "o", mfc="none", color="C3")
         if column != "psnr":
             ax.axvline(0.0, color="0.5", lw=0.8, ls="--")
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
         ax.set_xlabel(label)
         ax.grid(axis="x", alpha=0.3)
     axes[0][0].set_yticks(ys, [_label(r) for r in chosen])

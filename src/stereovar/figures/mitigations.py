@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from .layout import place_labels, wrap_to_width
 from .paper import _pyplot
 
 PANELS = (
@@ -25,7 +26,9 @@ def tradeoff_figure(rows: list[dict]):
     """One point per mitigation: the cue it leaves (y) against its PSNR (x), each with its
     95% interval as error bars (:mod:`stereovar.statistics.mitigations` states the methods),
     one panel per cue measure (:data:`PANELS`). A mitigation that removes the cue at no cost
-    sits at the bottom right.
+    sits at the bottom right. Each point is labelled by its mitigation where the label
+    collides with no other (:func:`stereovar.figures.layout.place_labels`, with a leader
+    line when it sits farther out); the legend below names every mitigation by colour.
 
     Parameters
     ----------
@@ -39,9 +42,12 @@ def tradeoff_figure(rows: list[dict]):
     plt = _pyplot()
     names = list(dict.fromkeys(r["mitigation"] for r in rows))
     colours = plt.get_cmap("tab10")
-    fig, axes = plt.subplots(1, len(PANELS), figsize=(5.0 * len(PANELS), 4.4), squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(PANELS), figsize=(5.0 * len(PANELS), 4.8), squeeze=False, layout="constrained"
+    )
+    drawn = []
     for ax, (column, region, label) in zip(axes[0], PANELS, strict=True):
-        plotted = 0
+        points = []
         for k, name in enumerate(names):
             x, x_lo, x_hi = _point(rows, name, "psnr", "all")
             y, y_lo, y_hi = _point(rows, name, column, region)
@@ -52,16 +58,23 @@ def tradeoff_figure(rows: list[dict]):
             ax.errorbar(
                 x, y, xerr=xerr, yerr=yerr, fmt="o", color=colours(k % 10), capsize=3, label=name
             )
-            ax.annotate(name, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
-            plotted += 1
+            points.append(((x, y), name, colours(k % 10)))
         ax.axhline(0.0, color="0.5", lw=0.8, ls="--")
+        ax.margins(y=0.25)  # room for the labels above and below the points
         ax.set_xlabel("PSNR against the converged reference [dB]")
-        ax.set_ylabel(label)
-        if not plotted:
+        ax.set_ylabel(wrap_to_width(label, 3.6, fontsize=10.0))
+        if not points:
             ax.text(0.5, 0.5, "no finite values", ha="center", va="center", transform=ax.transAxes)
+        drawn.append((ax, points))
     handles, labels = axes[0][0].get_legend_handles_labels()
     if handles:
-        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 7), fontsize=8)
+        fig.legend(
+            handles, labels, loc="outside lower center", ncols=min(len(labels), 6), fontsize=8
+        )
     fig.suptitle("Mitigations: the cue they leave against the image quality (95% intervals)")
-    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    fig.canvas.draw()  # the layout is final: the labels are placed in it
+    for ax, points in drawn:
+        if points:
+            xy, names_, colours_ = zip(*points, strict=True)
+            place_labels(ax, xy, names_, colors=colours_, fontsize=8, draw=False)
     return fig

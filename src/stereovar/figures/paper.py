@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from ..statistics.regions import REGIONS
+from .layout import wrap_to_width
 
 """Material regions of Fig. 2, in plotting order (paper Sec. 3.3 and Sec. 3.5)."""
 
@@ -605,8 +606,45 @@ def material_scatter_figure(
         if hasattr(handle, "set_alpha"):
             handle.set_alpha(1.0)
     if title:
-        ax.set_title(title)
+        ax.set_title(wrap_to_width(title, 0.8 * fig.get_figwidth(), fontsize=_title_size()))
     return fig
+
+
+def _title_size() -> float:
+    """Font size of an axes title, in points."""
+    import matplotlib
+    from matplotlib.font_manager import FontProperties
+
+    return FontProperties(size=matplotlib.rcParams["axes.titlesize"]).get_size_in_points()
+
+
+def symlog_ticks(lo: float, hi: float, linthresh: float, *, per_side: int = 3) -> list[float]:
+    """Major ticks of a symmetric-log axis from ``lo`` to ``hi``: 0 and the powers of ten
+    beyond ``linthresh`` on each side, every k-th decade counted down from the largest one
+    on either side, so that at most ``per_side`` remain per side; both sides share them.
+
+    Powers of ten inside the linear part :math:`|m| < s` sit close to 0, where their labels
+    would run into the label of 0; they are left out.
+
+    Examples
+    --------
+    >>> symlog_ticks(-100.0, 10.0, 0.003)
+    [-100.0, -1.0, -0.01, 0.0, 0.01, 1.0]
+    >>> symlog_ticks(-0.5, 0.5, 0.1)
+    [-0.1, 0.0, 0.1]
+    >>> symlog_ticks(0.5, 2.0, 1.0)
+    [1.0]
+    """
+    ticks = [0.0] if lo <= 0.0 <= hi else []
+    first = math.ceil(math.log10(linthresh))
+    reach = {-1.0: -lo, 1.0: hi}
+    top = max((math.floor(math.log10(r)) for r in reach.values() if r > linthresh), default=None)
+    if top is None:
+        return ticks
+    stride = max(math.ceil((top - first + 1) / per_side), 1)
+    for sign, r in reach.items():
+        ticks += [sign * 10.0**e for e in range(top, first - 1, -stride) if r >= 10.0**e]
+    return sorted(ticks)
 
 
 MARGIN_COSTS = {
@@ -701,9 +739,10 @@ def margin_distribution_figure(samples, *, title: str = "", bins: int = 60):
             ax.set_ylim(0.0, ax.get_ylim()[1] * 1.35)  # headroom for the legend
             ax.axvline(0.0, color="black", linestyle="--", linewidth=0.8)
             ax.set_xscale("symlog", linthresh=scale)
+            ax.set_xticks(symlog_ticks(float(edges[0]), float(edges[-1]), scale))
             ax.set_xlabel(f"GT margin m (symlog, linear within ±{scale:.2g})")
             ax.set_ylabel("share of margins per bin")
-            ax.tick_params(axis="x", labelsize="x-small", labelrotation=35)
+            ax.tick_params(axis="x", labelsize="small")
             ax.legend(fontsize="x-small", loc="best", framealpha=0.85)
             ax.grid(True, alpha=0.3)
     if title:

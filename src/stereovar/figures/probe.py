@@ -46,7 +46,7 @@ def _accuracy_panel(ax, rows, colours) -> None:
                       twins,
                       "twin_accuracy", fmt="x", ms=4, color=colours(k % 10), alpha=0.6)
     ax.set_xticks(range(len(inputs)))
-    ax.set_xticklabels(inputs, rotation=20)
+    ax.set_xticklabels(inputs, rotation=30, ha="right", rotation_mode="anchor")
     ax.set_ylabel("accuracy (|d - d_GT| < 1 px)")
     ax.grid(axis="y", alpha=0.3)
     if conditions:
@@ -83,7 +83,7 @@ def _power_panel(ax, rows) -> None:
                        label=f"smallest detectable DiD {mde:.3g}")
     ax.set_xlim(-0.1 * top - 0.1, 1.1 * top + 0.1)
     ax.margins(y=0.15)
-    ax.set_xlabel("planted strength, x the renders' strength (dotted: x1; 0: the renders)")
+    ax.set_xlabel("planted strength, x the renders' strength\n(dotted: x1; 0: the renders)")
     ax.set_ylabel("DiD of the shuffle vs the twin")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
@@ -113,7 +113,7 @@ def probe_figure(rows: list[dict]):
     rows = [r for r in rows if r["region"] == region]
     architectures = list(dict.fromkeys(r["architecture"] for r in rows)) or ["(none)"]
     fig, axes = plt.subplots(len(architectures), 2, figsize=(11, 4.0 * len(architectures)),
-                             squeeze=False)
+                             squeeze=False, layout="constrained")
     colours = plt.get_cmap("tab10")
     for (ax_acc, ax_pow), arch in zip(axes, architectures, strict=True):
         mine = [r for r in rows if r["architecture"] == arch]
@@ -122,5 +122,4 @@ def probe_figure(rows: list[dict]):
         ax_acc.set_title(f"{arch}: accuracy per test input")
         ax_pow.set_title(f"{arch}: planted cue, power")
     fig.suptitle(f"Learned probe, {region} pixels, 95% intervals (training seeds x test tiles)")
-    fig.tight_layout()
     return fig

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from .layout import wrap_to_width
 from .paper import (
     REGION_LABELS,
     REGIONS,
@@ -59,7 +60,7 @@ def _seed_legend(fig, axes) -> None:
             [handles[label] for label in labels],
             labels,
             loc="outside lower center",
-            ncols=min(len(labels), 4),
+            ncols=min(len(labels), 2 if len(axes) == 1 else 4),
             fontsize="small",
         )
 
@@ -78,6 +79,7 @@ def rho_vs_seeds_figure(
     title: str = "",
     methods=("warp", "log"),
     xlabel: str = SEEDS_AXIS,
+    drop_empty: bool = False,
 ):
     """:math:`\\rho` against the number of seeds :math:`N'` in Eq. 1, per region.
 
@@ -94,7 +96,9 @@ def rho_vs_seeds_figure(
     the largest :math:`N'` with a finite one.
 
     Rows with a non-finite or non-positive ``n_prime`` or a non-finite ``mean_rho`` are
-    left out; a panel with nothing to draw says "no data". Rows of other regions or
+    left out; a panel with nothing to draw says "no data", or is left out with
+    ``drop_empty`` (an audit without a material mask has no glass and no non-glass pixels;
+    with no data at all the first panel stays and says so). Rows of other regions or
     statistics are ignored.
 
     Parameters
@@ -110,12 +114,15 @@ def rho_vs_seeds_figure(
         The statistics drawn.
     xlabel : str, keyword-only
         Label of the :math:`N'` axis (:data:`SEEDS_AXIS`, :data:`HALVES_AXIS`).
+    drop_empty : bool, keyword-only
+        Leave out the panels of regions with nothing to draw.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes per region in ``region_order``. Each holds one
-        :class:`~matplotlib.container.ErrorbarContainer` per statistic with data, in
+        One axes per region in ``region_order`` (with ``drop_empty``: per region with data).
+        Each holds one :class:`~matplotlib.container.ErrorbarContainer` per statistic with
+        data, in
         ``methods`` order and labelled by the statistic, and one horizontal line per
         statistic with a finite corrected :math:`\\rho`, labelled
         ``"reliability-corrected asymptote, <statistic>"``. One figure legend below.
@@ -124,10 +131,13 @@ def rho_vs_seeds_figure(
 
     plt = _pyplot()
     region_order = tuple(region_order)
+    if drop_empty:
+        region_order = _with_data(region_order, {r["region"] for r in curve_rows
+                                                 if r["method"] in methods and _seed_point(r)})
     fig, axes = plt.subplots(
         1,
         len(region_order),
-        figsize=(3.8 * len(region_order), 4.0),
+        figsize=(max(3.8 * len(region_order), 6.0), 4.0),
         sharey=True,
         constrained_layout=True,
         squeeze=False,
@@ -200,8 +210,27 @@ def rho_vs_seeds_figure(
     axes[0].set_ylabel(r"$\rho$, mean over scenes $\pm$ std")
     _seed_legend(fig, axes)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(wrap_to_width(title, fig.get_figwidth(), fontsize=_suptitle_size()))
     return fig
+
+
+def _seed_point(row) -> bool:
+    """Whether a seed-curve row draws anything: a point or an asymptote."""
+    n, rho = _finite(row.get("n_prime")), _finite(row.get("mean_rho"))
+    return (n > 0 and math.isfinite(rho)) or math.isfinite(_finite(row.get("mean_rho_corrected")))
+
+
+def _with_data(region_order: tuple, drawn: set) -> tuple:
+    """The regions of ``region_order`` in ``drawn``; the first region where there is none."""
+    kept = tuple(r for r in region_order if r in drawn)
+    return kept or region_order[:1]
+
+
+def _suptitle_size() -> float:
+    import matplotlib
+    from matplotlib.font_manager import FontProperties
+
+    return FontProperties(size=matplotlib.rcParams["figure.titlesize"]).get_size_in_points()
 
 
 def _dot_offsets(n: int) -> np.ndarray:
@@ -212,7 +241,9 @@ def _dot_offsets(n: int) -> np.ndarray:
     return np.linspace(-spread / 2, spread / 2, n)
 
 
-def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIONS):
+def statistics_dot_figure(
+    rows, *, spp=None, title: str = "", region_order=REGIONS, drop_empty: bool = False
+):
     """Every statistic and control per scene: :math:`\\rho` with its 95% intervals.
 
     One panel per region. One row per method: the statistics (:data:`STATISTICS`), a
@@ -225,7 +256,8 @@ def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIO
     narrower interval than the bootstrap gives. A vertical line marks :math:`\\rho = 0`.
 
     Rows with a non-finite ``rho`` are left out (their method keeps its row); a missing
-    bound gives no bar on its side; a panel with nothing to draw says "no data". Rows of
+    bound gives no bar on its side; a panel with nothing to draw says "no data", or is left
+    out with ``drop_empty`` (with no data at all the first panel stays and says so). Rows of
     regions not in ``region_order`` are ignored.
 
     Parameters
@@ -239,11 +271,14 @@ def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIO
         Figure title.
     region_order : sequence of str, keyword-only
         The regions, one panel each, left to right.
+    drop_empty : bool, keyword-only
+        Leave out the panels of regions without a finite ``rho``.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes per region in ``region_order``. Each holds one
+        One axes per region in ``region_order`` (with ``drop_empty``: per region with data).
+        Each holds one
         :class:`~matplotlib.container.ErrorbarContainer` per scene with data (sorted by
         scene, labelled by it; x: rho, y: method row plus the scene's offset) and one
         :class:`~matplotlib.collections.LineCollection` of its Fisher-z intervals, labelled
@@ -256,6 +291,11 @@ def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIO
     if spp is not None:
         rows = [r for r in rows if _finite(r.get("spp", spp)) == float(spp)]
     rows = [r for r in rows if r["region"] in region_order]
+    if drop_empty:
+        region_order = _with_data(
+            region_order, {r["region"] for r in rows if math.isfinite(_finite(r.get("rho")))}
+        )
+        rows = [r for r in rows if r["region"] in region_order]
     present = {r["method"] for r in rows}
     methods = [m for m in (*STATISTICS, *CONTROLS) if m in present]
     methods += sorted(present - set(methods))
@@ -266,7 +306,7 @@ def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIO
     fig, axes = plt.subplots(
         1,
         len(region_order),
-        figsize=(4.2 * len(region_order), 0.42 * max(len(methods), 4) + 1.8),
+        figsize=(max(4.2 * len(region_order), 7.0), 0.42 * max(len(methods), 4) + 1.8),
         sharey=True,
         constrained_layout=True,
         squeeze=False,
@@ -350,9 +390,9 @@ def statistics_dot_figure(rows, *, spp=None, title: str = "", region_order=REGIO
             [handles[s] for s in labels] + proxies,
             labels + ["block bootstrap 95%", "Fisher-z 95% (independent pixels)"],
             loc="outside lower center",
-            ncols=min(len(labels) + 2, 6),
+            ncols=min(len(labels) + 2, 2 * len(axes) + 1),
             fontsize="small",
         )
     if title:
-        fig.suptitle(title)
+        fig.suptitle(wrap_to_width(title, fig.get_figwidth(), fontsize=_suptitle_size()))
     return fig

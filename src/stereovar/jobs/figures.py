@@ -3,11 +3,39 @@ uncertainty figures in ``workflow/rules/claims.smk`` (rho against seeds, the dot
 
 from __future__ import annotations
 
-from .common import left_right, run_label, save_figure
+from .common import left_right, log, run_label, save_figure
 
 
 def _title(attrs, text: str) -> str:
     return f"{text} ({run_label(attrs.get('renderer', '?'), attrs.get('estimator'))})"
+
+
+def _spp(spp) -> str:
+    """``", SPP 32"``; nothing where the SPP is not known (an audit's renders: 0 or None).
+
+    Examples
+    --------
+    >>> _spp(32), _spp(0), _spp(None)
+    (', SPP 32', '', '')
+    """
+    try:
+        return f", SPP {int(spp)}" if spp and int(spp) > 0 else ""
+    except (TypeError, ValueError):
+        return ""
+
+
+def _scenes(n: int) -> str:
+    return f"{n} scene{'' if n == 1 else 's'}"
+
+
+def _save(fig, out) -> None:
+    """Save a figure; log a warning per text it cuts off or draws over another
+    (:func:`stereovar.figures.layout.layout_problems`)."""
+    from ..figures.layout import layout_problems
+
+    for problem in layout_problems(fig):
+        log.warning("figure %s: %s", out, problem)
+    save_figure(fig, out)
 
 
 def _estimate(attrs) -> str:
@@ -27,8 +55,9 @@ def teaser_figure_job(variance, warped, out) -> None:
     v = load_store(variance, "variance store")
     w = load_store(warped, "warped store")
     sigma_l, sigma_r = left_right(v, "variance")
-    title = _title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}, {_estimate(v.attrs)}")
-    save_figure(teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out)
+    text = f"{v.attrs['scene']}{_spp(v.attrs.get('spp'))}, {_estimate(v.attrs)}"
+    title = _title(v.attrs, text)
+    _save(teaser_figure(sigma_l, sigma_r, w["warped_variance"], w["omega"], title=title), out)
 
 
 def rho_vs_spp_figure_job(correlations, out) -> None:
@@ -44,7 +73,7 @@ def rho_vs_spp_figure_job(correlations, out) -> None:
     fig = rho_vs_spp_figure(
         rows, title=_title(attrs, f"{scene}: rho against SPP"), primary=PRIMARY_METHOD
     )
-    save_figure(fig, out)
+    _save(fig, out)
 
 
 def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
@@ -60,9 +89,9 @@ def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
         w["warped_variance"],
         w["omega"],
         gt["glass"].sel(view="left").values,
-        title=_title(v.attrs, f"{v.attrs['scene']}, SPP {v.attrs['spp']}"),
+        title=_title(v.attrs, f"{v.attrs['scene']}{_spp(v.attrs.get('spp'))}"),
     )
-    save_figure(fig, out)
+    _save(fig, out)
 
 
 def margin_figure_job(margins, out) -> None:
@@ -72,10 +101,10 @@ def margin_figure_job(margins, out) -> None:
 
     rows = [r for path in margins for r in read_rows(path)]
     n_scenes = len({r["scene"] for r in rows})
-    title = f"GT margins, normal vs decorrelated ({n_scenes} scenes, sampled pixels)"
+    title = f"GT margins, normal vs decorrelated ({_scenes(n_scenes)}, sampled pixels)"
     if rows and rows[0].get("renderer"):
         title += f"\n{run_label(rows[0]['renderer'], rows[0].get('estimator'))}"
-    save_figure(margin_distribution_figure(rows, title=title), out)
+    _save(margin_distribution_figure(rows, title=title), out)
 
 
 def rho_vs_seeds_figure_job(curve_table, out) -> None:
@@ -93,8 +122,9 @@ def rho_vs_seeds_figure_job(curve_table, out) -> None:
         rows,
         title=_title(attrs, "rho against half renders" if moments else "rho against seeds N'"),
         xlabel=HALVES_AXIS if moments else SEEDS_AXIS,
+        drop_empty=True,
     )
-    save_figure(fig, out)
+    _save(fig, out)
 
 
 def statistics_dot_figure_job(correlations, out, *, spp) -> None:
@@ -105,8 +135,8 @@ def statistics_dot_figure_job(correlations, out, *, spp) -> None:
     rows = [r for path in correlations for r in read_rows(path)]
     attrs = rows[0] if rows else {}
     n_scenes = len({r["scene"] for r in rows})
-    title = _title(attrs, f"every statistic and control, {n_scenes} scenes, SPP {spp}")
-    save_figure(statistics_dot_figure(rows, spp=spp, title=title), out)
+    title = _title(attrs, f"every statistic and control, {_scenes(n_scenes)}{_spp(spp)}")
+    _save(statistics_dot_figure(rows, spp=spp, title=title, drop_empty=True), out)
 
 
 def cross_renderer_figure_job(variances: dict, correlations: dict, out) -> None:
@@ -125,5 +155,5 @@ def cross_renderer_figure_job(variances: dict, correlations: dict, out) -> None:
         for row in read_rows(correlations[renderer]):
             if row["region"] == "all" and row["method"] == PRIMARY_METHOD:
                 rho[renderer] = (row["rho"], row["boot_low"], row["boot_high"])
-    title = f"{attrs.get('scene', '')}, SPP {attrs.get('spp', '')}: sigma^2 by renderer"
-    save_figure(cross_renderer_figure(fields, rho=rho, title=title), out)
+    title = f"{attrs.get('scene', '')}{_spp(attrs.get('spp'))}: sigma^2 by renderer"
+    _save(cross_renderer_figure(fields, rho=rho, title=title), out)
