@@ -1,6 +1,6 @@
 """What an experiment config asks for: scene/SPP pairs, seed batches and the stores they read.
 
-Shared by the workflow's target lists (``workflow/rules/common.smk``) and the benchmarks, so
+Shared by the workflow's target lists (``workflow/rules/inputs/targets.smk``) and the benchmarks, so
 both enumerate exactly the same renders. Every path comes from :mod:`stereovar.layout`
 (re-exported here): renders under ``results/{source}[/{transform}]/renders/``, everything
 computed from them under ``results/{source}[/{transform}]/{estimator}/``.

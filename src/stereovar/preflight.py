@@ -2,7 +2,8 @@
 
 Snakemake deletes a job's outputs before it runs the job, so an input problem found by the
 job itself (a typo in a spec, a variant this machine lacks) would cost every output the job
-replaces. The workflow therefore checks up front (``workflow/rules/common.smk``):
+replaces. The workflow therefore checks up front (``workflow/rules/inputs/scenes.smk``,
+``workflow/rules/inputs/run.smk``):
 
 * every listed scene spec, including the XML file it points at and every file that reads
   (:func:`check_scene_specs`), when the workflow is parsed;

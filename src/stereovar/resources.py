@@ -133,7 +133,7 @@ def intervention_runtime(
 
 ANALYSIS_IMAGES_MAX = 24
 """Most images one analysis job holds at once: the intervention and the estimator check
-(``intervention_resources`` in ``workflow/rules/common.smk``, ``estimators.smk``)."""
+(:func:`stereovar.workflow_inputs.resources.intervention_resources`, ``estimators.smk``)."""
 
 
 def job_mem_requests(config) -> dict[str, int]:

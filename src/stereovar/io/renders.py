@@ -114,7 +114,7 @@ def _one_line(text) -> str:
 
 RERUN_ARGS_ENV = "STEREOVAR_SNAKEMAKE_ARGS"
 """Environment variable holding the ``--configfile`` and ``--config`` options of the
-Snakemake run a job belongs to (set by ``workflow/rules/common.smk``)."""
+Snakemake run a job belongs to (set by ``workflow/rules/inputs/run.smk``)."""
 
 
 def set_rerun_arguments(args: str) -> None:
