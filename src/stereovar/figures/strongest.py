@@ -81,7 +81,7 @@ def strongest_figure(frames: list[dict], *, tile: int):
             for ax, crop, name in zip(row[2:], crops, ("left", "right → left"), strict=True):
                 ax.imshow(np.ma.masked_invalid(crop), cmap="PuOr_r", vmin=-lim, vmax=lim,
                           interpolation="nearest")
-                ax.set_title(f"{f['frame']} tile 1, {name}", fontsize="medium")
+                ax.set_title(f"{f['frame']}\ntile 1, {name}", fontsize="medium")
         for ax in row:
             ax.set_xticks([])
             ax.set_yticks([])
