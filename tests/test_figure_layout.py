@@ -23,8 +23,9 @@ import xarray as xr  # noqa: E402
 
 from stereovar.figures.layout import layout_problems, overlap_depth, wrap_to_width  # noqa: E402
 
-DPI = 40
-"""Low dpi keeps the draws fast; the check works in points, so the verdict is dpi-free."""
+DPI = 100
+"""About the dpi the jobs save at (90-120): text extents are rounded to whole pixels, so a
+figure drawn much coarser can hide an overhang of a point or two."""
 
 SIZES = ("small", "large")
 

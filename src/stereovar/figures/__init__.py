@@ -23,6 +23,10 @@ The caller saves the figure; nothing here reads or writes results.
     coupling and its image quality.
 ``preview``
     Both renders of a scene, its disparity and material map; the audit's thumbnails.
+``layout``
+    The check that no text of a figure is cut off at its edge or drawn over another
+    (:func:`~stereovar.figures.layout.layout_problems`), and the helpers that keep it so:
+    titles wrapped to a width, point labels placed apart.
 ``strongest``
     The verdict page's frames and tiles where the cue is strongest, with the top tile's two
     residual fields.

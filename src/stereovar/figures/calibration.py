@@ -94,7 +94,7 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     fpr_ax.set_ylim(-0.03, 1.03)
     fpr_ax.set_ylabel("false-positive rate")
     fpr_ax.set_title(
-        "Calls a cue on a matched null: filled, above its null (the verdict); open, above 0",
+        "Calls a cue on a matched null:\nfilled, above its null (the verdict); open, above 0",
         fontsize=9,
     )
     fig.suptitle(f"Calibration of {method} on synthetic frames from this run", fontsize=11)
