@@ -233,9 +233,9 @@ def synthetic_results(
     layout_summary.write_text(json.dumps(summary))
     (root / run / "figures").mkdir(parents=True)
     figures = []
-    for i, name in enumerate(RUN_FIGURES):
+    for i, name in enumerate(RUN_FIGURES):  # the first wider than the page, as real ones are
         path = layout.run_figure("mitsuba", "seeds", name)
-        Image.new("RGB", (320, 160), (40 * i, 90, 160)).save(root / path)
+        Image.new("RGB", (1600 if i == 0 else 320, 160), (40 * i, 90, 160)).save(root / path)
         figures.append(path)
     kwargs = {
         "claims": tables[0],
@@ -742,7 +742,14 @@ def test_tiny_run_writes_its_results_page(tiny_run):
     results = tiny_run / "results"
     page = Page((tiny_run / layout.results_page()).read_text(encoding="utf-8"))
     check_claims(page, read_rows(results / "tables/claims.csv"))
-    check_headline(page, json.loads((tiny_run / layout.summary_json()).read_text()))
+    summary = json.loads((tiny_run / layout.summary_json()).read_text())
+    # the calibration's matched nulls make the headline the Monte Carlo-specific rho, which
+    # the mitigation table would compute scene by scene from the correlation rows
+    nulls = tiny_run / layout.calibration_nulls()
+    rows = sorted(results.glob(f"mitsuba/seeds/correlation/*/spp{summary['spp']}.csv"))
+    corr = [r for path in rows for r in read_rows(path)]
+    assert nulls.is_file() and corr
+    check_headline(page, summary, expected_matched(corr, read_rows(nulls)))
     check_links(page, results)
     figures = sorted(results.rglob("figures/*.png"))
     assert figures and len(page.images) == len(figures)
@@ -760,6 +767,7 @@ def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path
     share, ids, load = claims_visibility(headless_chromium, tiny_run / layout.results_page())
     (tmp_path / "index.png").write_bytes(load.screenshot)
     assert load.errors == []
+    check_in_browser(load.shown, tmp_path / "index.png")
     assert share >= VISIBLE, f"claims table not visible ({share:.2f}): {tmp_path / 'index.png'}"
     claims = read_rows(tiny_run / layout.claims_tables()[0])
     assert ids == [str(r["id"]) for r in claims]
