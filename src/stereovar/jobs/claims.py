@@ -309,15 +309,18 @@ def results_page_job(
     generators_figure=None,
     calibration=None,
 ) -> dict:
-    """Write ``results/index.html`` (:mod:`stereovar.pages.results`): the headline
-    :math:`\\rho` with its interval and controls from ``summary`` (``results/summary.json``),
-    the claims table (``claims``, its CSV), every figure of ``figures`` embedded with its
-    caption (``captions``: figure name, ``claims`` and ``workflow`` to the report's caption,
-    its Jinja already filled), with ``mitigations`` (the mitigation table's CSV) and
-    ``probe`` (the probe's verdict JSON) and ``generators`` (the generator table's files) their
-    sections and figures, links to every table of
-    ``tables`` relative to the page, and to ``report`` (Snakemake's report) when it exists;
-    with ``calibration`` (the calibration table's CSV) its sentence under the headline.
+    """Write ``results/index.html`` (:mod:`stereovar.pages.results`): a one-line conclusion
+    and the headline, the Monte Carlo-specific :math:`\\rho` (the intensity-controlled
+    :math:`\\rho` of ``summary``, ``results/summary.json``, minus the calibration's matched
+    null, ``calibration_nulls.csv`` among ``tables`` or beside ``calibration``) with its
+    interval and controls; the claims table (``claims``, its CSV) by claim name; every figure
+    of ``figures`` embedded with its caption (``captions``: figure name and ``claims`` to the
+    report's caption, its Jinja already filled); with ``mitigations`` (the mitigation
+    table's CSV) and ``probe`` (the probe's verdict JSON) and ``generators`` (the generator
+    table's files) their sections and figures; links to every table of ``tables`` relative
+    to the page, to ``report`` (Snakemake's report) when it exists, and to the
+    documentation (:func:`stereovar.links.docs_page`); with ``calibration`` (the
+    calibration table's CSV) its sentence under the headline.
 
     Returns the page's sections."""
     import json
