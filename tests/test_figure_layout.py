@@ -561,11 +561,11 @@ def test_figure_layout_is_clean(name, size):
 
 @pytest.fixture
 def saved(monkeypatch):
-    """The figures the figure jobs save, kept open (the jobs' ``save_figure`` replaced)."""
+    """The figures the figure jobs save, kept open (the jobs' ``_save`` replaced)."""
     import stereovar.jobs.figures as jobs
 
     figures = []
-    monkeypatch.setattr(jobs, "save_figure", lambda fig, out, **kw: figures.append(fig))
+    monkeypatch.setattr(jobs, "_save", lambda fig, out: figures.append(fig))
     yield figures
     for fig in figures:
         plt.close(fig)

@@ -199,7 +199,7 @@ def _name(kind: str, text, fig) -> str:
     return f"{kind} {words!r}{where}"
 
 
-def layout_problems(fig, *, tolerance_pt: float = TOLERANCE_PT) -> list[str]:
+def layout_problems(fig, *, tolerance_pt: float = TOLERANCE_PT, draw: bool = True) -> list[str]:
     """Draw a figure and name every text cut off at its edge and every two texts that collide.
 
     Clipped: a shown text (:func:`text_items`) or a legend whose rectangle reaches more than
@@ -213,6 +213,9 @@ def layout_problems(fig, *, tolerance_pt: float = TOLERANCE_PT) -> list[str]:
         The figure, as the caller would save it (its size and dpi as they are).
     tolerance_pt : float, keyword-only
         Overhang and overlap tolerated, in points.
+    draw : bool, keyword-only
+        Draw the figure first. ``False`` where it was just drawn as it is (saved): the
+        layout of that draw is measured, at the figure's own dpi.
 
     Returns
     -------
@@ -233,7 +236,12 @@ def layout_problems(fig, *, tolerance_pt: float = TOLERANCE_PT) -> list[str]:
     True
     >>> plt.close(fig)
     """
-    fig.canvas.draw()
+    if not hasattr(fig.canvas, "get_renderer"):  # a closed figure: measure on Agg
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    if draw:
+        fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     tol = tolerance_pt * fig.dpi / 72.0
     width, height = fig.bbox.width, fig.bbox.height

@@ -3,11 +3,15 @@ uncertainty figures in ``workflow/rules/claims.smk`` (rho against seeds, the dot
 
 from __future__ import annotations
 
-from .common import left_right, log, run_label, save_figure
+from .common import left_right, log, run_label
 
 
 def _title(attrs, text: str) -> str:
     return f"{text} ({run_label(attrs.get('renderer', '?'), attrs.get('estimator'))})"
+
+
+DPI = 120
+"""Resolution of the saved figures (pixels per inch)."""
 
 
 def _spp(spp) -> str:
@@ -29,13 +33,20 @@ def _scenes(n: int) -> str:
 
 
 def _save(fig, out) -> None:
-    """Save a figure; log a warning per text it cuts off or draws over another
-    (:func:`stereovar.figures.layout.layout_problems`)."""
-    from ..figures.layout import layout_problems
+    """Save a figure as PNG atomically (as :func:`~stereovar.jobs.common.save_figure`) and
+    log a warning per text it cuts off or draws over another
+    (:func:`stereovar.figures.layout.layout_problems`), measured on the saving draw: the
+    figure is saved at its own dpi, so the check needs no second draw."""
+    import matplotlib.pyplot as plt
 
-    for problem in layout_problems(fig):
+    from ..figures.layout import layout_problems
+    from ..io.store import write_file
+
+    fig.set_dpi(DPI)
+    write_file(out, lambda tmp: fig.savefig(tmp, format="png", dpi=DPI))
+    for problem in layout_problems(fig, draw=False):
         log.warning("figure %s: %s", out, problem)
-    save_figure(fig, out)
+    plt.close(fig)
 
 
 def _estimate(attrs) -> str:
