@@ -210,7 +210,7 @@ def test_the_strongest_section_quotes_intervals_and_controls(audited):
     tiles = audited["written"]["strongest"]["tiles"]
     top = tiles[0]
     assert f"{top['rho']:.3f} [{top['low']:.3f}, {top['high']:.3f}]" in section
-    assert f"{top['null']:.3f} (95th pct {top['null_high']:.3f})" in section
+    assert f"{top['null']:.3f} (critical {top['null_high']:.3f})" in section
     assert audited["strongest"].is_file()
 
 

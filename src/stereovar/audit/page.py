@@ -324,7 +324,7 @@ def _iv(value, low, high) -> str:
 def strongest_rows(ranking: list[dict], tiles: list[dict]) -> tuple[list[dict], list[dict]]:
     """The page's rows of :mod:`stereovar.audit.strongest`: each number with its interval,
     and beside it its control (the frame's matched null; the tile's null at its rank, with
-    its 95th percentile)."""
+    the value it must exceed, the Monte Carlo test's critical value at 5%)."""
     frames = [
         {
             "rank": r["rank"],
@@ -345,7 +345,7 @@ def strongest_rows(ranking: list[dict], tiles: list[dict]) -> tuple[list[dict], 
             "tile (x, y)": f"{t['x0']}-{t['x1'] - 1}, {t['y0']}-{t['y1'] - 1}",
             "pixels": t["n_pixels"],
             "local rho (95% interval)": _iv(t["rho"], t["low"], t["high"]),
-            "null at its rank": f"{t['null']:.3f} (95th pct {t['null_high']:.3f})"
+            "null at its rank": f"{t['null']:.3f} (critical {t['null_high']:.3f})"
             if math.isfinite(t["null_high"])
             else "n/a",
             "stands out": "yes" if t["stands_out"] else "no",

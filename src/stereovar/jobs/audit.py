@@ -171,7 +171,7 @@ def strongest_section(corr, nulls, *, variance=(), warped=(), ground_truth=(), f
     """Where the cue is strongest (:mod:`stereovar.audit.strongest`): the frames ranked, the
     tiles of the top :data:`~stereovar.audit.strongest.TOP_FRAMES` frames whose stores are
     given, and their figure written to ``figure``. None without correlation rows."""
-    from ..audit.strongest import TILE, TOP_FRAMES, frame_ranking, rank_tiles
+    from ..audit.strongest import NULL_OFFSETS, TILE, TOP_FRAMES, frame_ranking, rank_tiles
     from ..figures.strongest import strongest_figure
     from .common import save_figure
 
@@ -211,10 +211,10 @@ def strongest_section(corr, nulls, *, variance=(), warped=(), ground_truth=(), f
             f" Within the top {len(shown)} frame{'s' * (len(shown) != 1)}, {TILE}×{TILE} px "
             f"tiles ranked by the local correlation of {residual} across the views, each "
             "beside the null at its rank: the same ranking with the right field moved far "
-            "out of line. A tile stands out when it is above the null's 95th percentile ("
-            + "; ".join(f"{f['frame']}: {f['n_stand_out']} of {f['n_tiles']} tiles"
-                        for f in shown)
-            + "). A tile's interval is its :math:`\\rho` plus or minus 1.96 times the null "
+            "out of line. A tile stands out when it is above the null's critical value at its "
+            f"rank (a Monte Carlo test at 5% over {NULL_OFFSETS} offsets). Tiles standing out: "
+            + "; ".join(f"{f['frame']} {f['n_stand_out']} of {f['n_tiles']}" for f in shown)
+            + ". A tile's interval is its :math:`\\rho` plus or minus 1.96 times the null "
             "tiles' standard deviation."
         )
     if figure:
