@@ -646,3 +646,18 @@ def test_teaser_title_of_an_audit_says_no_spp(monkeypatch, saved):
     title = fig.get_suptitle()
     assert "SPP" not in title
     assert title.startswith("f00, N = 4")
+
+
+def test_figure_job_logs_what_the_check_finds(tmp_path, caplog):
+    """The jobs' save logs one warning per problem, and the PNG is written all the same."""
+    import logging
+
+    from stereovar.jobs.figures import _save
+
+    fig, ax = plt.subplots(figsize=(3, 2), layout="constrained")
+    ax.set_title("a title much too long for a figure three inches wide, by far")
+    with caplog.at_level(logging.WARNING):
+        _save(fig, tmp_path / "f.png")
+    assert (tmp_path / "f.png").stat().st_size > 0
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1 and "clipped: title" in warnings[0]
