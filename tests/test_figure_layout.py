@@ -469,8 +469,11 @@ def _preview(size):
 def _thumbnail(size):
     from stereovar.figures.preview import thumbnail_figure
 
-    title = "f00: left/f00_seed*.exr, 4 seeds" if size == "small" else (
-        "frame_000123: renders/left/frame_000123_seed_*.exr, 16 seeds, glass from mask.png")
+    # the audit's title: the frame and the last three parts of its first file's path
+    title = (
+        "frame_000123: kitchen_sequence_2024-05-01_mitsuba/left_camera/"
+        "frame_000123_seed_0000_radiance.exr"
+    )
     return thumbnail_figure(_render(size), _ground_truth(size, masked=size == "large"),
                             title=title)  # fmt: skip
 

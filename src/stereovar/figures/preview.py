@@ -6,6 +6,7 @@ import numpy as np
 import xarray as xr
 
 from ..ground_truth import MATERIAL_CLASSES
+from .layout import wrap_to_width
 
 MATERIAL_COLOURS = {
     "background": "#000000",
@@ -154,6 +155,6 @@ def thumbnail_figure(render, gt: xr.Dataset, *, title: str = ""):
     for ax in axes:
         ax.set_xticks([])
         ax.set_yticks([])
-    if title:
-        fig.suptitle(title, fontsize="medium")
+    if title:  # file paths run long: the title wraps to the figure's width
+        fig.suptitle(wrap_to_width(title, fig.get_figwidth(), fontsize=10.0), fontsize="medium")
     return fig
