@@ -189,14 +189,17 @@ def verdict_rows(
                     correlations, nulls, transform="none", region=region
                 )
                 out.append(
-                    _row(
-                        SPECIFIC,
-                        region,
-                        *diff,
-                        f"intensity-controlled rho minus its matched null ({null:.3f})"
-                        if _ok(null)
-                        else "no matched null for these frames",
-                    )
+                    {
+                        **_row(
+                            SPECIFIC,
+                            region,
+                            *diff,
+                            f"intensity-controlled rho minus its matched null ({null:.3f})"
+                            if _ok(null)
+                            else "no matched null for these frames",
+                        ),
+                        "null": null,
+                    }
                 )
     for source, label in (("render", "renders"), ("sensor", "simulated camera frames")):
         value, low, high = wta_lift(intervention, source)
@@ -223,8 +226,10 @@ def verdict(rows: list[dict]) -> dict:
     Returns
     -------
     dict
-        ``mc_specific`` (True, False or None: not testable), ``strength``,
-        ``matching_cue`` (True, False or None) and ``text``, one plain-language paragraph.
+        ``mc_specific`` (True, False or None: not testable), ``matched_null`` (whether the
+        rule read the intensity-controlled rho against its matched null; without one the
+        rule reads the intensity-controlled rho itself), ``strength``, ``matching_cue``
+        (True, False or None) and ``text``, one plain-language paragraph.
     """
     partial = _find(rows, "intensity-controlled")
     specific = _find(rows, SPECIFIC)
@@ -256,10 +261,13 @@ def verdict(rows: list[dict]) -> dict:
         )
     elif partial["low"] > 0:
         mc, word = True, strength(partial["value"])
+        kind = "Monte Carlo-specific" if against else "intensity-controlled"
         first = (
-            f"The data carries a {word} Monte Carlo-specific cross-view variance cue: after "
+            f"The data carries a {word} {kind} cross-view variance cue: after "
             f"removing what intensity explains, the two views' variance fields still correlate"
             f"{against} (rho {iv(partial)}). A real camera's noise would leave about 0 here."
+            + ("" if against else " No matched null was given, so whether it is Monte "
+               "Carlo-specific is not tested.")
         )
     else:
         mc, word = False, "none detected"
@@ -290,6 +298,7 @@ def verdict(rows: list[dict]) -> dict:
         matching, third = None, " The intervention's lift is undefined on these frames."
     return {
         "mc_specific": mc,
+        "matched_null": bool(against),
         "strength": word,
         "matching_cue": matching,
         "text": first + second + third,
@@ -305,9 +314,17 @@ def summary_lines(name: str, found: str, rows: list[dict], result: dict) -> list
 
     lift = _find(rows, "C_sigma WTA accuracy minus chance, renders")
     camera = _find(rows, "C_sigma WTA accuracy minus chance, simulated")
-    return [
+    specific = _find(rows, SPECIFIC)
+    first = (
         f"audit {name} ({found}): Monte Carlo-specific cue: {result['strength']}; "
-        f"intensity-controlled rho {fmt('intensity-controlled')}",
+        f"Monte Carlo-specific rho {fmt(SPECIFIC)} (intensity-controlled rho "
+        f"{fmt('intensity-controlled')} minus its matched null {specific['null']:.3f})"
+        if _ok(specific["value"], specific.get("null"))
+        else f"audit {name} ({found}): intensity-controlled cue: {result['strength']}; "
+        f"intensity-controlled rho {fmt('intensity-controlled')} (no matched null)"
+    )
+    return [
+        first,
         f"  Pearson rho {fmt('Pearson rho after')}, corrected {fmt('attenuation-corrected')}, "
         f"Spearman {fmt('Spearman')}",
         f"  camera baseline (simulated sensor) {fmt('camera baseline: simulated')}; null warps: "
@@ -563,7 +580,13 @@ def decision(
         light = "amber"
     else:
         light = "green"
-    if mc is True:
+    tested = result.get("matched_null", True)
+    if mc is True and not tested:
+        found = (
+            f"These renders carry a {word} intensity-controlled cross-view variance cue "
+            "(no matched null: not tested as Monte Carlo-specific)"
+        )
+    elif mc is True:
         found = f"These renders carry a {word} Monte Carlo-specific cross-view variance cue"
     elif mc is False:
         found = "No Monte Carlo-specific cross-view variance cue was detected in these renders"
@@ -577,10 +600,21 @@ def decision(
 
     partial, pearson = _find(rows, "intensity-controlled"), _find(rows, "Pearson rho after")
     camera = _find(rows, "camera baseline: simulated")
+    specific = _find(rows, SPECIFIC)
     zero = seeding.get("zero") or (math.nan, math.nan, math.nan)
+    if _ok(specific["value"], specific["low"], specific["high"], specific.get("null")):
+        first = (
+            f"How sure: the Monte Carlo-specific rho is {iv(specific)} (95% interval): the "
+            f"intensity-controlled rho {iv(partial)} minus its matched null "
+            f"{specific['null']:.3f} (camera-law noise drawn on these frames)"
+        )
+    else:
+        first = (
+            f"How sure: the intensity-controlled rho is {iv(partial)} (95% interval), "
+            "where a real camera's noise gives about 0"
+        )
     sure = (
-        f"How sure: the intensity-controlled rho is {iv(partial)} (95% interval), "
-        "where a real camera's noise gives about 0; the raw Pearson rho "
+        first + "; the raw Pearson rho "
         f"{iv(pearson)} is beside {iv(camera)} for a simulated camera"
         + (
             ", and the residual correlation at zero disparity is "
