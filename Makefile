@@ -5,7 +5,7 @@ VENV := .venv
 PYTHON := $(VENV)/bin/python
 SNAKEMAKE := $(VENV)/bin/snakemake
 
-.PHONY: setup run test test-other-cpu lint docs clean
+.PHONY: setup run test test-other-cpu lint docs docs-figures clean
 
 setup:
 	bash scripts/setup.sh
@@ -39,6 +39,10 @@ lint: setup
 # The documentation site, warnings as errors; open docs/_build/html/index.html.
 docs: setup
 	$(PYTHON) -m sphinx -W --keep-going -b html docs docs/_build/html
+
+# The documentation's figures (docs/figures/*.png), from a tiny run and the example audit.
+docs-figures: setup
+	$(PYTHON) docs/figures/make_figures.py
 
 # Removes workflow outputs and Snakemake's state; never scenes/ or .venv.
 clean:

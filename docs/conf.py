@@ -33,6 +33,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax 3 copied into the site (_static/mathjax/tex-chtml.js), so that the equations
+    # render offline: no script from a CDN
+    "sphinx-mathjax-offline",
     "numpydoc",
     "myst_parser",
     "stereovar_docs",
@@ -70,7 +73,7 @@ html_static_path = ["_static"]
 html_css_files = ["stereovar.css"]
 html_theme_options = {
     "navigation_with_keys": False,
-    "header_links_before_dropdown": 6,
+    "header_links_before_dropdown": 4,
     # the side navigation shows the current page's branch only: much faster to write with
     # one page per module
     "collapse_navigation": True,

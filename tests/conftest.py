@@ -62,6 +62,29 @@ def tiny_run_copy(tiny_run):
 
 
 @pytest.fixture(scope="session")
+def docs_site(tmp_path_factory):
+    """The documentation built once per session as ``make docs`` builds it (warnings are
+    errors), into a temporary folder; the build's output is in the failure message. Its
+    modules share one xdist group (``test_docs``), so the site is built once."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    pytest.importorskip("sphinx", reason="the docs extra is not installed (make setup does)")
+    repo = Path(__file__).resolve().parents[1]
+    out = tmp_path_factory.mktemp("docs")
+    result = subprocess.run(
+        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+         "-d", str(out / "doctrees"), str(repo / "docs"), str(out / "html")],
+        cwd=repo, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert result.returncode == 0, (
+        f"the documentation build failed (warnings are errors):\n{result.stdout}{result.stderr}"
+    )
+    return out / "html"
+
+
+@pytest.fixture(scope="session")
 def headless_chromium():
     """A function ``load(path, *, width=1280, height=900, expression=None)``: open a local
     HTML file in headless Chromium (Debian's ``chromium``) through the DevTools protocol on a
