@@ -17,6 +17,8 @@ CAPTIONS = sorted((REPO / "workflow/report").glob("*.rst"))
 TEX_MARKERS = ("_{", "^{", "\\", "$")
 """What TeX leaves in text that was not typeset: a braced sub- or superscript, a command, a
 math delimiter."""
+REPOSITORY_PATHS = re.compile(r"\b(workflow|docs|profiles|schemas|presets|src)/|snakemake --report")
+"""Paths of the source repository, which an installed stereovar does not have."""
 
 
 class VisibleText(HTMLParser):
@@ -61,6 +63,7 @@ def test_every_report_caption_renders_without_tex_markers(config):
         assert not leaks, (path.name, leaks, shown.text)
         assert "problematic" not in fragment and "system-message" not in fragment, path.name
         assert "{{" not in shown.text and "{%" not in shown.text, path.name  # Jinja filled
+        assert not REPOSITORY_PATHS.search(shown.text), (path.name, shown.text)
         math_seen += "math" in shown.tags
     assert math_seen >= 3  # the captions with equations typeset them
 

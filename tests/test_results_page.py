@@ -20,6 +20,8 @@ from stereovar.pages.names import claim_name
 from stereovar.pages.results import CONTROL_GROUPS, REGIONS
 from stereovar.statistics.claims import CLAIMS_COLUMNS, load_claims
 
+from .test_page_captions import REPOSITORY_PATHS
+
 VERDICTS = ("holds", "does not hold", "explained by a control", "not testable at this scale")
 METHODS = ("warp", *(m for _, _, methods in CONTROL_GROUPS for m, _ in methods))
 RUN_FIGURES = ("fig1_teaser", "rho_vs_seeds")
@@ -616,11 +618,14 @@ TEX_MARKERS = ("_{", "^{", "\\", "$")
 def browser_problems(shown: dict) -> list[str]:
     """What the page fails of the checks in a 1280 px window, by name: text overflowing its
     box (scroll containers aside), a page wider than the window, TeX in the visible text, an
-    image not loaded, the conclusion or the headline number off the first screen."""
+    image not loaded, the conclusion or the headline number off the first screen, a path of
+    the source repository (the documentation is linked by address)."""
     problems = [f"overflow: {e}" for e in shown["overflow"]]
     if shown["page_width"] > VIEWPORT[0]:
         problems.append(f"page width {shown['page_width']}")
     problems += [f"tex: {m}" for m in TEX_MARKERS if m in shown["text"]]
+    problems += [f"repository path: {m.group(0)}"
+                 for m in REPOSITORY_PATHS.finditer(shown["text"])]
     if not shown["images"] or not all(done and width > 0 for _, done, width in shown["images"]):
         problems.append(f"images: {shown['images']}")
     for key in ("conclusion", "headline"):
@@ -716,6 +721,7 @@ BROKEN = {
     "overflow": ("</body>", '<p style="width: 8em; white-space: nowrap">a line that cannot wrap '
                  "and runs out of its box</p></body>"),
     "tex": ("</body>", "<p>σ̂²_{R→L}</p></body>"),
+    "repository path": ("</body>", "<p>see docs/outputs.md</p></body>"),
     "conclusion off": ('id="conclusion"', 'style="margin-top: 1200px" id="conclusion"'),
     "images": ("</body>", '<img src="missing.png" alt="missing"></body>'),
 }
@@ -730,7 +736,7 @@ def test_the_browser_checks_fail_on_a_broken_page(headless_chromium, synthetic_p
     broken.write_text(text, encoding="utf-8")
     _, _, load = claims_visibility(headless_chromium, broken)
     found = {p.split(":")[0].split(" off")[0] for p in browser_problems(load.shown)}
-    assert {"overflow", "tex", "conclusion", "headline", "images"} <= found, found
+    assert {"overflow", "tex", "conclusion", "headline", "images", "repository path"} <= found
     assert any("missing.png" in e for e in load.errors)
 
 
