@@ -104,6 +104,7 @@ rule audit_teaser:
 
 rule audit_verdict:
     input:
+        unpack(audit_verdict_stores),
         correlations=lambda wc: [
             layout.correlation_rows(layout.audit_source(wc.name), "seeds", s, MAIN_SPP)
             for s in SCENES
@@ -133,9 +134,11 @@ rule audit_verdict:
             labels={"audit": "{name}", "table": "verdict"},
         ),
         summary=layout.audit_summary("{name}"),
+        strongest=layout.audit_strongest("{name}"),
     params:
         name=lambda wc: wc.name,
         found=AUDIT_FOUND,
+        analysis=config["analysis"],
     log:
         "logs/audit/{name}/verdict.log",
     benchmark:

@@ -18,6 +18,10 @@ run_job(
     probe_figure=(list(snakemake.input.probe_figure) or [None])[0],
     calibration=snakemake.input.calibration,
     nulls=snakemake.input.nulls,
+    statistics_figure=snakemake.input.statistics_figure,
+    variance=list(snakemake.input.variance),
+    warped=list(snakemake.input.warped),
+    ground_truth=list(snakemake.input.ground_truth),
     outputs=dict(snakemake.output.items()),
     **snakemake.params,
 )

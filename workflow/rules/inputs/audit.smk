@@ -10,6 +10,19 @@ def audit_frame_inputs(wildcards):
     }
 
 
+def audit_verdict_stores(wildcards):
+    """What the verdict page reads beyond the tables: the figure of every statistic against
+    its controls, and each frame's variance, warped and ground-truth stores, where it ranks
+    the frames and tiles in which the cue is strongest (:mod:`stereovar.audit.strongest`)."""
+    source = layout.audit_source(wildcards.name)
+    return {
+        "statistics_figure": layout.run_figure(source, "seeds", "statistics_dots"),
+        "variance": [layout.variance_store(source, "seeds", s, MAIN_SPP) for s in SCENES],
+        "warped": [layout.warped_store(source, "seeds", s, MAIN_SPP) for s in SCENES],
+        "ground_truth": [layout.ground_truth_store(source, s) for s in SCENES],
+    }
+
+
 AUDIT_FOUND = AUDIT_DISCOVERY.summary() if AUDIT else ""
 EXPORT_FORMATS = config["export"]["formats"]
 
