@@ -1,6 +1,6 @@
 """Make the documentation's figures from two tiny runs, and write them to ``docs/figures/``.
 
-Run it from the checkout (about 5 minutes on 2 cores)::
+Run it from the checkout (about a minute on 2 cores; ``make docs-figures``)::
 
     .venv/bin/python docs/figures/make_figures.py
 
