@@ -193,7 +193,9 @@ def test_every_math_block_of_a_docstring_is_rendered_for_mathjax(site):
     checked = 0
     for name in public_modules():
         path = SRC.parent.joinpath(*name.split("."))
-        path = path / "__init__.py" if path.is_dir() else path.with_suffix(".py")
+        # a module beside a folder of the same name (pages/templates.py, pages/templates/)
+        module = path.with_suffix(".py")
+        path = module if module.is_file() else path / "__init__.py"
         blocks = _math_blocks(path.read_text(encoding="utf-8"))
         if not blocks:
             continue
