@@ -2,8 +2,8 @@
 # Set up stereovar in ./.venv: a libLLVM >= 16 for Dr.Jit, Python >= 3.10,
 # `pip install -e ".[test,cycles,mitigations,probe,docs]"` (skipped while pyproject.toml is unchanged;
 # the cycles extra, Blender's bpy, installs on CPython 3.11 only; mitigations is pyoidn;
-# probe is PyTorch 2.13.0, pinned exactly (on Linux without a CPU torch wheel at hand, PyPI's
-# is the CUDA build: see pyproject.toml's probe extra);
+# probe is PyTorch 2.13.0, taken from PyTorch's CPU wheel index on Linux where that index
+# answers (PyPI's Linux torch is the CUDA build: see pyproject.toml's probe extra);
 # docs is Sphinx and its extensions, for `make docs` and the documentation test),
 # and, where apt-get can install it, Debian's chromium for the results page's browser test.
 # Called by `make setup`, `make run` and `make test`; safe to run again.
@@ -133,8 +133,16 @@ want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("py
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else
-    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations,probe,docs]\")"
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[test,cycles,mitigations,probe,docs]" \
+    # PyTorch's CPU wheels, as the README's install line names them: on Linux, PyPI's torch is
+    # the CUDA build (several GB). The index is added only where it answers, since pip retries
+    # an unreachable index for every package it resolves.
+    TORCH_CPU_INDEX="https://download.pytorch.org/whl/cpu"
+    INDEX_ARGS=()
+    if [ "$(uname -s)" = Linux ] && "$VENV/bin/python" -c "import urllib.request, sys; urllib.request.urlopen(sys.argv[1] + '/torch/', timeout=5)" "$TORCH_CPU_INDEX" 2>/dev/null; then
+        INDEX_ARGS=(--extra-index-url "$TORCH_CPU_INDEX")
+    fi
+    say "installing stereovar and its dependencies into $VENV (pip install -e \".[test,cycles,mitigations,probe,docs]\" ${INDEX_ARGS[*]+${INDEX_ARGS[*]}})"
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check ${INDEX_ARGS[@]+"${INDEX_ARGS[@]}"} -e ".[test,cycles,mitigations,probe,docs]" \
         || die "pip install -e \".[test,cycles,mitigations,probe,docs]\" failed (see the pip output above)"
     echo "$want" >"$STAMP"
 fi

@@ -12,7 +12,8 @@ from .snakemake import _VERBOSE, _project_root, _run_snakemake, _workflow
 #: ``{disparity}`` and ``{convention}`` are filled in (placeholders, or the example's files).
 AUDIT_STARTER = """\
 # stereovar audit audit.yaml: audit renders made elsewhere for the cross-view variance cue.
-# Keys, types and defaults: the documentation's configuration reference (audit: section).
+# How to describe your files: {audit_docs}
+# Keys, types and defaults (the audit: section): {configuration_docs}
 audit:
   # results/audit/<name>/verdict.html
   name: {name}
@@ -123,7 +124,10 @@ def _cmd_init(args: argparse.Namespace) -> int:
             fields = {**settings, "views": "{left: L, right: R}"}
             print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
     _write_new(root / "config.yaml", (_workflow() / "config.yaml").read_text())
-    _write_new(root / "audit.yaml", AUDIT_STARTER.format(**fields))
+    from ..links import docs_page
+
+    links = {"audit_docs": docs_page("audit"), "configuration_docs": docs_page("configuration")}
+    _write_new(root / "audit.yaml", AUDIT_STARTER.format(**fields, **links))
     print("next: stereovar run -j2 (the default experiment) or stereovar audit audit.yaml")
     return 0
 
