@@ -5,7 +5,7 @@ Run it from the checkout (about a minute on 2 cores; ``make docs-figures``)::
     .venv/bin/python docs/figures/make_figures.py
 
 - **The tiny run**: the workflow copied to a temporary folder with the two scenes and the
-  configuration of ``tests/test_workflow.py`` (``TINY`` below: 48x27 pixels, SPP 2, N = 2
+  configuration of ``tests/test_workflow.py`` (its ``TINY``, imported: 48x27 pixels, SPP 2, N = 2
   seeds; the test suite runs the same), asked for the main run's figures with
   ``snakemake -j2 --configfile tiny.yaml <figures>``. Its figures go in the user guide.
 - **The example audit**: the two synthetic frames that ``stereovar init --example`` writes
@@ -31,21 +31,8 @@ from PIL import Image
 REPO = Path(__file__).resolve().parents[2]
 OUT = Path(__file__).resolve().parent
 
-#: The tests' tiny configuration (tests/test_workflow.py ``TINY``) and its scenes.
-SCENES = ["scene_000", "scene_001"]
-TINY = {
-    "scenes": SCENES,
-    "resolution": {"width": 48, "height": 27},
-    "render": {
-        "spp": 2,
-        "n_seeds": 2,
-        "seeds_per_job": 2,
-        "spp_sweep": {"scene": "scene_000", "spp": [1, 2]},
-    },
-    "preview": {"spp": 4},
-    "mitigations": {"names": []},
-    "calibration": {"replicates": 4},
-}
+sys.path.insert(0, str(REPO))
+from tests.test_workflow import SCENES, TINY  # noqa: E402  the suite's tiny configuration
 
 #: Figures of the tiny run: its path under the run, the name written here.
 RUN_FIGURES = {

@@ -20,6 +20,17 @@ import re
 from collections import Counter
 from pathlib import Path
 
+#: The rules of the intervention (Sec. 3.4) and of the mitigations, stages of both maps.
+INTERVENTION_RULES = ("intervention", "intervention_table", "margin_figure")
+MITIGATION_RULES = (
+    "render_policy",
+    "render_aux",
+    "transform",
+    "mitigation_scene",
+    "mitigations_table",
+    "mitigations",
+)
+
 #: The stages ``stereovar run`` reports, in order, and the workflow rules of each. A rule
 #: named nowhere counts as ``statistics``; ``all`` (the target, no work) counts nowhere.
 RUN_STAGES = {
@@ -28,15 +39,8 @@ RUN_STAGES = {
     "ground truth": ("ground_truth",),
     "statistics": ("variance", "warp", "correlation"),
     "controls": ("estimator_check", "estimator_tables", "estimators"),
-    "intervention": ("intervention", "intervention_table", "margin_figure"),
-    "mitigations": (
-        "render_policy",
-        "render_aux",
-        "transform",
-        "mitigation_scene",
-        "mitigations_table",
-        "mitigations",
-    ),
+    "intervention": INTERVENTION_RULES,
+    "mitigations": MITIGATION_RULES,
     "calibration": (
         "calibration_scene",
         "calibration_table",
@@ -88,15 +92,8 @@ AUDIT_STAGES = {
         "audit_thumbnail",
     ),
     "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
-    "intervention": ("intervention", "intervention_table", "margin_figure"),
-    "mitigations": (
-        "render_policy",
-        "render_aux",
-        "transform",
-        "mitigation_scene",
-        "mitigations_table",
-        "mitigations",
-    ),
+    "intervention": INTERVENTION_RULES,
+    "mitigations": MITIGATION_RULES,
     "probe": ("probe_train", "probe_test", "probe_table", "probe"),
     "verdict": ("audit_verdict",),
 }
