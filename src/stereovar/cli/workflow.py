@@ -179,8 +179,9 @@ def _add_configs(parser) -> None:
         "--preset",
         action="append",
         metavar="NAME",
-        help="the workflow's preset NAME (workflow/presets/NAME.yaml: paper, paper-moments, "
-        "probe), merged before --configfile",
+        help="a preset shipped with the workflow: paper, paper-moments or probe (the "
+        "paper's scale, with the moments estimator, the probe's frames), merged before "
+        "--configfile",
     )
 
 
