@@ -42,9 +42,7 @@ def cross_renderer_figure(fields: dict, *, rho: dict | None = None, title: str =
     }
     every = np.concatenate([a.ravel() for pair in arrays.values() for a in pair])
     lo, hi = _log_limits(every, ROBUST_PERCENTILES)
-    cmap = plt.get_cmap(VARIANCE_CMAP).copy()
-    cmap.set_under(UNDER_COLOUR)
-    cmap.set_bad(UNDER_COLOUR)
+    cmap = plt.get_cmap(VARIANCE_CMAP).with_extremes(under=UNDER_COLOUR, bad=UNDER_COLOUR)
     n = len(arrays)
     height, width = next(iter(arrays.values()))[0].shape
     fig, axes = plt.subplots(
