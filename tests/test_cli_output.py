@@ -15,7 +15,15 @@ from .test_workflow import TINY, copy_workflow
 
 pytestmark = pytest.mark.workflow
 
-STAGES = ["import", "statistics", "controls", "intervention", "verdict"]
+STAGES = [
+    "import",
+    "statistics",
+    "controls",
+    "intervention",
+    "calibration",
+    "tables and figures",
+    "verdict",
+]
 
 
 def audit(root, *args):
@@ -143,11 +151,15 @@ def test_new_log_files_do_not_clobber_one_of_the_same_second(tmp_path, monkeypat
 def test_an_error_before_any_job_is_one_line(tmp_path):
     # what the logger plugin recorded of Snakemake's error (its ERROR event)
     monitor = cli._Run(tmp_path / "run.log")
-    monitor.summary = {"errors": [{
-        "exception": "AuditError",
-        "message": 'AuditError in file "/wf/workflow/rules/common.smk", line 40:\n'
-        "data/renders/f00/L/seed_001.exr: gone since the files were found; render it again",
-    }]}
+    monitor.summary = {
+        "errors": [
+            {
+                "exception": "AuditError",
+                "message": 'AuditError in file "/wf/workflow/rules/common.smk", line 40:\n'
+                "data/renders/f00/L/seed_001.exr: gone since the files were found; render it again",
+            }
+        ]
+    }
     assert monitor.errors(1) == [
         "data/renders/f00/L/seed_001.exr: gone since the files were found; render it again"
     ]

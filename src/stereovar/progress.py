@@ -53,6 +53,7 @@ RUN_STAGES = {
         "probe_model_frames",
         "probe_planted",
         "probe_train",
+        "probe_train_control",
         "probe_test",
         "probe_table",
         "probe",
@@ -79,10 +80,13 @@ RUN_STAGES = {
 #: The stages ``stereovar audit`` reports, in order, and the workflow rules of each.
 AUDIT_STAGES = {
     "import": ("audit_import",),
-    "statistics": (
-        "variance",
-        "warp",
-        "correlation",
+    "statistics": ("variance", "warp", "correlation"),
+    "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
+    "intervention": INTERVENTION_RULES,
+    "calibration": ("calibration_scene", "calibration_table", "calibration"),
+    "mitigations": MITIGATION_RULES,
+    "probe": ("probe_train", "probe_train_control", "probe_test", "probe_table", "probe"),
+    "tables and figures": (
         "statistics_table",
         "cross_scene_table",
         "spp_sweep_table",
@@ -91,10 +95,6 @@ AUDIT_STAGES = {
         "audit_teaser",
         "audit_thumbnail",
     ),
-    "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
-    "intervention": INTERVENTION_RULES,
-    "mitigations": MITIGATION_RULES,
-    "probe": ("probe_train", "probe_test", "probe_table", "probe"),
     "verdict": ("audit_verdict",),
 }
 
