@@ -67,7 +67,8 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     power_ax.set_ylabel("power (above its matched null)")
     power_ax.set_title("Detects a planted cue", fontsize=10)
     if transforms:
-        power_ax.legend(fontsize=8, loc="center right")
+        # beside the axes: the points sit at 0 and 1 across every strength, so no corner is free
+        power_ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     bars = [
         r
         for r in rows
