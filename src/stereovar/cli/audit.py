@@ -121,9 +121,11 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     data = load_yaml(config, "audit config", error=StereovarError) or {}
     settings = data.get("audit") if isinstance(data, dict) else None
     if not isinstance(settings, dict):
+        from ..links import docs_page
+
         raise StereovarError(
             f"{config}: no audit: section; add one (keys: name, renders, views, disparity, "
-            "convention; see the documentation's Auditing your renders page, docs/audit.md)"
+            f"convention; see {docs_page('audit')})"
         )
     # The whole config, as the workflow will see it, before any file is read; then the
     # files, found (not read) as the workflow finds them; the import is the workflow's (one
