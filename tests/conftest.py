@@ -38,6 +38,28 @@ def tree_snapshot():
 
 
 @pytest.fixture(scope="session")
+def verdict_summary():
+    """A function of a light and the summary's lines: the smallest ``summary.json`` of that
+    verdict that its schema takes (checked here), for stand-ins of the verdict job."""
+    from stereovar.audit.summary_schema import SUMMARY_SCHEMA_VERSION, validate_summary
+
+    def make(light: str, lines: list, name: str = "gate") -> dict:
+        summary = {
+            "schema_version": SUMMARY_SCHEMA_VERSION, "audit": name,
+            "found": "1 frame × 2 views × 4 seeds", "mc_specific": None,
+            "matched_null": False, "strength": "not testable", "matching_cue": None,
+            "text": lines[0], "light": light, "decision": lines[:1], "shared_streams": None,
+            "seeding": "", "flags": [], "summary": list(lines), "mitigations": [],
+            "probe": None, "calibration": "", "rules": "", "rows": [], "csv": "",
+            "strongest": None,
+        }
+        validate_summary(summary)
+        return summary
+
+    return make
+
+
+@pytest.fixture(scope="session")
 def tiny_run(tmp_path_factory):
     """A copy of the workflow with the tiny config of ``tests/test_workflow.py``, run once to
     completion (``snakemake -j2 all``) and shared by every module that reads such a run;

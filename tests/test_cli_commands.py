@@ -240,7 +240,7 @@ def test_an_unknown_level_is_refused():
 
 
 @pytest.fixture
-def audited(tmp_path, monkeypatch):
+def audited(tmp_path, monkeypatch, verdict_summary):
     """``audit(light, *options)``: ``stereovar audit`` of a one-frame synthetic audit in
     ``tmp_path`` whose Snakemake run is a stand-in that writes a finished audit's
     ``summary.json`` with verdict ``light``; returns the exit status."""
@@ -257,7 +257,7 @@ def audited(tmp_path, monkeypatch):
             summary = Path(root) / "results" / "audit" / "gate" / "summary.json"
             summary.parent.mkdir(parents=True, exist_ok=True)
             lines = [f"{light.upper()}: the verdict's headline.", "a second line"]
-            summary.write_text(json.dumps({"light": light, "summary": lines}))
+            summary.write_text(json.dumps(verdict_summary(light, lines)))
             return 0
 
         monkeypatch.setattr(cli, "_snakemake", finished)

@@ -154,10 +154,42 @@ def test_a_stage_that_fails_before_its_line_began_is_named():
     out += p.job(3, "transform", {"renderer": "audit/a", "transform": "sensor_only"})
     p.fail("transform", 3, ["logs/transform.log"])
     assert (out + p.finish()).splitlines() == [
-        "import: 1 frame ... done", "statistics ... stopped", "mitigations ... failed"
+        "import: 1 frame ... done",
+        "statistics ... · mitigations started stopped",  # its one job never started
+        "mitigations ... failed",
     ]
     assert p.job_logs() == ["logs/transform.log"]
     assert p.error_lines() == ["rule transform failed"]  # its log does not exist
+
+
+def test_the_open_line_says_which_stage_runs_while_it_waits():
+    """A frame's calibration runs while the second frame's import waits for a core: the
+    import's line, open until that frame is imported, says so from the job events."""
+    stats = {"audit_import": 2, "calibration_scene": 2, "audit_verdict": 1}
+    events = [("job", 1, "audit_import"), ("done", 1), ("job", 2, "calibration_scene"),
+              ("job", 3, "calibration_scene"), ("done", 2), ("job", 4, "audit_import"),
+              ("done", 4), ("done", 3), ("job", 5, "audit_verdict"), ("done", 5)]
+
+    def follow(live):
+        p = Progress(AUDIT_STAGES, labels={"import": "import: 2 frames"}, live=live)
+        shown = [p.plan({**stats, "total": 5})]
+        for kind, jobid, *rule in events:
+            shown.append(p.job(jobid, *rule) if kind == "job" else p.done(jobid))
+        return shown + [p.finish()]
+
+    text = "".join(follow(False))
+    assert text.splitlines() == [
+        "import: 2 frames ... 1/2 · calibration started 2/2 done",
+        "calibration ... done (2 jobs; 4 of 5 in all)",
+        "verdict ... done",
+    ]
+    live = follow(True)
+    # once calibration's first job starts, the rewritten import line names it, with its count
+    assert live[3].endswith("import: 2 frames ... frame 2 of 2 · running: calibration 0 of 2 "
+                            "jobs")
+    assert live[4].endswith("· running: calibration 0 of 2 jobs")  # its second job
+    assert live[5].endswith("frame 2 of 2 · running: calibration 1 of 2 jobs")
+    assert live[7].startswith("\r\x1b[Kimport: 2 frames ... done\n")  # frame 2 imported
 
 
 def test_an_up_to_date_import_and_nothing_to_do_are_said():

@@ -29,6 +29,13 @@ __all__ = [
     "validate_config_or_exit",
 ]
 
+#: Keys a user may write under ``audit:`` to ask for one render per view, which the audit
+#: refuses with its measured reasons (:func:`stereovar.estimators.single.refusal`), as it
+#: does N = 1 renders.
+ONE_RENDER_KEYS = frozenset(
+    {"single_render", "one_render", "single_image", "one_render_per_view", "single_view_render"}
+)
+
 _TYPE_NAMES = {
     "integer": "an integer",
     "number": "a number",
@@ -143,6 +150,10 @@ def _message(error: jsonschema.ValidationError) -> str:
         allowed = list(schema.get("properties", {}))
         unknown = sorted(k for k in value if k not in allowed)
         where = f"under '{key}'" if key else "at the top level"
+        if key == "audit" and set(unknown) & ONE_RENDER_KEYS:
+            from .estimators.single import refusal
+
+            return f"config key 'audit.{min(set(unknown) & ONE_RENDER_KEYS)}': {refusal()}"
         return (
             f"config key '{_key([*path, unknown[0]])}' is not known; allowed keys {where}: "
             f"{', '.join(allowed)}"

@@ -38,6 +38,11 @@ class WriteError(StereovarError):
     is kept, and the same command resumes once the cause is fixed."""
 
 
+class RunLockedError(StereovarError):
+    """Another ``stereovar`` command holds the lock of the results this one would write
+    (:mod:`stereovar.run_lock`)."""
+
+
 class ImageError(StereovarError):
     """An image, disparity, depth or mask file cannot be read or has the wrong shape."""
 
@@ -49,6 +54,25 @@ class ClaimsError(StereovarError):
 class AuditError(StereovarError):
     """An audit's files do not form N >= 2 renders per view of stereo frames with ground
     truth, or their disparity convention is the wrong one."""
+
+
+def printable(text) -> str:
+    r"""``text`` safe to print on a terminal: every character that is not printable (the
+    terminal's control characters, such as ESC and BEL, which can retitle the window or
+    erase lines, newlines and tabs, and invisible format characters such as bidirectional
+    overrides) written as its Python escape; the rest, letters of every script included,
+    unchanged.
+
+    Examples
+    --------
+    >>> printable("data/e\x1b]0;TITLE\x07/f.exr")
+    'data/e\\x1b]0;TITLE\\x07/f.exr'
+    >>> printable("renders/café/L.exr: no such file")
+    'renders/café/L.exr: no such file'
+    """
+    return "".join(
+        c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text)
+    )
 
 
 @contextmanager

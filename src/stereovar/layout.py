@@ -93,6 +93,7 @@ __all__ = [
     "render_store",
     "results_page",
     "run_figure",
+    "run_lock",
     "run_prefix",
     "run_tables",
     "scene_tables",
@@ -498,6 +499,19 @@ def summary_json() -> str:
 def results_page() -> str:
     """The run's results page, the one page a person opens: ``results/index.html``."""
     return f"{RESULTS}/index.html"
+
+
+def run_lock(scope: str) -> str:
+    """The lock file a ``stereovar`` command holds while it may write ``scope``'s results
+    (:mod:`stereovar.run_lock`): ``results/.locks/{scope}.lock``, where ``scope`` is ``run``
+    (the workflow's own results) or ``audit-{name}`` (``results/audit/{name}/``).
+
+    Examples
+    --------
+    >>> run_lock("audit-my_renders")
+    'results/.locks/audit-my_renders.lock'
+    """
+    return f"{RESULTS}/.locks/{scope}.lock"
 
 
 def snakemake_report() -> str:

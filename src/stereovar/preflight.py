@@ -170,7 +170,7 @@ def process_start(pid: int) -> float | None:
         return None
 
 
-def _record(pid: int, command: str | None = None) -> dict:
+def process_record(pid: int, command: str | None = None) -> dict:
     record = {"host": socket.gethostname(), "pid": int(pid), "started": process_start(pid)}
     return {**record, "command": command} if command else record
 
@@ -328,7 +328,7 @@ def mark_run(state_dir) -> None:
     record of a run killed before its ``onstart`` is what shows that run's lock is stale."""
     state = Path(state_dir)
     state.mkdir(parents=True, exist_ok=True)
-    _write_json(state / RUN_MARKER, _record(os.getpid()))
+    _write_json(state / RUN_MARKER, process_record(os.getpid()))
     for record in run_records(state):
         if record["kind"] == "started" and _alive(record) is False:
             record["path"].unlink(missing_ok=True)
@@ -358,7 +358,7 @@ def record_run(state_dir, pid: int, command: str) -> Path:
     runs = Path(state_dir) / RUNS_DIR
     runs.mkdir(parents=True, exist_ok=True)
     path = runs / f"{socket.gethostname()}-{int(pid)}.json"
-    _write_json(path, _record(pid, command))
+    _write_json(path, process_record(pid, command))
     return path
 
 
@@ -373,7 +373,7 @@ def forget_run(path) -> None:
     Path(path).unlink(missing_ok=True)
 
 
-def _describe_run(record: dict) -> str:
+def describe_run(record: dict) -> str:
     where = "" if record["host"] == socket.gethostname() else f" on host {record['host']}"
     started = record.get("started")
     when = (
@@ -422,7 +422,7 @@ def lock_message(state_dir, unlock: str) -> str:
     folder = Path(state_dir).absolute().parent
     holders = lock_holders(state_dir)
     if holders:
-        runs = "; ".join(map(_describe_run, holders))
+        runs = "; ".join(map(describe_run, holders))
         wait = (
             f"{folder} is locked by another run still going ({runs}); wait for it to "
             "finish, then run the same command again"
@@ -436,7 +436,7 @@ def lock_message(state_dir, unlock: str) -> str:
         )
     recorded = _recorded(state_dir)
     if recorded:
-        ended = "; ".join(map(_describe_run, recorded))
+        ended = "; ".join(map(describe_run, recorded))
         return (
             f"{folder} was locked by a run that has ended ({ended}); run the same command "
             "again (the lock of a run that is gone is removed)"

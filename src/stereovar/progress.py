@@ -349,6 +349,8 @@ class Progress:
         self.finished: Counter = Counter()  # stage: jobs
         self.job_stages: dict = {}  # job id: stage
         self.job_rules: dict = {}  # job id: rule
+        self.running: Counter = Counter()  # stage: jobs started and not ended
+        self._noted = False  # the open (not live) line says another stage started
         self.failed: list = []  # {"rule", "jobid", "logs"} per failed job
         self.errors: list = []  # {"exception", "message"} per Snakemake error
         self.nothing = False  # Snakemake said there is nothing to be done
@@ -389,26 +391,53 @@ class Progress:
         return text + self.advance()
 
     def job(self, jobid, rule: str, wildcards=None) -> str:
-        """A job starts (``JOB_INFO``; in a dry run, every planned job)."""
+        """A job starts (``JOB_INFO``; in a dry run, every planned job).
+
+        Where it belongs to another stage than the open line's, and no job of that one
+        runs (it waits for jobs still to come), the line says what runs: with ``live``, the
+        rewritten line names the stages running and their counts; else the open line gets
+        ``· <stage> started``, once, so that it never stands alone for work that is not
+        going on."""
         self.job_rules[jobid] = rule
         stage = job_stage(rule, wildcards, self.stages, self.source)
         if stage is None:
             return ""
         self.job_stages[jobid] = stage
+        self.running[stage] += 1
         home = rule_stage(rule, self.stages)
-        if stage == home or not self.seen_plan:
-            return ""
-        self.planned[home] = max(self.planned.get(home, 1) - 1, self.finished[home])
-        self.rules.get(home, Counter())[rule] -= 1
-        self.planned[stage] = self.planned.get(stage, 0) + 1
-        self.rules.setdefault(stage, Counter())[rule] += 1
-        return self.advance()
+        text = ""
+        if stage != home and self.seen_plan:
+            self.planned[home] = max(self.planned.get(home, 1) - 1, self.finished[home])
+            self.rules.get(home, Counter())[rule] -= 1
+            self.planned[stage] = self.planned.get(stage, 0) + 1
+            self.rules.setdefault(stage, Counter())[rule] += 1
+            text = self.advance()
+        return text + self._meanwhile(stage)
 
-    def done(self, jobid) -> str:
-        """A job finished (``JOB_FINISHED``)."""
+    def _meanwhile(self, stage: str) -> str:
+        """What the open line says when a job of ``stage`` starts (:meth:`job`)."""
+        open_ = self.open
+        if open_ is None or stage == open_ or self.running[open_] > 0:
+            return ""
+        if self.live:
+            return self._step(open_)
+        if self._noted:
+            return ""
+        self._noted = True
+        return f"· {self.label(stage)} started "
+
+    def _stopped(self, jobid) -> str | None:
+        """The stage of a job that ended (its count of running jobs one less)."""
         stage = self.job_stages.get(jobid)
         if stage is None:
             stage = rule_stage(self.job_rules.get(jobid), self.stages)
+        if stage is not None and self.running[stage] > 0:
+            self.running[stage] -= 1
+        return stage
+
+    def done(self, jobid) -> str:
+        """A job finished (``JOB_FINISHED``)."""
+        stage = self._stopped(jobid)
         if stage is None:
             return ""
         self.finished[stage] += 1
@@ -417,6 +446,7 @@ class Progress:
 
     def fail(self, rule: str, jobid=None, logs=()) -> None:
         """A job failed (``JOB_ERROR``), its log files ``logs``."""
+        self._stopped(jobid)
         self.failed.append({"rule": rule, "jobid": jobid, "logs": [str(p) for p in logs]})
 
     def error(self, message: str, exception: str = "") -> None:
@@ -450,10 +480,20 @@ class Progress:
             return f"frame {min(k + 1, n)} of {n}" if k < n else f"{n} of {n} frames"
         return f"{k} of {_jobs(n)}"
 
+    def _elsewhere(self) -> str:
+        """The live line's account of the stages other than the open one with jobs running:
+        ``· running: calibration 3 of 8 jobs``."""
+        busy = [s for s in self.stages if s != self.open and self.running[s] > 0]
+        if not busy:
+            return ""
+        counts = ", ".join(f"{s} {self.finished[s]} of {_jobs(self.planned.get(s, 0))}"
+                           for s in busy)
+        return f" · running: {counts}"
+
     def _begin(self, stage: str) -> str:
-        self.open, self._marks = stage, 0
+        self.open, self._marks, self._noted = stage, 0, False
         if self.live:
-            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}"
+            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}{self._elsewhere()}"
         return f"{self.label(stage)} ... "
 
     def _end(self, word: str) -> str:
@@ -466,7 +506,7 @@ class Progress:
     def _step(self, stage: str) -> str:
         """The open line, one more job of it finished and more to come."""
         if self.live:
-            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}"
+            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}{self._elsewhere()}"
         k, n = self.finished[stage], self.planned.get(stage, 0)
         if stage != "import" or n < 2 or k > n or k * 20 // n <= self._marks:
             return ""
@@ -521,9 +561,13 @@ class Progress:
         return stage or rule_stage(job["rule"], self.stages)
 
     def plan_lines(self) -> str:
-        """A dry run's plan: one line per stage with its jobs per rule, and the total."""
-        if self.nothing or not self.seen_plan or not self.totals()[1]:
+        """A dry run's plan: one line per stage with its jobs per rule, and the total;
+        nothing when Snakemake stopped before it planned (a refused config: its error says
+        why)."""
+        if self.nothing or (self.seen_plan and not self.totals()[1]):
             return "Nothing to be done: every result is up to date\n"
+        if not self.seen_plan:
+            return ""
         lines = []
         for stage in self.stages:
             n = self.planned.get(stage, 0)

@@ -56,3 +56,62 @@ def validate_summary(summary: dict) -> None:
         raise ValueError(
             f"summary.json breaks its schema ({SCHEMA_PATH.name}) at {where}: {e.message}"
         )
+
+
+def read_summary(path) -> dict:
+    """An audit's ``summary.json``, read through :func:`summary_schema`: what ``stereovar
+    audit`` prints and its ``--fail-on`` gate decides from. A file that is not JSON, not a
+    JSON object or breaks the schema is refused, so that the gate fails closed on a verdict
+    it cannot read rather than pass on a ``light`` it was handed.
+
+    Parameters
+    ----------
+    path : path-like
+        ``results/audit/{name}/summary.json``.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    AuditError
+        One line: the file, what is wrong with it, and to remove it and run the audit again
+        (the verdict job writes it anew).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "summary.json"
+    >>> _ = path.write_text('{"light": "green", "summary": "GREEN"}')
+    >>> read_summary(path)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.AuditError: .../summary.json is not a summary the verdict job wrote: ...
+    """
+    from ..errors import AuditError
+
+    fix = "remove it and run the same stereovar audit command again to write it anew"
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise AuditError(
+            f"{path}: cannot read the audit's summary ({getattr(err, 'strerror', None) or err});"
+            f" {fix}"
+        ) from None
+    try:
+        summary = json.loads(text)
+    except ValueError as err:
+        raise AuditError(
+            f"{path} is not a summary the verdict job wrote: it is not JSON ({err}); {fix}"
+        ) from None
+    if not isinstance(summary, dict):
+        raise AuditError(
+            f"{path} is not a summary the verdict job wrote: it holds a JSON "
+            f"{type(summary).__name__}, not an object; {fix}"
+        )
+    try:
+        validate_summary(summary)
+    except ValueError as err:
+        raise AuditError(f"{path} is not a summary the verdict job wrote: {err}; {fix}") from None
+    return summary

@@ -29,12 +29,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import sys
 
 # ``name as name``: re-exported, reached through the package: the constants, Snakemake's
 # runner (replaced here, it is replaced for every command: ``snakemake._run_snakemake``),
 # the run's monitor, its hook and the audit's log file, and the workflow's config.
-from ..errors import StereovarError
+from ..errors import StereovarError, printable
 from .audit import _audit_log as _audit_log
 from .audit import _register_audit
 from .completion import _register_completion
@@ -42,7 +43,7 @@ from .monitor import _Run as _Run
 from .probe import _register_probe
 from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR
-from .snakemake import PROG, _workflow
+from .snakemake import PROG, _workflow, check_cores
 from .snakemake import _project_root as _project_root
 from .snakemake import _snakemake as _snakemake
 from .snakemake import _workflow_config as _workflow_config
@@ -107,7 +108,7 @@ def main(argv=None) -> int:
     -------
     int
         0 on success (a bare ``stereovar``: the help), 2 on a usage error or a
-        :class:`~stereovar.errors.StereovarError`; ``audit --fail-on``:
+        :class:`~stereovar.errors.StereovarError`, 130 when stopped by Ctrl-C; ``audit --fail-on``:
         :data:`~stereovar.cli.audit.FAIL_ON_STATUS` for a verdict at or past the level.
     """
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -130,12 +131,19 @@ def main(argv=None) -> int:
             + (f", not {args.command}" if args.command else "")
         )
     args.snakemake_args = passthrough
+    args.command_line = shlex.join([PROG, *argv, *(["--", *passthrough] if passthrough else [])])
     try:
+        check_cores(getattr(args, "cores", None))
         return int(args.func(args) or 0)
     except StereovarError as err:
-        message = " ".join(str(err).split())
+        message = printable(" ".join(str(err).split()))
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         sys.stderr.close()
         return 0
+    except KeyboardInterrupt:  # Ctrl-C outside a Snakemake run (which says it itself)
+        from .monitor import INTERRUPTED, INTERRUPTED_STATUS
+
+        print(f"{PROG}: {INTERRUPTED}", file=sys.stderr)
+        return INTERRUPTED_STATUS

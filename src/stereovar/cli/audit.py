@@ -13,9 +13,11 @@ from .monitor import _Run, log_line
 from .snakemake import (
     _MONITOR,
     PROG,
+    _hold_results,
     _new_log,
     _project_root,
     _run_snakemake,
+    _warn_unlocked,
     _workflow_config,
 )
 
@@ -92,22 +94,21 @@ def _audit_preflight(root, config: dict, discovery) -> None:
     """The workflow's checks of an audit, made before Snakemake starts and before anything
     is written: the folders the run writes can be written, the disk has room for
     Snakemake's lock (:mod:`stereovar.preflight`), and the run config's mitigations and
-    memory (:func:`stereovar.audit.run.check_audit_run`); one line for the first problem."""
-    from ..audit.run import audit_run_config, check_audit_run
+    memory (:func:`stereovar.audit.run.check_audit_run`), and every file's header
+    (:func:`stereovar.audit.run.check_headers`); one line for the first problem."""
+    from ..audit.run import audit_run_config, check_audit_run, check_headers
     from ..preflight import WRITTEN_FOLDERS, check_free_space, check_writable
 
     check_writable([root / d for d in WRITTEN_FOLDERS])
     check_free_space(root)
     check_audit_run({**config, **audit_run_config(config, discovery)}, discovery)
+    check_headers(discovery)
 
 
 def _cmd_audit(args: argparse.Namespace) -> int:
-    import json
-    import os
     from pathlib import Path
 
-    from ..audit.run import PREVIOUS, audit_paths, discover_audit
-    from ..layout import audit_source
+    from ..audit.run import discover_audit
     from ..schema import load_yaml
 
     if args.fail_on and args.import_only:  # the gate would pass without a verdict
@@ -135,6 +136,23 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     name = settings["name"]
     discovery = discover_audit(settings)
     _audit_preflight(root, workflow_config, discovery)
+    # the audit's results are this command's until it ends: another audit of the same name
+    # is refused here, before anything is written
+    with _hold_results(root, workflow_config, args.command_line) as lock:
+        _warn_unlocked(lock)
+        return _audit(args, root, config, name, discovery)
+
+
+def _audit(args, root, config, name: str, discovery) -> int:
+    """Run the audit's workflow and say its verdict (``stereovar audit``, its inputs
+    checked and its results held)."""
+    import os
+    from pathlib import Path
+
+    from ..audit.run import PREVIOUS, audit_paths
+    from ..audit.summary_schema import read_summary
+    from ..layout import audit_source
+
     command = ["-j", str(args.cores), "all", "--configfile", str(config.resolve())]
     if args.import_only:
         command += ["--until", "audit_import"]
@@ -156,37 +174,42 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         _MONITOR.reset(token)
     paths = audit_paths(name)
     summary = root / paths["summary"]
-    verdict = json.loads(summary.read_text()) if rc == 0 and not args.import_only else {}
+    # read through its schema: a gate never passes on a file it cannot read as a verdict
+    verdict = read_summary(summary) if rc == 0 and not args.import_only else {}
     lines = verdict.get("summary", [])
     # the import's warnings, each once: those the verdict's summary does not already say
     for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
         if not any(warning in line for line in lines):
-            print(f"warning: {warning}", file=sys.stderr)
+            _say(f"warning: {warning}")
     if monitor.log_error:
-        print(f"warning: the log ends early: {monitor.log_error}", file=sys.stderr)
+        _say(f"warning: the log ends early: {monitor.log_error}")
     if rc != 0:
         for message in monitor.errors(rc):
-            print(f"{PROG}: error: {message}", file=sys.stderr)
+            _say(f"{PROG}: error: {message}")
         previous = root / Path(paths["verdict_html"]).parent / PREVIOUS
         if not (root / paths["verdict_html"]).exists() and (previous / "verdict.html").exists():
-            print(
-                f"the verdict before this run, set aside as out of date: {previous}/",
-                file=sys.stderr,
-            )
-        print(log_line(shown_log, monitor.job_logs()), file=sys.stderr)
+            _say(f"the verdict before this run, set aside as out of date: {previous}/")
+        _say(log_line(shown_log, monitor.job_logs()))
         return rc
     if args.import_only:
         records = root / Path(paths["summary"]).parent / "import"
-        print(f"imported {name}: one record per frame in {records}")
+        _say(f"imported {name}: one record per frame in {records}", sys.stdout)
     else:
-        print("\n".join(lines))
-        print(f"verdict page: {summary.parent / 'verdict.html'}")
-    print(f"log: {shown_log}")
+        _say("\n".join(lines), sys.stdout)
+        _say(f"verdict page: {summary.parent / 'verdict.html'}", sys.stdout)
+    _say(f"log: {shown_log}", sys.stdout)
     if verdict_fails(verdict.get("light"), args.fail_on):
-        line = lines[0] if lines else f"the verdict's light is {verdict.get('light')!r}"
-        print(f"{PROG}: --fail-on {args.fail_on}: {line}", file=sys.stderr)
+        _say(f"{PROG}: --fail-on {args.fail_on}: {lines[0]}")
         return FAIL_ON_STATUS
     return 0
+
+
+def _say(text: str, stream=None) -> None:
+    """Print ``text`` (lines) with the terminal's control characters in the user's paths
+    and names escaped (:func:`stereovar.errors.printable`); stderr by default."""
+    from ..errors import printable
+
+    print("\n".join(map(printable, text.split("\n"))), file=stream or sys.stderr)
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
@@ -202,10 +225,12 @@ def _cmd_export(args: argparse.Namespace) -> int:
     options = ["-j", str(args.cores), "export", "--config", f"export={{formats: [{args.format}]}}"]
     for f in args.configfile or []:
         options[3:3] = ["--configfile", f]
-    rc = _run_snakemake(options, root)
-    if rc != 0:
-        return rc
-    check_export_targets(targets)
+    with _hold_results(root, config, args.command_line) as lock:
+        _warn_unlocked(lock)
+        rc = _run_snakemake(options, root)
+        if rc != 0:
+            return rc
+        check_export_targets(targets)
     folder = Path(targets[0]).parent
     scenes = ", ".join(Path(t).name for t in targets)
     print(

@@ -23,6 +23,62 @@ _WORKFLOW_LINE = "stereovar: "
 _WORKFLOW_NOTES = ("warning:", "removed the lock")
 #: How much of the end of the run's log is read for the errors of a run that stopped early.
 _TAIL_BYTES = 64 * 1024
+#: The exit status of a run stopped by Ctrl-C (SIGINT), as a shell gives it: 128 + 2.
+INTERRUPTED_STATUS = 130
+#: The one line said for it.
+INTERRUPTED = (
+    "interrupted (Ctrl-C): the results that were finished are kept and the jobs that were "
+    "stopped run again; run the same command again to go on"
+)
+#: The files in the temporary folder through which the plugin hands a run's summary to the
+#: command (:meth:`_Run.run`): ``stereovar-run-<pid>-<random>.json``, ``<pid>`` the command's.
+SUMMARY_PREFIX = "stereovar-run-"
+#: Age (s) after which a summary file that names no process (written by an older stereovar)
+#: is removed.
+_UNNAMED_SUMMARY_AGE = 24 * 3600
+
+
+def clean_stale_summaries(folder=None) -> list:
+    """Remove this user's run summaries (:data:`SUMMARY_PREFIX`) left in the temporary folder
+    by commands that were killed: those whose process is gone, and those that name no
+    process and are older than a day. A run's summary is written by the plugin as the run
+    ends and read at once, so removing one of a process that still runs costs nothing.
+
+    Parameters
+    ----------
+    folder : path-like, optional
+        Default: the temporary folder (:func:`tempfile.gettempdir`).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    import re
+    import tempfile
+    import time
+    from pathlib import Path
+
+    from ..processes import process_exists
+
+    removed = []
+    for path in Path(folder or tempfile.gettempdir()).glob(f"{SUMMARY_PREFIX}*.json"):
+        try:
+            st = path.lstat()
+            if not path.is_file() or path.is_symlink() or st.st_uid != os.getuid():
+                continue
+            named = re.fullmatch(rf"{SUMMARY_PREFIX}(\d+)-.+\.json", path.name)
+            gone = (
+                not process_exists(int(named.group(1)))
+                if named
+                else time.time() - st.st_mtime > _UNNAMED_SUMMARY_AGE
+            )
+            if gone:
+                path.unlink()
+                removed.append(path)
+        except OSError:
+            continue
+    return removed
 
 
 def workflow_error(lines) -> str | None:
@@ -105,6 +161,8 @@ class _Run:
         self.configfiles: list = []  # its --configfile options
         self.summary: dict = {}  # what the plugin wrote as the run ended
         self.log_error = None  # why the log stopped being written, if it did
+        self.interrupted = False  # the user pressed Ctrl-C while the run went on
+        self._partial = False  # the lines shown end inside a line (a stage's, begun)
 
     # -- running ----------------------------------------------------------------------------
 
@@ -147,7 +205,8 @@ class _Run:
         if self.verbose:
             sys.stderr.write(header)
         read, write = os.pipe() if not self.verbose else (None, None)
-        handle, summary = tempfile.mkstemp(prefix="stereovar-run-", suffix=".json")
+        clean_stale_summaries()
+        handle, summary = tempfile.mkstemp(prefix=f"{SUMMARY_PREFIX}{os.getpid()}-", suffix=".json")
         os.close(handle)
         shown = sys.stdout if is_dry_run(cmd[1:]) else sys.stderr
         env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONIOENCODING": "utf-8"}
@@ -174,10 +233,15 @@ class _Run:
                 else:
                     self._show(read, shown)
             except KeyboardInterrupt:  # Snakemake got it too: let it stop, keep what it says
+                self.interrupted = True
                 if self.verbose:
                     self._tee(proc.stdout, show=False)
+                else:  # its stage lines would say its jobs failed: the interruption says why
+                    self._drain(read)
+                    if self._partial:
+                        shown.write("\n")
             finally:
-                rc = proc.wait()
+                rc = self._wait(proc)
                 if record is not None:
                     forget_run(record)
             try:
@@ -190,7 +254,15 @@ class _Run:
                     os.close(fd)
             Path(summary).unlink(missing_ok=True)
         self.log_error = self.log_error or self.summary.get("log_error")
-        return rc
+        return INTERRUPTED_STATUS if self.interrupted and rc else rc
+
+    def _wait(self, proc) -> int:
+        """Wait for Snakemake to end, through more Ctrl-C presses (it stops its jobs)."""
+        while True:
+            try:
+                return proc.wait()
+            except KeyboardInterrupt:
+                self.interrupted = True
 
     def _show(self, fd: int, stream) -> None:
         """Copy the plugin's lines from ``fd`` to ``stream`` until the run closes it."""
@@ -198,9 +270,18 @@ class _Run:
 
         decoder = codecs.getincrementaldecoder("utf-8")("replace")
         while chunk := os.read(fd, 4096):
-            stream.write(decoder.decode(chunk))
+            text = decoder.decode(chunk)
+            stream.write(text)
             stream.flush()
+            if text:
+                self._partial = not text.endswith("\n")
         stream.write(decoder.decode(b"", final=True))
+
+    @staticmethod
+    def _drain(fd: int) -> None:
+        """Read ``fd`` until the run closes it, showing nothing."""
+        while os.read(fd, 4096):
+            pass
 
     def _tee(self, output, show: bool = True) -> None:
         """Snakemake's whole output, live (``-v``): to stderr and to the log."""
@@ -239,8 +320,12 @@ class _Run:
             return []
 
     def errors(self, rc: int) -> list:
-        """One line per distinct error of a failed run (see the module's docstring)."""
+        """One line per distinct error of a failed run (see the module's docstring); one
+        line for a run stopped by Ctrl-C (its jobs' failures are the interruption's)."""
         from ..progress import our_exceptions
+
+        if self.interrupted:
+            return [INTERRUPTED]
 
         tail = self._tail()
         messages = []
@@ -283,11 +368,13 @@ class _Run:
     def report(self, rc: int) -> None:
         """After the run: a warning if the log ends early; a failed run's errors, one line
         each."""
+        from ..errors import printable
+
         if self.log_error:
-            print(f"warning: the log ends early: {self.log_error}", file=sys.stderr)
+            print(f"warning: the log ends early: {printable(self.log_error)}", file=sys.stderr)
         if rc != 0:
             for message in self.errors(rc):
-                print(f"{PROG}: error: {message}", file=sys.stderr)
+                print(f"{PROG}: error: {printable(message)}", file=sys.stderr)
 
 
 def _isatty(stream) -> bool:

@@ -6,7 +6,14 @@ from __future__ import annotations
 import argparse
 
 from ..errors import StereovarError
-from .snakemake import _project_root, _run_snakemake, _workflow_config
+from .monitor import INTERRUPTED_STATUS
+from .snakemake import (
+    _hold_results,
+    _project_root,
+    _run_snakemake,
+    _warn_unlocked,
+    _workflow_config,
+)
 
 
 def _cmd_probe(args: argparse.Namespace) -> int:
@@ -15,16 +22,12 @@ def _cmd_probe(args: argparse.Namespace) -> int:
     (workflow rule ``probe_model_frames``)."""
     from pathlib import Path
 
-    if args.cores < 1:
-        raise StereovarError(f"-j must be >= 1, got {args.cores}")
     for option, value in (("--test-frames", args.test_frames), ("--batch", args.batch)):
         if value < 1:
             raise StereovarError(f"{option} must be >= 1, got {value}")
-    weights = Path(args.weights)
-    if not weights.is_file():
-        raise StereovarError(
-            f"weights file {weights} does not exist; give the model's saved weights"
-        )
+    from ..probe.user_model import check_weights_file
+
+    weights = check_weights_file(args.weights)  # missing, a folder, a named pipe: one line
     files = []
     if args.config:
         if not Path(args.config).is_file():
@@ -43,20 +46,24 @@ def _cmd_probe(args: argparse.Namespace) -> int:
     options = ["-j", str(args.cores), manifest, "--forcerun", "probe_model_frames"]
     if files:
         options += ["--configfile", *[str(Path(f).resolve()) for f in files]]
-    rc = _run_snakemake(options, root)
-    if rc != 0:
-        raise StereovarError(
-            f"the frames' stores could not be made (snakemake exit status {rc}); see its "
-            "output above"
+    with _hold_results(root, config, args.command_line) as lock:  # the frames and the table
+        _warn_unlocked(lock)
+        rc = _run_snakemake(options, root)
+        if rc == INTERRUPTED_STATUS:  # said by the run
+            return rc
+        if rc != 0:
+            raise StereovarError(
+                f"the frames' stores could not be made (snakemake exit status {rc}); see its "
+                "output above"
+            )
+        scenes, stores = read_manifest(root / manifest)
+        paths = probe_model_tables(source)
+        outputs = dict(zip(("csv", "md", "tex", "html"), paths, strict=True))
+        settings = {"test_frames": args.test_frames, "batch": args.batch, "seed": args.seed}
+        record = probe_model_job(
+            stores, outputs, scenes=scenes, factory=args.model, weights=weights,
+            device=args.device, settings=settings, source=source, model=model,
         )
-    scenes, stores = read_manifest(root / manifest)
-    paths = probe_model_tables(source)
-    outputs = dict(zip(("csv", "md", "tex", "html"), paths, strict=True))
-    settings = {"test_frames": args.test_frames, "batch": args.batch, "seed": args.seed}
-    record = probe_model_job(
-        stores, outputs, scenes=scenes, factory=args.model, weights=weights,
-        device=args.device, settings=settings, source=source, model=model,
-    )
     print(record["reading"])
     print(f"table: {paths[1]}")
     return 0

@@ -16,6 +16,26 @@ from ..errors import StereovarError
 PROG = "stereovar"
 
 
+def check_cores(cores) -> None:
+    """Refuse a ``-j`` below 1, which Snakemake would wait on for ever (``Provided cores:
+    0``); every command that runs Snakemake takes ``-j`` and is checked here, before any work.
+    None (a command without ``-j``) passes.
+
+    Examples
+    --------
+    >>> check_cores(2), check_cores(None)
+    (None, None)
+    >>> check_cores(0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.StereovarError: -j 0: a run needs at least 1 core; give -j 1 or more ...
+    """
+    if cores is not None and cores < 1:
+        raise StereovarError(
+            f"-j {cores}: a run needs at least 1 core; give -j 1 or more (e.g. -j 2)"
+        )
+
+
 def _project_root():
     """The directory a command works in: the current one. Configs' relative paths, results,
     logs and Snakemake's state are all relative to it, as for ``snakemake``; the workflow
@@ -100,7 +120,9 @@ def _run_with_progress(cmd: list, root) -> int:
     run = _Run(path, stages="run", verbose=_VERBOSE.get(), command=" ".join([PROG, *sys.argv[1:]]))
     rc = run.run(cmd, root)
     run.report(rc)
-    print(log_line(shown, run.job_logs() if rc else ()), file=sys.stderr)
+    from ..errors import printable
+
+    print(printable(log_line(shown, run.job_logs() if rc else ())), file=sys.stderr)
     return rc
 
 
@@ -114,6 +136,47 @@ def _workflow_config(root, files) -> dict:
     workflow = _workflow()
     first = root / "config.yaml" if (root / "config.yaml").is_file() else workflow / "config.yaml"
     return load_config([first, *files], workflow / "workflow" / "schemas" / "config.schema.yaml")
+
+
+def _hold_results(root, config: dict, command: str, snakemake_args=()):
+    """A context that holds the lock of the results a run of ``config`` may write
+    (:class:`stereovar.run_lock.RunLock`, its scope :func:`~stereovar.run_lock.lock_scope`)
+    for as long as the command goes; another command holding them refuses this one, in one
+    line, before anything is written. A dry run writes nothing and takes none, nor do
+    Snakemake options that run no job, but ``--unlock``, which removes the locks of the runs
+    going in the folder."""
+    from contextlib import nullcontext
+
+    from ..progress import is_dry_run, reports_progress
+    from ..run_lock import RunLock, lock_scope
+
+    args = list(snakemake_args)
+    if is_dry_run(args) or not (reports_progress(args) or "--unlock" in args):
+        return nullcontext()
+    return RunLock(root, lock_scope(config), command)
+
+
+def _warn_unlocked(lock) -> None:
+    """Say when the run goes on without its lock (a file system without locks)."""
+    if getattr(lock, "warning", None):
+        from ..errors import printable
+
+        print(f"warning: {printable(lock.warning)}", file=sys.stderr)
+
+
+def _passed_configfiles(snakemake_args) -> list:
+    """The config files among Snakemake's own options (``-- --configfile a.yaml b.yaml``)."""
+    files, taking = [], False
+    for arg in snakemake_args:
+        name, eq, value = arg.partition("=")
+        if name in ("--configfile", "--configfiles"):
+            taking = not eq
+            files += [value] if eq else []
+        elif arg.startswith("-"):
+            taking = False
+        elif taking:
+            files.append(arg)
+    return files
 
 
 def _run_snakemake(args: list, root) -> int:

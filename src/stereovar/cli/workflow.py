@@ -6,7 +6,16 @@ from __future__ import annotations
 import argparse
 
 from ..errors import StereovarError
-from .snakemake import _VERBOSE, _project_root, _run_snakemake, _workflow
+from .snakemake import (
+    _VERBOSE,
+    _hold_results,
+    _passed_configfiles,
+    _project_root,
+    _run_snakemake,
+    _warn_unlocked,
+    _workflow,
+    _workflow_config,
+)
 
 #: The starter audit config ``stereovar init`` writes; ``{name}``, ``{renders}``, ``{views}``,
 #: ``{disparity}`` and ``{convention}`` are filled in (placeholders, or the example's files).
@@ -147,17 +156,21 @@ def _configfiles(args) -> list:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    if args.cores < 1:
-        raise StereovarError(f"-j must be >= 1, got {args.cores}")
     files = _configfiles(args)
+    root = _project_root()
+    # the config as the workflow will read it: refused in one line before Snakemake starts,
+    # and the results the run may write, which it holds while it goes
+    config = _workflow_config(root, [*files, *_passed_configfiles(args.snakemake_args)])
     options = ["-j", str(args.cores), *(args.targets or ["all"])]
     if files:
         options += ["--configfile", *files]
-    token = _VERBOSE.set(args.verbose)  # one line per stage, or (-v) Snakemake's output
-    try:
-        return _run_snakemake([*options, *args.snakemake_args], _project_root())
-    finally:
-        _VERBOSE.reset(token)
+    with _hold_results(root, config, args.command_line, args.snakemake_args) as lock:
+        _warn_unlocked(lock)
+        token = _VERBOSE.set(args.verbose)  # one line per stage, or (-v) Snakemake's output
+        try:
+            return _run_snakemake([*options, *args.snakemake_args], root)
+        finally:
+            _VERBOSE.reset(token)
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
