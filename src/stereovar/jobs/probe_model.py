@@ -16,7 +16,10 @@ TABLE_CAPTION = (
     "view's Monte Carlo residual is shuffled within intensity strata (normal -> shuffled); "
     "camera_shuffle: the same shuffle of camera-law noise at the renders' level (camera -> "
     "camera_shuffled); mc_minus_camera: their difference, the part only the residual's "
-    "cross-view alignment explains. Intervals: percentile, tile bootstrap stratified by frame"
+    "cross-view alignment explains; nonfinite_share: share of the scored pixels where the "
+    "model's disparity is NaN or Inf, each a miss at an end-point error of the frame's largest "
+    "disparity (at least 1 px), and its rise under each shuffle. Intervals: percentile, tile "
+    "bootstrap stratified by frame"
 )
 
 
@@ -54,7 +57,10 @@ def probe_model_job(
     format, :func:`stereovar.io.tables.write_tables`; a ``json`` key gets the rows and the
     reading) and return ``{"rows": ..., "reading": ...}``.
 
-    ``settings`` are :class:`~stereovar.probe.user_model.ModelSettings` fields."""
+    ``settings`` are :class:`~stereovar.probe.user_model.ModelSettings` fields. One
+    ``warning:`` line each when the model returned NaN or Inf at any scored pixel (the share
+    of each input, :func:`~stereovar.probe.user_model.nonfinite_warning`) and when its
+    accuracy on the ``normal`` input is under 5 %."""
     import torch
 
     from ..io.store import write_file
@@ -66,6 +72,7 @@ def probe_model_job(
         load_user_model,
         model_reading,
         model_rows,
+        nonfinite_warning,
         score_frame,
     )
 
@@ -102,10 +109,14 @@ def probe_model_job(
         )
     table = model_rows(rows, reps=config.reps, seed=config.seed, level=config.level)
     reading = model_reading(table)
+    nonfinite = nonfinite_warning(table)
+    if nonfinite:
+        log.warning("warning: %s", nonfinite)
     if np.nanmedian([r["accuracy"] for r in table[:1]]) < 0.05:
         log.warning(
-            "the model's accuracy on the renders is under 5 %%: check its output is disparity "
-            "(positive, in pixels; RAFT-Stereo's flow is -d) in the conventional sign"
+            "warning: %s",
+            "the model's accuracy on the renders is under 5 %: check its output is disparity "
+            "(positive, in pixels; RAFT-Stereo's flow is -d) in the conventional sign",
         )
     formats = {k: v for k, v in outputs.items() if k != "json"}
     if formats:

@@ -12,7 +12,16 @@ disparity :math:`d` and a prediction (the network's border has none):
 
 ``pulled`` for the cue-conflict input, whose right residual lines up at :math:`d + k`;
 ``zero`` the predictions at :math:`\\hat d = 0` (disparities are integers or rounded to
-within half a pixel). The sums are kept per bootstrap tile
+within half a pixel). A non-finite prediction (NaN or Inf) is left out, or, given a bound
+:math:`e_{\\max} \\ge 1` (``nonfinite_error``), scored as a miss at that end-point error:
+
+.. math::
+
+    \\mathrm{hit} = 0, \\qquad \\mathrm{EPE} = e_{\\max}, \\qquad
+    \\mathrm{pulled} = \\mathrm{zero} = 0, \\qquad \\mathrm{nonfinite} = 1,
+
+so that every prediction of a region is scored on the same pixels whatever it returns.
+The sums are kept per bootstrap tile
 (:func:`stereovar.statistics.bootstrap.tile_labels`), so that intervals can resample tiles
 (:mod:`stereovar.probe.metrics`).
 
@@ -30,7 +39,9 @@ SUMS = ("n", "hits", "abs_error", "pulled", "zero")
 pixels predicted at zero disparity."""
 
 
-def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
+def tile_sums(
+    d_hat, d_gt, mask, labels, *, conflict_shift: int, nonfinite_error: float | None = None
+) -> dict:
     """Per-tile sums of the metrics of one prediction over one region.
 
     Parameters
@@ -43,11 +54,16 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
         Tile index of each pixel.
     conflict_shift : int, keyword-only
         :math:`k`.
+    nonfinite_error : float, keyword-only, optional
+        :math:`e_{\\max}`: where given, a pixel of the region with a ground truth and a NaN
+        or Inf prediction is scored, as a miss at this end-point error (module docstring),
+        and counted in ``nonfinite``; by default it is not scored.
 
     Returns
     -------
     dict
-        ``tile`` (the tiles with a scored pixel) and one int or float array per :data:`SUMS`.
+        ``tile`` (the tiles with a scored pixel) and one int or float array per :data:`SUMS`
+        (and ``nonfinite``, the non-finite predictions, with ``nonfinite_error``).
 
     Examples
     --------
@@ -58,6 +74,13 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
     ([0, 1], [2, 1], [1, 1], [1, 0])
     >>> s["abs_error"].tolist(), s["zero"].tolist()
     ([3.0, 0.0], [0, 0])
+
+    With a bound, the NaN prediction of pixel 1 is a miss at 4 px:
+
+    >>> s = tile_sums(np.array([[2.0, np.nan, 5.0, 1.0]]), d, np.ones((1, 4), bool),
+    ...               np.array([[0, 0, 1, 1]]), conflict_shift=3, nonfinite_error=4.0)
+    >>> s["n"].tolist(), s["hits"].tolist(), s["abs_error"].tolist(), s["nonfinite"].tolist()
+    ([2, 1], [1, 1], [4.0, 0.0], [1, 0])
     """
     d_hat = np.asarray(d_hat, dtype=np.float64)
     d_gt = np.asarray(d_gt, dtype=np.float64)
@@ -68,18 +91,30 @@ def tile_sums(d_hat, d_gt, mask, labels, *, conflict_shift: int) -> dict:
             f"prediction, ground truth, mask and tile labels differ in shape: {d_hat.shape}, "
             f"{d_gt.shape}, {mask.shape}, {labels.shape}"
         )
-    scored = mask & np.isfinite(d_hat) & np.isfinite(d_gt)
+    bounded = nonfinite_error is not None
+    if bounded and not float(nonfinite_error) >= 1:
+        raise ValueError(f"nonfinite_error must be at least 1 (a miss), got {nonfinite_error}")
+    scored = mask & np.isfinite(d_gt)
+    if not bounded:
+        scored &= np.isfinite(d_hat)
     tiles = labels[scored]
-    err = np.abs(d_hat[scored] - d_gt[scored])
-    pulled = np.abs(d_hat[scored] - d_gt[scored] - int(conflict_shift)) < 1
-    zero = np.abs(d_hat[scored]) < 0.5
+    truth = d_gt[scored]
+    finite = np.isfinite(d_hat[scored])
+    pred = np.where(finite, d_hat[scored], 0.0)  # a non-finite one's sums are set by `finite`
+    err = np.where(finite, np.abs(pred - truth), float(nonfinite_error) if bounded else 0.0)
+    hit = finite & (err < 1)
+    pulled = finite & (np.abs(pred - truth - int(conflict_shift)) < 1)
+    zero = finite & (np.abs(pred) < 0.5)
     used, inverse = np.unique(tiles, return_inverse=True)
     k = used.size
-    return {
+    out = {
         "tile": used,
         "n": np.bincount(inverse, minlength=k),
-        "hits": np.bincount(inverse, weights=err < 1, minlength=k).astype(np.int64),
+        "hits": np.bincount(inverse, weights=hit, minlength=k).astype(np.int64),
         "abs_error": np.bincount(inverse, weights=err, minlength=k),
         "pulled": np.bincount(inverse, weights=pulled, minlength=k).astype(np.int64),
         "zero": np.bincount(inverse, weights=zero, minlength=k).astype(np.int64),
     }
+    if bounded:
+        out["nonfinite"] = np.bincount(inverse, weights=~finite, minlength=k).astype(np.int64)
+    return out

@@ -37,6 +37,22 @@ Monte Carlo residual's cross-view alignment explains. Intervals: a tile bootstra
 replicate draws every frame's own tiles with replacement; a tile holds all its test
 renders), percentile intervals.
 
+A prediction that is NaN or Inf is a miss, scored at the end-point error
+
+.. math:: e_{\\max} = \\max\\bigl(1,\\ \\max_{\\Omega} d\\bigr)
+
+(:func:`nonfinite_bound`, :func:`stereovar.probe.scoring.tile_sums`), and its share is
+reported per input (``nonfinite_share``). Every input is thus scored on the same pixels
+:math:`\\Omega` of the same test renders, so each drop compares the inputs pixel by pixel.
+Were they left out, each input would be scored on the pixels where the model answered: a
+model whose NaN follow the input (more of them under the shuffle, or on the pixels it would
+get wrong) would have its inputs compared over different pixels, and the drop would measure
+where its NaN fall, not what the shuffle costs it. The bound is the largest error of any
+finite answer in the frame's disparity range (:math:`|\\hat d - d| \\le \\max_\\Omega d`
+for :math:`\\hat d, d \\in [0, \\max_\\Omega d]`), and at least a miss's 1 px, so that
+a NaN never scores better than an answer in range. A model with no finite prediction at all
+on a frame stops the probe (:class:`ModelError`).
+
 Importing this module imports PyTorch (the ``probe`` extra).
 """
 
@@ -45,6 +61,8 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import math
+import os
+import stat
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,7 +71,7 @@ import numpy as np
 import torch
 
 from ..errors import StereovarError
-from ..io.images import linear_to_srgb
+from ..io.images import file_kind, linear_to_srgb
 from ..seeding import derive_seed
 from ..statistics.bootstrap import draw_counts, percentile_interval, tile_labels
 from ..statistics.regions import valid_set
@@ -68,11 +86,14 @@ __all__ = [
     "ModelSettings",
     "camera_stack",
     "check_output",
+    "check_weights_file",
     "frame_law",
     "load_user_model",
     "model_image",
     "model_reading",
     "model_rows",
+    "nonfinite_bound",
+    "nonfinite_warning",
     "predict_user",
     "score_frame",
     "model_pairs",
@@ -87,8 +108,13 @@ COMPARISONS = {
 }
 """Each drop: (before, after) the shuffle."""
 
-MODEL_SUMS = ("n", "hits", "abs_error")
-"""The per-tile sums kept (:func:`stereovar.probe.scoring.tile_sums`)."""
+MODEL_SUMS = ("n", "hits", "abs_error", "nonfinite")
+"""The per-tile sums kept (:func:`stereovar.probe.scoring.tile_sums`): scored pixels, hits,
+summed end-point error, NaN or Inf predictions."""
+
+WEIGHTS_SUFFIXES = (".pt", ".pth", ".ckpt", ".tar", ".bin")
+"""Usual extensions of a file written by ``torch.save`` (offered from a folder given as
+weights)."""
 
 FACTORY_FORMAT = "package.module:factory (or path/to/file.py:factory)"
 
@@ -209,6 +235,62 @@ def _state_dict(payload, weights) -> dict:
     return payload
 
 
+def check_weights_file(weights) -> Path:
+    """``weights`` as a path, once it is known to be a regular file (a link to one counts);
+    nothing is opened, so a named pipe is refused without waiting on it.
+
+    Parameters
+    ----------
+    weights : str or path
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ModelError
+        One line: the path does not exist, cannot be looked at, is a directory (naming the
+        weights files inside it, if any), or is a named pipe, a device or a socket
+        (:func:`stereovar.io.images.file_kind`).
+    """
+    path = Path(weights)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise ModelError(
+            f"weights file {path} does not exist; give the model's saved weights"
+        ) from None
+    except OSError as err:
+        raise ModelError(
+            f"weights file {path} cannot be looked at ({err.strerror or err}); give a readable "
+            "path to the model's saved weights"
+        ) from None
+    if stat.S_ISDIR(mode):
+        raise ModelError(f"weights {path} is a directory; {_inside(path)}")
+    if not stat.S_ISREG(mode):
+        raise ModelError(
+            f"weights {path} is {file_kind(mode)}, not a file; give the model's weights file "
+            "saved with torch.save"
+        )
+    return path
+
+
+def _inside(folder: Path) -> str:
+    """The fix for a folder given as weights: the file inside it to give, named where the
+    folder holds files with a :data:`WEIGHTS_SUFFIXES` extension."""
+    try:
+        found = sorted(
+            p for p in folder.iterdir() if p.suffix.lower() in WEIGHTS_SUFFIXES and p.is_file()
+        )
+    except OSError:
+        found = []
+    if not found:
+        return "give the weights file inside it (the file torch.save wrote, e.g. model.pt)"
+    listed = ", ".join(str(p) for p in found[:3]) + (", ..." if len(found) > 3 else "")
+    return f"give the weights file inside it: {listed}"
+
+
 def load_user_model(factory: str, weights, *, device: str = "cpu") -> torch.nn.Module:
     """The user's model: ``factory()`` with the weights of ``weights``, in eval mode.
 
@@ -229,13 +311,11 @@ def load_user_model(factory: str, weights, *, device: str = "cpu") -> torch.nn.M
     Raises
     ------
     ModelError
-        One line each: the weights file is missing, the spec is malformed, the module does not
-        import, it has no such attribute, the factory raises or returns no module, the weights
-        do not load or do not fit the model.
+        One line each: the weights file is missing or not a file (:func:`check_weights_file`),
+        the spec is malformed, the module does not import, it has no such attribute, the
+        factory raises or returns no module, the weights do not load or do not fit the model.
     """
-    weights = Path(weights)
-    if not weights.is_file():
-        raise ModelError(f"weights file {weights} does not exist; give the model's saved weights")
+    weights = check_weights_file(weights)
     build = _factory(factory)
     try:
         model = build()
@@ -502,7 +582,13 @@ def score_frame(
     -------
     list of dict
         ``scene``, ``test_input``, ``tile`` and :data:`MODEL_SUMS`: the pixels of
-        :math:`\\Omega` (paper Sec. 2.2) with a finite prediction.
+        :math:`\\Omega` (paper Sec. 2.2), a NaN or Inf prediction a miss at
+        :func:`nonfinite_bound` (module docstring).
+
+    Raises
+    ------
+    ModelError
+        No prediction of the frame, on any input, has a finite pixel (one line).
     """
     pairs = model_pairs(left, right, scene=scene, sign=sign, law=law, settings=settings)
     d = np.asarray(truth_left["disparity"], dtype=np.float64)
@@ -513,9 +599,12 @@ def score_frame(
     d_hats = predict_user(
         model, [pairs[k] for k in keys], sign=sign, batch=settings.batch, device=device
     )
+    if not any(np.isfinite(d_hat).any() for d_hat in d_hats):
+        raise ModelError(_no_finite_message(d_hats, keys, scene))
+    bound = nonfinite_bound(d_gt)
     pooled: dict = {}
     for (_, kind), d_hat in zip(keys, d_hats, strict=True):
-        sums = tile_sums(d_hat, d_gt, omega, labels, conflict_shift=0)
+        sums = tile_sums(d_hat, d_gt, omega, labels, conflict_shift=0, nonfinite_error=bound)
         for i, tile in enumerate(sums["tile"]):
             acc = pooled.setdefault((kind, int(tile)), dict.fromkeys(MODEL_SUMS, 0))
             for s in MODEL_SUMS:
@@ -524,6 +613,49 @@ def score_frame(
         {"scene": scene, "test_input": kind, "tile": tile, **sums}
         for (kind, tile), sums in pooled.items()
     ]
+
+
+def nonfinite_bound(d_gt) -> float:
+    """The end-point error charged to a NaN or Inf prediction of a frame: its largest
+    ground-truth disparity, at least 1 px (module docstring).
+
+    .. math:: e_{\\max} = \\max\\bigl(1,\\ \\max_{\\Omega} d\\bigr)
+
+    Parameters
+    ----------
+    d_gt : array_like
+        The frame's ground-truth disparity magnitudes, NaN outside :math:`\\Omega`.
+
+    Examples
+    --------
+    >>> nonfinite_bound([[2.0, 7.5, np.nan]]), nonfinite_bound([[0.25, np.nan]])
+    (7.5, 1.0)
+    """
+    d = np.asarray(d_gt, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    return max(1.0, float(d.max())) if d.size else 1.0
+
+
+def _no_finite_message(d_hats, keys, scene: str) -> str:
+    """One line: every prediction of a frame is NaN or Inf (which, how many, of what size)."""
+    stack = np.stack(d_hats)
+    if np.isnan(stack).all():
+        what = "NaN"
+    elif np.isinf(stack).all():
+        what = "Inf"
+    else:
+        what = "NaN or Inf"
+    inputs = list(dict.fromkeys(kind for _, kind in keys))
+    renders = len({n for n, _ in keys})
+    h, w = stack.shape[1:]
+    return (
+        f"the model returned no finite disparity: all {len(d_hats)} of its predictions on "
+        f"frame {scene} ({renders} test renders x {len(inputs)} inputs: {', '.join(inputs)}; "
+        f"{h}x{w} pixels each) are "
+        f"{what} at every pixel; check that it runs on sRGB images in [0, 1] of shape "
+        "(B, 3, H, W) and that its weights are finite (a NaN weight or a division by zero "
+        "gives NaN)"
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -541,7 +673,7 @@ def _sums_matrix(rows) -> tuple[np.ndarray, list]:
         if r["test_input"] not in MODEL_INPUTS:
             continue
         i = MODEL_INPUTS.index(r["test_input"])
-        out[i, index[(r["scene"], int(r["tile"]))]] += [float(r[s]) for s in MODEL_SUMS]
+        out[i, index[(r["scene"], int(r["tile"]))]] += [float(r.get(s, 0)) for s in MODEL_SUMS]
     return out, [k[0] for k in keys]
 
 
@@ -577,7 +709,10 @@ def model_rows(rows, *, reps: int = 1000, seed: int = 0, level: float = 0.95) ->
     under each shuffle (:data:`COMPARISONS`: before minus after, after minus before), and row
     ``mc_minus_camera`` the difference of the two. Each with a percentile interval of a tile
     bootstrap stratified by frame (``*_low``, ``*_high``); the inputs are paired by tile in
-    every replicate.
+    every replicate. A NaN or Inf prediction is one of the :math:`n_t` pixels, a miss, and
+    adds :func:`nonfinite_bound` to the EPE's sum (module docstring); ``nonfinite_share``
+    is their share of the scored pixels of an input (its rise under a comparison's shuffle;
+    the difference of the two rises for ``mc_minus_camera``).
 
     Parameters
     ----------
@@ -589,13 +724,17 @@ def model_rows(rows, *, reps: int = 1000, seed: int = 0, level: float = 0.95) ->
     -------
     list of dict
         ``row``, ``accuracy``, ``accuracy_low``, ``accuracy_high``, ``epe``, ``epe_low``,
-        ``epe_high``, ``n_pixels``, ``n_tiles``, ``frames``.
+        ``epe_high``, ``nonfinite_share``, ``n_pixels``, ``n_tiles``, ``frames``.
     """
     sums, scenes = _sums_matrix(list(rows))
     if not scenes:
         raise ValueError("no scored pixel: the frames have no valid ground truth")
     counts = _stratified_counts(scenes, reps, seed)
-    point = _metrics(sums.sum(axis=1))  # (input,)
+    total = sums.sum(axis=1)  # (input, sum)
+    point = _metrics(total)
+    nonfinite = total[:, MODEL_SUMS.index("nonfinite")]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(total[:, 0] > 0, nonfinite / total[:, 0], np.nan)  # (input,)
     boot = _metrics(np.einsum("rt,its->ris", counts, sums))  # (reps, input)
 
     def drop(values, before, after, axis_last=True):
@@ -623,11 +762,12 @@ def model_rows(rows, *, reps: int = 1000, seed: int = 0, level: float = 0.95) ->
                 **summary(
                     point["accuracy"][i], boot["accuracy"][:, i], point["epe"][i], boot["epe"][:, i]
                 ),
+                "nonfinite_share": float(share[i]),
                 "n_pixels": int(sums[i, :, 0].sum()),
                 **common,
             }
         )
-    diffs = {}
+    diffs, rises = {}, {}
     for name, (before, after) in COMPARISONS.items():
         diffs[name] = (
             drop(point["accuracy"], before, after),
@@ -635,17 +775,67 @@ def model_rows(rows, *, reps: int = 1000, seed: int = 0, level: float = 0.95) ->
             -drop(point["epe"], before, after),
             -drop(boot["epe"], before, after),
         )
+        rises[name] = -drop(share, before, after)
     mc, cam = diffs["mc_shuffle"], diffs["camera_shuffle"]
     diffs["mc_minus_camera"] = tuple(a - b for a, b in zip(mc, cam, strict=True))
+    rises["mc_minus_camera"] = rises["mc_shuffle"] - rises["camera_shuffle"]
     for name, values in diffs.items():
         out.append(
-            {"row": name, **summary(*values), "n_pixels": int(sums[0, :, 0].sum()), **common}
+            {
+                "row": name,
+                **summary(*values),
+                "nonfinite_share": float(rises[name]),
+                "n_pixels": int(sums[0, :, 0].sum()),
+                **common,
+            }
         )
     return out
 
 
 def _points(value, low, high, scale=100.0) -> str:
     return f"{scale * value:+.2f} [{scale * low:+.2f}, {scale * high:+.2f}]"
+
+
+def _share(value: float) -> str:
+    """A share in percent, one decimal; a share that rounds to 0 or 100 % but is not says
+    so.
+
+    Examples
+    --------
+    >>> _share(0.5), _share(0.0), _share(2e-5), _share(1.0)
+    ('50.0 %', '0 %', '< 0.1 %', '100 %')
+    """
+    if value <= 0 or value >= 1:
+        return f"{100 * value:.0f} %"
+    if value < 0.0005:
+        return "< 0.1 %"
+    if value > 0.9995:
+        return "> 99.9 %"
+    return f"{100 * value:.1f} %"
+
+
+def nonfinite_warning(rows) -> str | None:
+    """The one-line warning when the model returned NaN or Inf at any scored pixel, with the
+    share of each input (:func:`model_rows`' ``nonfinite_share``); None when it never did.
+
+    Examples
+    --------
+    >>> rows = [{"row": k, "nonfinite_share": s} for k, s in zip(MODEL_INPUTS, (0, 0.5, 0, 0))]
+    >>> nonfinite_warning(rows)[:85]
+    'the model returned NaN or Inf disparity at scored pixels (normal 0 %, shuffled 50.0 %'
+    >>> nonfinite_warning(rows[:1]) is None
+    True
+    """
+    shares = {r["row"]: r["nonfinite_share"] for r in rows if r["row"] in MODEL_INPUTS}
+    if not any(s > 0 for s in shares.values()):
+        return None
+    listed = ", ".join(f"{kind} {_share(s)}" for kind, s in shares.items())
+    return (
+        f"the model returned NaN or Inf disparity at scored pixels ({listed}); they "
+        "count as misses at an end-point error of the frame's largest disparity (column "
+        "nonfinite_share); check the model for a division by zero or a log of a negative "
+        "number"
+    )
 
 
 def model_reading(rows) -> str:
