@@ -13,8 +13,9 @@ def mi():
 
 @pytest.fixture
 def tree_snapshot():
-    """A function of a folder: every path under it (``.snakemake`` aside) with its mtime and,
-    for a file, the SHA-256 of its bytes; equal snapshots mean nothing was written there."""
+    """A function of a folder: every path under it (``.snakemake`` and the run locks'
+    ``.locks``, which every run takes, aside) with its mtime and, for a file, the SHA-256 of
+    its bytes; equal snapshots mean nothing was written there."""
     import hashlib
     import os
     from pathlib import Path
@@ -22,7 +23,7 @@ def tree_snapshot():
     def snapshot(root) -> dict:
         out = {}
         for folder, dirs, files in os.walk(root):
-            dirs[:] = [d for d in dirs if d != ".snakemake"]
+            dirs[:] = [d for d in dirs if d not in (".snakemake", ".locks")]
             for name in dirs + files:
                 path = Path(folder, name)
                 st = path.lstat()

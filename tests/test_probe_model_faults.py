@@ -29,13 +29,19 @@ from stereovar.probe.user_model import (  # noqa: E402
     model_image,
     model_pairs,
     model_rows,
-    score_frame,
 )
 
 from .test_probe_user_model import D0, TRUTH, H, W, frame  # noqa: E402
+from .test_probe_user_model import rows_of as scored_rows  # noqa: E402
 
 SETTINGS = ModelSettings(test_frames=2, tile=8, reps=50, batch=8)
 SIGN = -1  # TRUTH's frames: the right pixel of left pixel x is at x - D0
+
+
+def rows_of(model, frames):
+    return scored_rows(model, frames, sign=SIGN, settings=SETTINGS)
+
+
 OMEGA = np.zeros((H, W), bool)
 OMEGA[:, D0:] = True  # the left pixels whose match x - D0 lies in the image
 BOUND = max(D0, 1.0)  # a non-finite prediction's end-point error: the largest disparity, >= 1
@@ -121,22 +127,6 @@ class NanOnTheRightHalf(nn.Module):
 def frames():
     rng = np.random.default_rng(3)
     return [frame(rng, texture=0.05) for _ in range(2)]
-
-
-def rows_of(model, frames):
-    rows = []
-    for i, (left, right, _) in enumerate(frames):
-        rows += score_frame(
-            model,
-            left,
-            right,
-            TRUTH,
-            scene=f"f{i}",
-            sign=SIGN,
-            law=frame_law(left),
-            settings=SETTINGS,
-        )
-    return rows
 
 
 @pytest.mark.parametrize(

@@ -134,7 +134,8 @@ def train_energy(frames, steps=120, seed=0):
     return net.eval()
 
 
-def table_of(net, frames, *, sign=-1):
+def rows_of(net, frames, *, sign=-1, settings=SETTINGS):
+    """The scored rows of ``net`` on ``frames`` (left, right, _), frame ``i`` named ``f{i}``."""
     rows = []
     for i, (left, right, _) in enumerate(frames):
         rows += score_frame(
@@ -145,9 +146,13 @@ def table_of(net, frames, *, sign=-1):
             scene=f"f{i}",
             sign=sign,
             law=frame_law(left),
-            settings=SETTINGS,
+            settings=settings,
         )
-    return {r["row"]: r for r in model_rows(rows, reps=SETTINGS.reps)}
+    return rows
+
+
+def table_of(net, frames, *, sign=-1):
+    return {r["row"]: r for r in model_rows(rows_of(net, frames, sign=sign), reps=SETTINGS.reps)}
 
 
 @pytest.fixture(scope="module")

@@ -32,6 +32,7 @@ from ..rig import VIEWS
 from .generators import (
     FOCAL_AGREEMENT,
     depth_size,
+    infinigen_camview,
     read_camera,
     read_depth,
     stereo_geometry,
@@ -52,6 +53,8 @@ def check_sizes(frame: Frame) -> tuple[int, int]:
     render_size = sizes[next(iter(frame.renders[VIEWS[0]].values()))]
     for path in frame.ground_truth.get("depth", {}).values():
         sizes[path] = depth_size(path, render_size)
+        if sizes[path] == (2 * render_size[0], 2 * render_size[1]):
+            _check_camviews(frame, path, render_size)
     size, count = Counter(sizes.values()).most_common(1)[0]  # a tie: the first render's
     for path, other in sizes.items():
         if other != size:
@@ -66,6 +69,31 @@ def check_sizes(frame: Frame) -> tuple[int, int]:
                 "at one resolution"
             )
     return size
+
+
+def _check_camviews(frame: Frame, depth, size) -> None:
+    """Refuse an Infinigen depth at twice the renders' ``size`` whose ``camview`` files
+    are missing (it is read at that size with them only): one line naming the camview
+    files of the frame's views that are not there, where Infinigen writes them."""
+    expected = infinigen_camview(depth)
+    if expected is None:  # not Infinigen's: the size check names it
+        return
+    named = [expected]
+    for view in VIEWS:
+        if view not in frame.cameras:
+            source = frame.ground_truth["depth"].get(view)
+            named.append(infinigen_camview(source or next(iter(frame.renders[view].values()))))
+    missing = [str(p) for p in dict.fromkeys(named) if p is not None and not p.is_file()]
+    if not missing:
+        return
+    plural = "s" * (len(missing) != 1)
+    raise AuditError(
+        f"{depth} is {2 * size[1]}x{2 * size[0]} px, twice the renders' {size[1]}x{size[0]}: "
+        f"Infinigen's depth, which is read with the frame's camview files, but the "
+        f"camview file{plural} {' and '.join(missing)} {'are' if plural else 'is'} missing "
+        "(Infinigen writes them to frames/camview/camera_<subcam>/ beside frames/Depth/); "
+        "copy the scene's frames/camview folder along with the frame"
+    )
 
 
 @dataclass
@@ -251,6 +279,60 @@ def seed_mean(stack: np.ndarray, n_nonfinite) -> np.ndarray:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pixels stay NaN
         return np.nanmean(np.where(np.isfinite(stack), stack, np.nan), axis=0)
+
+
+MIN_FINITE_PIXELS = 2
+"""The fewest finite pixels a render, and a view's renders together, must hold: a
+variance is measured only where every render is finite, and the camera law the
+calibration fits to it (:func:`~stereovar.calibration.synthesis.camera_law`) needs two."""
+
+
+def check_finite(stack: np.ndarray, n_nonfinite, frame: str, view: str, paths: list) -> None:
+    """Refuse a render with fewer than :data:`MIN_FINITE_PIXELS` finite pixels (a render
+    that is NaN or Inf everywhere failed), then a view whose renders are finite together at
+    fewer: a pixel with a NaN or Inf in one render has no variance. A few NaN pixels
+    import (the estimators count and leave them out).
+
+    Parameters
+    ----------
+    stack : numpy.ndarray, (n, H, W, 3)
+        The view's renders (:func:`decode_view`).
+    n_nonfinite : array_like of int, (n,)
+        Pixels with a NaN or Inf channel, per render.
+    frame, view : str
+        For the error line.
+    paths : list
+        The renders' files, in stack order.
+
+    Raises
+    ------
+    AuditError
+        One line naming the render (or the view) and its count of finite pixels.
+    """
+    n_nonfinite = np.asarray(n_nonfinite)
+    if not n_nonfinite.any():
+        return
+    total = int(stack.shape[1] * stack.shape[2])
+    for path, bad in zip(paths, n_nonfinite, strict=True):
+        if total - int(bad) < MIN_FINITE_PIXELS:
+            raise AuditError(
+                f"{path}: {total - int(bad)} of its {total} pixels are finite (the others "
+                f"hold NaN or Inf), and a render needs at least {MIN_FINITE_PIXELS} for any "
+                "variance to be measured; render this seed again (a render that is NaN "
+                "almost everywhere failed: check the renderer's output)"
+            )
+    finite = np.ones(stack.shape[1:3], dtype=bool)
+    for image in stack:  # one render at a time: no temporary the size of the stack
+        finite &= np.isfinite(image).all(axis=-1)
+    together = int(finite.sum())
+    if together < MIN_FINITE_PIXELS:
+        worst = int(np.argmax(n_nonfinite))
+        raise AuditError(
+            f"frame {frame}, view {view}: {together} of the {total} pixels are finite in all "
+            f"{len(paths)} renders (a pixel with a NaN or Inf in one render has no variance), "
+            f"and the audit needs at least {MIN_FINITE_PIXELS}; render again the seeds whose "
+            f"renders hold NaN or Inf (e.g. {paths[worst]}, {int(n_nonfinite[worst])} pixels)"
+        )
 
 
 def check_distinct(stack: np.ndarray, frame: str, view: str, paths: list) -> None:

@@ -116,16 +116,45 @@ def camera_file(path) -> Path | None:
     True
     """
     path = Path(path)
-    m = INFINIGEN_FILE.match(path.name)
-    if m:
-        name = f"camview{m.group('suffix')}.npz"
-        for candidate in (path.parent.parent.parent / "camview" / path.parent.name / name,
-                          path.parent / name):
+    filed = infinigen_camview(path)
+    if filed is not None:
+        for candidate in (filed, path.parent / filed.name):
             if candidate.is_file():
                 return candidate
     if KUBRIC_FILE.match(path.name) and (path.parent / KUBRIC_METADATA).is_file():
         return path.parent / KUBRIC_METADATA
     return None
+
+
+def infinigen_camview(path) -> Path | None:
+    """Where Infinigen writes the ``camview`` file of one of its outputs, found by name
+    alone (nothing is opened): ``frames/camview/camera_<subcam>/camview_<suffix>.npz`` for
+    ``frames/<Pass>/camera_<subcam>/<Pass>_<suffix>.<ext>``.
+
+    Parameters
+    ----------
+    path : path-like
+        An output of Infinigen (``Depth_0_0_0048_0.npy``, ``Image_0_0_0048_1.exr``).
+
+    Returns
+    -------
+    Path or None
+        The camview's path (whether or not it is there); None for a file not named as
+        Infinigen names its outputs.
+
+    Examples
+    --------
+    >>> infinigen_camview("scene/frames/Depth/camera_0/Depth_0_0_0048_0.npy").as_posix()
+    'scene/frames/camview/camera_0/camview_0_0_0048_0.npz'
+    >>> infinigen_camview("renders/L/seed_000.exr") is None
+    True
+    """
+    path = Path(path)
+    m = INFINIGEN_FILE.match(path.name)
+    if m is None:
+        return None
+    name = f"camview{m.group('suffix')}.npz"
+    return path.parent.parent.parent / "camview" / path.parent.name / name
 
 
 def _kubric_camera(path: Path) -> Camera:
@@ -157,12 +186,34 @@ def _infinigen_camera(path: Path) -> Camera:
             f"{path}: not Infinigen's camview file ({type(err).__name__}: {err}); it holds "
             "K (3x3), T (4x4) and HW (infinigen.core.placement.camera.save_camera_parameters)"
         ) from None
-    if K.shape != (3, 3) or T.shape != (4, 4) or HW.shape != (2,) or not K[0, 0] > 0:
+    shaped = K.shape == (3, 3) and T.shape == (4, 4) and HW.shape == (2,)
+    if shaped:
+        _finite_camview(path, K, T, HW)
+    if not shaped or not K[0, 0] > 0:
         raise ImageError(
             f"{path}: K {K.shape}, T {T.shape}, HW {HW.shape}: Infinigen's camview holds a 3x3 "
             "K with a positive focal length, a 4x4 T and HW (height, width)"
         )
     return Camera("infinigen", path, float(K[0, 0]), (int(HW[0]), int(HW[1])), T, None)
+
+
+def _finite_camview(path: Path, K, T, HW) -> None:
+    """Refuse a camview whose pose, intrinsics or image size hold NaN or Inf: it places no
+    camera, and a baseline or focal length from it would be NaN (one line naming the
+    file)."""
+    bad = [
+        (what, int((~np.isfinite(a)).sum()), a.size)
+        for what, a in (("pose T", T), ("intrinsic matrix K", K), ("image size HW", HW))
+        if not np.isfinite(a).all()
+    ]
+    if not bad:
+        return
+    held = ", ".join(f"a non-finite {what} ({n} of its {size} values NaN or Inf)"
+                     for what, n, size in bad)
+    raise ImageError(
+        f"{path}: Infinigen's camview holds {held}, so it places no camera; export the "
+        "frame's camview files again (infinigen.core.placement.camera.save_camera_parameters)"
+    )
 
 
 def read_camera(path) -> Camera:
@@ -172,7 +223,8 @@ def read_camera(path) -> Camera:
     Raises
     ------
     ImageError
-        The file is not what its name says (one line naming what it needs).
+        The file is not what its name says, or a camview holds NaN or Inf (one line naming
+        what it needs).
     """
     path = Path(path)
     if path.suffix == ".json":

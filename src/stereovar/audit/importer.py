@@ -9,7 +9,8 @@ alone: ``cp -p``, ``rsync -a`` and ``tar x`` keep both. The workflow imports one
 (:func:`import_frame`, rule ``audit_import``); Snakemake decides which frames to import again
 (:func:`~stereovar.audit.hashing.frame_fingerprint` is the rule's ``params``). A frame is
 imported by decoding all of its files, checking them, settling the disparity sign
-photometrically (:func:`stereovar.audit.sign.sign_check`) and only then writing its stores,
+photometrically (:func:`stereovar.audit.sign.sign_check`), checking it for an offset
+(:func:`stereovar.audit.offset.offset_check`: a warning) and only then writing its stores,
 each atomically: a bad file stops the import with one line and leaves every store already
 imported as it was.
 
@@ -42,6 +43,7 @@ from ..layout import import_record
 from ..rig import VIEWS
 from .decoding import (
     check_distinct,
+    check_finite,
     check_geometry,
     check_sizes,
     clipped_fraction,
@@ -66,6 +68,7 @@ from .hashing import (
     unchanged_frame,
 )
 from .layout import Frame, discover
+from .offset import offset_check
 from .records import (
     CLIPPED_WARNING,
     HALF_STEPS,
@@ -154,6 +157,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
                 channel=render_channel, view=VIEWS.index(view),
             )
         fr.nonfinite_pixels[view] = int(n_bad.sum())
+        check_finite(images, n_bad, frame.name, view, paths)
         check_distinct(images, frame.name, view, paths)
         means[view] = seed_mean(images, n_bad)
         valid = gt["valid"].sel(view=view).values
@@ -197,6 +201,8 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     gt.attrs.update(scene_digest=digest, source_sha256=[files[p] for p in gt_files])
     with report.timed("sign check"):
         _check_sign(settings, frame, gt, means, sign, fr, report)
+    with report.timed("offset check"):
+        _check_offset(frame, gt, means, sign, fr, report)
     datasets["ground_truth"] = gt
     stores = frame_stores(settings, frame.name, frame.n_seeds)
     with report.timed("write"), ExitStack() as staged:  # renamed into place together
@@ -347,6 +353,27 @@ def _check_sign(settings, frame: Frame, gt, means, sign, fr: FrameReport, report
         "high_error": check.high_error,
         "reason": check.reason,
     }
+
+
+def _check_offset(frame: Frame, gt, means, sign, fr: FrameReport, report) -> None:
+    """The photometric offset check (:func:`stereovar.audit.offset.offset_check`) of one
+    frame, on the pixels the sign check compares: a warning naming the offset, the errors
+    and the fix when the disparity shifted by whole pixels matches clearly better."""
+    left_gt = gt.sel(view="left")
+    compare = left_gt["valid"].values & ~left_gt["glass"].values & ~left_gt["occluded"].values
+    check = offset_check(
+        means["left"], means["right"], left_gt["disparity"].values, sign=sign, valid=compare
+    )
+    if check.fires:
+        report.warn(
+            "disparity_offset",
+            f"frame {frame.name}: {check.finding()}; check the disparity's units, offset and "
+            "convention (e.g. a crop or a principal-point shift, audit.disparity_scale): the "
+            "cross-view cue measured with this disparity is unreliable",
+            frame.name,
+        )
+    gt.attrs.update(check.attrs())
+    fr.offset = check.facts()
 
 
 

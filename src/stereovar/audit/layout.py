@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..errors import AuditError
 from ..io import hdf5
-from ..io.images import image_format, regular_file
+from ..io.images import image_format, reading_header, regular_file
 from ..rig import VIEWS
 from .generators import camera_file
 
@@ -163,6 +163,12 @@ def discover(settings: dict) -> Discovery:
     """
     root = _root(settings)
     views = dict(settings.get("views") or {v: v for v in VIEWS})
+    if len({str(v) for v in views.values()}) < len(VIEWS):
+        raise AuditError(
+            f"audit.views gives both views the value {str(views[VIEWS[0]])!r}, so no file "
+            "can be told to be the left or the right view; give each its own {view} value "
+            "(e.g. views: {left: L, right: R})"
+        )
     template = settings["renders"]
     fields = template_fields(template)
     missing = [f for f in ("view", "seed") if f not in fields]
@@ -235,7 +241,8 @@ def _check_both_views(path: Path, settings: dict) -> None:
     holds both views (BlenderProc's stereo HDF5)."""
     regular_file(path)
     channel = (settings.get("channels") or {}).get("render")
-    views = hdf5.render_views(path, channel)
+    with reading_header(path):  # a truncated file: one line, as for any header
+        views = hdf5.render_views(path, channel)
     if views != 2:
         raise AuditError(
             f"{path}: its render holds one view, and audit.renders {settings['renders']!r} "

@@ -3,7 +3,8 @@
 :func:`page_sections` puts what :mod:`stereovar.audit.verdict` computed in reading order:
 
 1. banners (an inconclusive sign check the audit went on with, ``audit.sign_check: warn``,
-   and a sign check won with a high error);
+   a sign check won with a high error, and a disparity that seems offset:
+   :mod:`stereovar.audit.offset`);
 2. the decision: a traffic light and two or three sentences (what was found, how sure,
    what to do; :func:`stereovar.audit.verdict.decision`);
 3. the import's facts: frames, seeds and files, each frame's sign check and valid pixels,
@@ -55,9 +56,10 @@ view's valid pixels at a PNG's full scale in some render, ``quantised`` the shar
 :data:`~stereovar.audit.importer.HALF_STEPS` half-float steps (half-float renders, marked
 ``half float``; ``n/a`` for 16-bit PNG and 32-bit float formats)."""
 
-BANNER_KINDS = ("sign_check", "sign_check_error")
+BANNER_KINDS = ("sign_check", "sign_check_error", "disparity_offset")
 """Import warnings the page opens with, above the decision: the sign check the disparity
-rests on was inconclusive, or won with a high error."""
+rests on was inconclusive, or won with a high error, or the disparity seems offset (the
+warp matches better shifted by a pixel or more: :mod:`stereovar.audit.offset`)."""
 
 FLAG_COLUMNS = ["flag", "frame", "what"]
 """Columns of the flags table (one row per warning or flag)."""
@@ -239,6 +241,15 @@ def _sign_fact(sign: dict) -> str:
     return text + (" (error high)" if sign.get("high_error") else "")
 
 
+def _offset_fact(offset: dict) -> str:
+    """The offset check's estimate, where it fired (:mod:`stereovar.audit.offset`)."""
+    if not offset.get("fires"):
+        return ""
+    if offset.get("varies"):
+        return " (disparity offset varies)"
+    return f" (disparity offset about {offset['offset']:+.1f} px)"
+
+
 def import_facts(records: list[dict]) -> list[dict]:
     """One :data:`FACT_COLUMNS` row per frame from the frames' import records
     (``found``: :meth:`stereovar.audit.importer.FrameReport.facts`)."""
@@ -259,7 +270,8 @@ def import_facts(records: list[dict]) -> list[dict]:
                 "invalid_disparity_px": found.get("invalid_disparity", math.nan),
                 "outside_px": found.get("outside", math.nan),
                 "nonfinite_render_px": sum((found.get("nonfinite_pixels") or {}).values()),
-                "sign_check": _sign_fact(found.get("sign") or {}),
+                "sign_check": _sign_fact(found.get("sign") or {})
+                + _offset_fact(found.get("offset") or {}),
                 "clipped": ", ".join(f"{v} {100 * f:.2f}%" for v, f in clipped.items()) or "n/a",
                 "quantised": ", ".join(quantised) or "n/a",
             }

@@ -23,6 +23,7 @@ from .settings import settings_digest
 WARNING_KINDS = {
     "sign_check": "sign check inconclusive",
     "sign_check_error": "sign check error high",
+    "disparity_offset": "disparity offset",
     "outside": "matches outside the other view",
     "transfer": "PNG transfer assumed",
     "quantisation": "variance quantised",
@@ -66,6 +67,8 @@ class FrameReport:
     """View to the share of its valid pixels whose spread across the seeds is below
     :data:`HALF_STEPS` half-float steps (renders in half precision only)."""
     sign: dict = field(default_factory=dict)
+    offset: dict = field(default_factory=dict)
+    """The offset check's findings (:meth:`stereovar.audit.offset.OffsetCheck.facts`)."""
     n_seeds: int = 0
 
     def facts(self) -> dict:
@@ -80,6 +83,7 @@ class FrameReport:
             "clipped": self.clipped,
             "half": self.half,
             "sign": self.sign,
+            "offset": self.offset,
             "n_seeds": self.n_seeds,
         }
 
@@ -98,8 +102,8 @@ class ImportReport:
     :data:`WARNING_KINDS`; ``frame`` None for the whole audit)."""
     seconds: dict = field(default_factory=dict)
     """Wall-clock seconds per phase (``hash`` of unchanged frames, ``ground truth``,
-    ``decode`` (each including its files' hashes), ``sign check``, ``write``), summed over
-    the frames."""
+    ``decode`` (each including its files' hashes), ``sign check``, ``offset check``,
+    ``write``), summed over the frames."""
     dry_run: bool = False
     """Nothing was written: :attr:`frames` that are ``imported`` would be."""
     temporaries: list = field(default_factory=list)

@@ -121,6 +121,33 @@ def check_files(discovery: Discovery) -> None:
                 )
 
 
+def check_headers(discovery: Discovery) -> None:
+    """Every file of the audit read as far as its header, no pixel decoded: each frame's
+    images' sizes (:func:`~stereovar.audit.decoding.check_sizes`: a header that cannot be
+    read, as a truncated HDF5 file's, sizes that differ, an Infinigen depth without its
+    camview files) and its camera files (:func:`~stereovar.audit.generators.read_camera`).
+    ``stereovar audit`` calls it before Snakemake starts, so such a file stops the audit
+    before any import job.
+
+    Parameters
+    ----------
+    discovery : Discovery
+        The audit's files (:func:`stereovar.audit.layout.discover`).
+
+    Raises
+    ------
+    AuditError, ImageError
+        One line naming the first such file and the fix.
+    """
+    from .decoding import check_sizes
+    from .generators import read_camera
+
+    for frame in discovery.frames:
+        check_sizes(frame)
+        for path in frame.cameras.values():
+            read_camera(path)
+
+
 def frame_files(discovery: Discovery, frame: str) -> list[str]:
     """Every file one frame is imported from (renders of each view and seed, then its
     ground truth): the inputs of its ``audit_import`` job."""

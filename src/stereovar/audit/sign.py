@@ -20,6 +20,10 @@ render) both warps give the same value and both errors are the same. A check who
 sign is not settled says so, with the reason (:attr:`SignCheck.reason`). A declared sign that
 wins with a median error above :data:`HIGH_ERROR` is flagged (:attr:`SignCheck.high_error`):
 a depth map read as disparity can win against the opposite sign with a poor match.
+
+A disparity off by a pixel or two (:math:`d + 2`, or :math:`d` replaced by its mean) still
+wins clearly, with a median error under :data:`HIGH_ERROR`: the sign check cannot see it;
+the offset check (:mod:`stereovar.audit.offset`) can.
 """
 
 from __future__ import annotations

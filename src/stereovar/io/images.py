@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import ImageError
 from ..renderers.quiet import silenced
 from . import hdf5
-from .channels import field_channel, render_channels, unique_channels
+from .channels import WORDS, field_channel, render_channels, unique_channels
 from .exr_header import channel_types
 
 FORMATS = ("exr", "pfm", "png", "npy", "npz", "hdf5", "tiff")
@@ -241,14 +241,42 @@ def image_size(path) -> tuple[int, int]:
     """
     fmt = image_format(path)
     path = Path(path)
-    with open_regular(path) as f:
-        try:
-            with _quiet():
-                return _header_size(f, fmt, path)
-        except ImageError:
-            raise
-        except Exception as err:  # each library raises its own exception types
-            raise _unreadable(path, err, "header") from None
+    with open_regular(path) as f, reading_header(path), _quiet():
+        return _header_size(f, fmt, path)
+
+
+@contextmanager
+def reading_header(path):
+    """Any library's failure to read the header of ``path`` inside the block as one
+    :class:`ImageError` line: the file is truncated or not of its extension's format (an
+    HDF5 file cut short cannot be opened at all, so its datasets cannot be listed).
+
+    Parameters
+    ----------
+    path : path-like
+        The file whose header the block reads, named in the line.
+
+    Raises
+    ------
+    ImageError
+        ``path: cannot read the header (<the library's words>); it is truncated or not a
+        valid <FORMAT> file: write it again``; an :class:`ImageError` raised inside passes
+        as it is.
+
+    Examples
+    --------
+    >>> with reading_header("a/0.hdf5"):  # doctest: +ELLIPSIS
+    ...     raise OSError("Unable to synchronously open file (file signature not found)")
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.ImageError: a/0.hdf5: cannot read the header (Unable to ... not found)); ...
+    """
+    try:
+        yield
+    except ImageError:
+        raise
+    except Exception as err:  # each library raises its own exception types
+        raise _unreadable(path, err, "header") from None
 
 
 def _header_size(f, fmt, path) -> tuple[int, int]:
@@ -369,24 +397,19 @@ def stored_as_half(path, *, channel: str | None = None) -> bool | None:
     fmt = image_format(path)
     if fmt not in ("exr", "npy", "npz", "hdf5"):
         return None
-    with open_regular(path) as f:
-        try:
-            if fmt == "hdf5":
-                return hdf5.render_dtype(path, channel) == np.float16
-            if fmt == "exr":
-                types = channel_types(f)
-                return any(types[c] == "half" for c in render_channels(types, path, channel))
-            if fmt == "npy":
-                return _npy_header(f)[2] == np.float16
-            with np.load(f) as z:
-                key = _npz_key(z, path)
-                member = key if key in z.zip.namelist() else f"{key}.npy"
-                with z.zip.open(member) as array:
-                    return _npy_header(array)[2] == np.float16
-        except ImageError:
-            raise
-        except Exception as err:  # each library raises its own exception types
-            raise _unreadable(path, err, "header") from None
+    with open_regular(path) as f, reading_header(path):
+        if fmt == "hdf5":
+            return hdf5.render_dtype(path, channel) == np.float16
+        if fmt == "exr":
+            types = channel_types(f)
+            return any(types[c] == "half" for c in render_channels(types, path, channel))
+        if fmt == "npy":
+            return _npy_header(f)[2] == np.float16
+        with np.load(f) as z:
+            key = _npz_key(z, path)
+            member = key if key in z.zip.namelist() else f"{key}.npy"
+            with z.zip.open(member) as array:
+                return _npy_header(array)[2] == np.float16
 
 
 # --------------------------------------------------------------------------------------------
@@ -574,12 +597,14 @@ def integer_bits(path, *, channel: str | None = None) -> int | None:
     ``transfer`` and ``scale``, and the import warns about their quantisation and clipping.
     """
     fmt = image_format(path)
-    if fmt == "png":
-        return png_header(path)[0]
-    if fmt == "hdf5":
+    if fmt not in ("png", "hdf5"):
+        return None
+    regular_file(path)
+    with reading_header(path):
+        if fmt == "png":
+            return png_header(path)[0]
         dtype = hdf5.render_dtype(path, channel)
         return 8 * dtype.itemsize if dtype.kind == "u" else None
-    return None
 
 
 def _decode_integer(a: np.ndarray, path, transfer: str, scale: float) -> np.ndarray:
@@ -681,13 +706,92 @@ def read_image(
 
 
 def _tiff(path) -> np.ndarray:
-    """A TIFF's values as stored (one channel, or its first), through OpenCV."""
+    """A TIFF's values as stored, through OpenCV: ``(H, W)``, or its colour channels in
+    R, G, B order (OpenCV reads them as B, G, R; an alpha channel is left out)."""
     import cv2
 
     a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if a is None:
         raise ValueError("OpenCV could not decode it")
+    if a.ndim == 3 and a.shape[-1] >= 3:
+        a = a[..., 2::-1]
     return a
+
+
+def channel_names(fmt: str, count: int) -> list[str]:
+    """The names of the ``count`` channels of a file of format ``fmt`` holding one value per
+    pixel and channel, for error lines: ``R, G, B`` for a colour PNG, TIFF or PFM, their
+    indices otherwise (an array's last axis).
+
+    Parameters
+    ----------
+    fmt : str
+        One of :data:`FORMATS`.
+    count : int
+        How many channels the file holds.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> channel_names("png", 3), channel_names("npy", 2)
+    (['R', 'G', 'B'], ['0', '1'])
+    """
+    if fmt in ("png", "tiff", "pfm") and count == 3:
+        return ["R", "G", "B"]
+    return [str(k) for k in range(count)]
+
+
+def one_field_channel(a: np.ndarray, path, what: str) -> np.ndarray:
+    """The ``(H, W)`` values of a field decoded with a channel axis, ``(H, W, C)``: its one
+    channel, or the first of channels that all hold the same values (a grey image saved as
+    RGB). Channels that differ are refused: which of them holds the field, or whether the
+    file is a colour-mapped picture of it, is not for the reader to guess.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, (H, W, C)
+        The values as decoded (a PNG's or TIFF's colour channels in R, G, B order, alpha
+        left out; an array's last axis).
+    path : path-like
+        The file, for the error line.
+    what : str
+        What the file was given as, in words (``"disparity"``, ``"a glass mask"``).
+
+    Returns
+    -------
+    numpy.ndarray, (H, W)
+
+    Raises
+    ------
+    ImageError
+        Channels that differ (one line listing them and naming the fix).
+
+    Examples
+    --------
+    >>> grey = np.arange(6.0).reshape(2, 3)
+    >>> one_field_channel(np.stack([grey] * 3, axis=-1), "d.png", "disparity").tolist()
+    [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]]
+    >>> one_field_channel(np.stack([grey, grey, 2 * grey], axis=-1), "d.png", "disparity")
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    stereovar.errors.ImageError: d.png: disparity given as 3 channels (R, G, B) that differ, ...
+    """
+    first = a[..., 0]
+    nan = a.dtype.kind in "fc"
+    if all(np.array_equal(first, a[..., k], equal_nan=nan) for k in range(1, a.shape[-1])):
+        return first
+    names = channel_names(image_format(path), a.shape[-1])
+    plain = what.removeprefix("a ")
+    raise ImageError(
+        f"{path}: {what} given as {a.shape[-1]} channels ({', '.join(names)}) that differ, so "
+        f"which of them holds the {plain}, or whether the file is a colour-mapped picture of "
+        f"it, is not for the reader to guess; write the {plain} as one channel (a grey PNG or "
+        "TIFF, or EXR, PFM or NPY)"
+    )
 
 
 def _one_channel(
@@ -695,9 +799,9 @@ def _one_channel(
 ) -> np.ndarray:
     """The ``(H, W)`` values of a one-field file as stored (a PNG's integers or palette
     indices, an EXR channel's or a PFM's floats, an NPY's or HDF5 dataset's dtype): an EXR's
-    channel or an HDF5 file's dataset holding ``role``, a PNG's first channel; ``what``
-    (``"a field"``) names it in the error line; ``view`` picks the view of an HDF5 file
-    that holds both."""
+    channel or an HDF5 file's dataset holding ``role``; a file of several channels only when
+    they are equal (:func:`one_field_channel`); ``what`` (``"a field"``) names it in the
+    error line, or ``role`` does; ``view`` picks the view of an HDF5 file that holds both."""
     fmt = image_format(path)
 
     def decode():
@@ -717,7 +821,7 @@ def _one_channel(
 
     a = _decoded(path, decode)
     if a.ndim == 3:
-        a = a[..., 0]
+        a = one_field_channel(a, path, WORDS.get(role, what))
     if a.ndim != 2:
         raise ImageError(f"{path}: {what} has shape (H, W), got {a.shape}; store one per file")
     return a
@@ -737,8 +841,9 @@ def read_field(
     ----------
     path : path-like
         ``.exr`` (its one channel, or the channel holding ``role``, from any part),
-        ``.pfm`` (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, first
-        channel; a palette PNG's indices), ``.npy``, ``.npz``, ``.tiff`` (first channel;
+        ``.pfm`` (``Pf``; SceneFlow and Middlebury files), ``.png`` (8 or 16 bit, grey,
+        or RGB with equal channels; a palette PNG's indices), ``.npy``, ``.npz``, ``.tiff``
+        (one channel, or equal ones;
         :mod:`stereovar.audit.generators` says what a Kubric depth TIFF holds) or
         ``.hdf5`` (the dataset holding ``role``, :func:`stereovar.io.hdf5.field_layer`).
     png_scale : float, optional, keyword-only
@@ -788,9 +893,9 @@ def _one_id_per_pixel(path) -> None:
 def read_labels(path, *, channel: str | None = None, view: int = 0) -> np.ndarray:
     """A segmentation map's segment ids as int64 ``(H, W)``, never through a float.
 
-    Integer files keep their ids exactly: PNG (8 or 16 bit, first channel; a palette PNG's
-    indices, as Kubric's ``segmentation_%05d.png`` stores its ids), an EXR ``UINT``
-    channel, an integer NPY or NPZ (Infinigen's ``ObjectSegmentation_*.npy``), a
+    Integer files keep their ids exactly: PNG (8 or 16 bit, one channel or equal ones; a
+    palette PNG's indices, as Kubric's ``segmentation_%05d.png`` stores its ids), an EXR
+    ``UINT`` channel, an integer NPY or NPZ (Infinigen's ``ObjectSegmentation_*.npy``), a
     BlenderProc ``*_segmaps`` dataset. Float files (an EXR ``HALF`` or ``FLOAT`` channel such
     as Blender's ``IndexOB``, PFM, a float NPY) tell whole numbers apart only below
     :math:`2^{p}` (:math:`p` the mantissa bits plus one: :math:`2^{24}` = 16777216 for
