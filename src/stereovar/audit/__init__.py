@@ -6,7 +6,7 @@ changed), from its parts: ``settings`` checks and digests the ``audit:`` setting
 ``hashing`` hashes every file as it is decoded and fingerprints a frame's files, ``decoding``
 decodes a frame's renders and ground truth, and ``records`` holds what an import finds and
 records; ``ground_truth`` builds the imported ground truth; ``sign`` settles the disparity
-convention photometrically; ``verdict`` decides whether the data carry the cue, ``strongest``
+convention photometrically and ``offset`` finds a disparity off by a pixel or more; ``verdict`` decides whether the data carry the cue, ``strongest``
 finds the frames and tiles where it is strongest, ``page`` lays the verdict out as one page
 and ``summary_schema`` checks its ``summary.json`` against the shipped schema; ``run``
 makes an audit a workflow run (its discovery, config and targets, which ``stereovar audit``

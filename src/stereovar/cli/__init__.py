@@ -35,7 +35,7 @@ import sys
 # ``name as name``: re-exported, reached through the package: the constants, Snakemake's
 # runner (replaced here, it is replaced for every command: ``snakemake._run_snakemake``),
 # the run's monitor, its hook and the audit's log file, and the workflow's config.
-from ..errors import StereovarError, printable
+from ..errors import StereovarError
 from .audit import _audit_log as _audit_log
 from .audit import _register_audit
 from .completion import _register_completion
@@ -43,7 +43,7 @@ from .monitor import _Run as _Run
 from .probe import _register_probe
 from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR
-from .snakemake import PROG, _workflow, check_cores
+from .snakemake import PROG, _workflow, check_cores, say
 from .snakemake import _project_root as _project_root
 from .snakemake import _snakemake as _snakemake
 from .snakemake import _workflow_config as _workflow_config
@@ -136,8 +136,7 @@ def main(argv=None) -> int:
         check_cores(getattr(args, "cores", None))
         return int(args.func(args) or 0)
     except StereovarError as err:
-        message = printable(" ".join(str(err).split()))
-        print(f"{PROG}: error: {message}", file=sys.stderr)
+        say(f"{PROG}: error: {' '.join(str(err).split())}")
         return 2
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         sys.stderr.close()

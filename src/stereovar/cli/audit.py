@@ -19,6 +19,7 @@ from .snakemake import (
     _run_snakemake,
     _warn_unlocked,
     _workflow_config,
+    say,
 )
 
 #: The exit status of ``stereovar audit --fail-on LEVEL`` when the verdict is at or past
@@ -180,36 +181,28 @@ def _audit(args, root, config, name: str, discovery) -> int:
     # the import's warnings, each once: those the verdict's summary does not already say
     for warning in _import_warnings(root, name, [f.name for f in discovery.frames]):
         if not any(warning in line for line in lines):
-            _say(f"warning: {warning}")
+            say(f"warning: {warning}")
     if monitor.log_error:
-        _say(f"warning: the log ends early: {monitor.log_error}")
+        say(f"warning: the log ends early: {monitor.log_error}")
     if rc != 0:
         for message in monitor.errors(rc):
-            _say(f"{PROG}: error: {message}")
+            say(f"{PROG}: error: {message}")
         previous = root / Path(paths["verdict_html"]).parent / PREVIOUS
         if not (root / paths["verdict_html"]).exists() and (previous / "verdict.html").exists():
-            _say(f"the verdict before this run, set aside as out of date: {previous}/")
-        _say(log_line(shown_log, monitor.job_logs()))
+            say(f"the verdict before this run, set aside as out of date: {previous}/")
+        say(log_line(shown_log, monitor.job_logs()))
         return rc
     if args.import_only:
         records = root / Path(paths["summary"]).parent / "import"
-        _say(f"imported {name}: one record per frame in {records}", sys.stdout)
+        say(f"imported {name}: one record per frame in {records}", sys.stdout)
     else:
-        _say("\n".join(lines), sys.stdout)
-        _say(f"verdict page: {summary.parent / 'verdict.html'}", sys.stdout)
-    _say(f"log: {shown_log}", sys.stdout)
+        say("\n".join(lines), sys.stdout)
+        say(f"verdict page: {summary.parent / 'verdict.html'}", sys.stdout)
+    say(f"log: {shown_log}", sys.stdout)
     if verdict_fails(verdict.get("light"), args.fail_on):
-        _say(f"{PROG}: --fail-on {args.fail_on}: {lines[0]}")
+        say(f"{PROG}: --fail-on {args.fail_on}: {lines[0]}")
         return FAIL_ON_STATUS
     return 0
-
-
-def _say(text: str, stream=None) -> None:
-    """Print ``text`` (lines) with the terminal's control characters in the user's paths
-    and names escaped (:func:`stereovar.errors.printable`); stderr by default."""
-    from ..errors import printable
-
-    print("\n".join(map(printable, text.split("\n"))), file=stream or sys.stderr)
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
@@ -233,9 +226,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
         check_export_targets(targets)
     folder = Path(targets[0]).parent
     scenes = ", ".join(Path(t).name for t in targets)
-    print(
+    say(
         f"exported {len(targets)} scene{'s' * (len(targets) != 1)} to {folder}/ ({scenes}); "
-        "each scene directory has an audit.yaml that audits it"
+        "each scene directory has an audit.yaml that audits it",
+        sys.stdout,
     )
     return 0
 

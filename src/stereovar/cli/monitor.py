@@ -15,7 +15,7 @@ import os
 import sys
 
 from ..progress import JOB_FAILED, exception_line, is_dry_run, job_error, log_error
-from .snakemake import PROG
+from .snakemake import PROG, say
 
 #: The workflow's own one-line errors (``stereovar.errors.exit_with_one_line``), and the
 #: lines it prints with the same prefix that are not errors.
@@ -368,13 +368,11 @@ class _Run:
     def report(self, rc: int) -> None:
         """After the run: a warning if the log ends early; a failed run's errors, one line
         each."""
-        from ..errors import printable
-
         if self.log_error:
-            print(f"warning: the log ends early: {printable(self.log_error)}", file=sys.stderr)
+            say(f"warning: the log ends early: {self.log_error}")
         if rc != 0:
             for message in self.errors(rc):
-                print(f"{PROG}: error: {printable(message)}", file=sys.stderr)
+                say(f"{PROG}: error: {message}")
 
 
 def _isatty(stream) -> bool:

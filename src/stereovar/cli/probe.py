@@ -4,6 +4,7 @@ audit's frames or of the run's scenes."""
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..errors import StereovarError
 from .monitor import INTERRUPTED_STATUS
@@ -13,6 +14,7 @@ from .snakemake import (
     _run_snakemake,
     _warn_unlocked,
     _workflow_config,
+    say,
 )
 
 
@@ -64,8 +66,7 @@ def _cmd_probe(args: argparse.Namespace) -> int:
             stores, outputs, scenes=scenes, factory=args.model, weights=weights,
             device=args.device, settings=settings, source=source, model=model,
         )
-    print(record["reading"])
-    print(f"table: {paths[1]}")
+    say(f"{record['reading']}\ntable: {paths[1]}", sys.stdout)
     return 0
 
 

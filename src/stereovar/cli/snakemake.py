@@ -120,9 +120,7 @@ def _run_with_progress(cmd: list, root) -> int:
     run = _Run(path, stages="run", verbose=_VERBOSE.get(), command=" ".join([PROG, *sys.argv[1:]]))
     rc = run.run(cmd, root)
     run.report(rc)
-    from ..errors import printable
-
-    print(printable(log_line(shown, run.job_logs() if rc else ())), file=sys.stderr)
+    say(log_line(shown, run.job_logs() if rc else ()))
     return rc
 
 
@@ -156,12 +154,19 @@ def _hold_results(root, config: dict, command: str, snakemake_args=()):
     return RunLock(root, lock_scope(config), command)
 
 
+def say(text: str, stream=None) -> None:
+    """Print ``text`` (lines) with the terminal's control characters in a user's paths and
+    names escaped (:func:`stereovar.errors.printable`): every command prints what holds a
+    user's text through it. Default stream: stderr."""
+    from ..errors import printable
+
+    print("\n".join(map(printable, str(text).split("\n"))), file=stream or sys.stderr)
+
+
 def _warn_unlocked(lock) -> None:
     """Say when the run goes on without its lock (a file system without locks)."""
     if getattr(lock, "warning", None):
-        from ..errors import printable
-
-        print(f"warning: {printable(lock.warning)}", file=sys.stderr)
+        say(f"warning: {lock.warning}")
 
 
 def _passed_configfiles(snakemake_args) -> list:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..errors import StereovarError
 from .snakemake import (
@@ -15,6 +16,7 @@ from .snakemake import (
     _warn_unlocked,
     _workflow,
     _workflow_config,
+    say,
 )
 
 #: The starter audit config ``stereovar init`` writes; ``{name}``, ``{renders}``, ``{views}``,
@@ -97,11 +99,11 @@ def _write_new(path, text: str) -> bool:
     from ..io.store import atomic_path
 
     if path.exists():
-        print(f"kept {path} (it exists)")
+        say(f"kept {path} (it exists)", sys.stdout)
         return False
     with atomic_path(path) as tmp:
         tmp.write_text(text)
-    print(f"wrote {path}")
+    say(f"wrote {path}", sys.stdout)
     return True
 
 
@@ -127,11 +129,12 @@ def _cmd_init(args: argparse.Namespace) -> int:
                 "directory"
             )
         if present:  # an example written before: both kept, as every file init writes
-            print(f"kept {folder} (it exists)")
+            say(f"kept {folder} (it exists)", sys.stdout)
         else:
             settings, _ = write_synthetic_audit(os.path.relpath(folder, root))
             fields = {**settings, "views": "{left: L, right: R}"}
-            print(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation")
+            say(f"wrote {folder}: 2 synthetic frames with a known cross-view correlation",
+                sys.stdout)
     _write_new(root / "config.yaml", (_workflow() / "config.yaml").read_text())
     from ..links import docs_page
 
@@ -180,7 +183,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         options += ["--configfile", *files]
     rc = _run_snakemake([*options, *args.snakemake_args], _project_root())
     if rc == 0:
-        print(f"report: {args.output}")
+        say(f"report: {args.output}", sys.stdout)
     return rc
 
 
