@@ -316,8 +316,8 @@ def test_ctrl_c_is_said_as_an_interruption_with_status_130(tmp_path, monkeypatch
         "summary = [a.split('=', 1)[1] for a in sys.argv if a.startswith('--logger-stereovar-"
         "summary=')][0]\n"
         "def stop(*_):\n"
-        "    json.dump({'failed': [{'rule': 'calibration_scene', 'jobid': 3, 'logs': []},"
-        " {'rule': 'audit_teaser', 'jobid': 4, 'logs': []}]}, open(summary, 'w'))\n"
+        "    json.dump({'failed': [{'rule': 'calibration_scene', 'jobid': 3, 'logs': ['c.log']},"
+        " {'rule': 'audit_teaser', 'jobid': 4, 'logs': ['t.log']}]}, open(summary, 'w'))\n"
         "    sys.exit(1)\n"
         "signal.signal(signal.SIGINT, stop)\n"
         "time.sleep(0.5)\n"
@@ -332,7 +332,8 @@ def test_ctrl_c_is_said_as_an_interruption_with_status_130(tmp_path, monkeypatch
     assert cli.main(["audit", config]) == monitor.INTERRUPTED_STATUS
     err = capsys.readouterr().err
     assert f"stereovar: error: {monitor.INTERRUPTED}" in err.splitlines()
-    assert "failed" not in err
+    assert "failed" not in err and "c.log" not in err  # stopped, not failed
+    assert err.splitlines()[-1].startswith("log: logs/audit/t/")
 
 
 # -- 5. control characters, stale summaries ---------------------------------------------------

@@ -307,7 +307,10 @@ class _Run:
     # -- errors -----------------------------------------------------------------------------
 
     def job_logs(self) -> list:
-        """The log files of the jobs that failed."""
+        """The log files of the jobs that failed (none for a run stopped by Ctrl-C: its
+        jobs were stopped, they did not fail)."""
+        if self.interrupted:
+            return []
         return list(dict.fromkeys(p for job in self.summary.get("failed", []) for p in job["logs"]))
 
     def _tail(self) -> list:
