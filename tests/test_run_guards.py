@@ -409,3 +409,20 @@ def test_asking_for_one_render_per_view_gets_the_measured_refusal(tmp_path, no_s
     assert error_line(capsys) == (
         f"stereovar: error: config key 'audit.single_render': {refusal()}"
     )
+
+
+def test_a_results_folder_that_cannot_be_written_is_said_before_the_lock(tmp_path):
+    from .test_config_limits import read_only
+
+    (tmp_path / "results").mkdir()
+    prefix = read_only(tmp_path / "results")
+    script = ("import sys; from stereovar import cli; "
+              "cli._snakemake = lambda a, r: sys.exit('snakemake started'); "
+              "sys.exit(cli.main(['run']))")
+    proc = subprocess.run([*prefix, sys.executable, "-c", script], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 2, proc.stderr
+    (line,) = proc.stderr.splitlines()
+    assert line.startswith(f"stereovar: error: {tmp_path / 'results'} is on a read-only file "
+                           "system and this run writes there") or (
+        os.geteuid() != 0 and "is not writable by this user" in line), line

@@ -136,6 +136,9 @@ class RunLock:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
         except OSError as err:
+            from .preflight import check_writable
+
+            check_writable([self.path.parent])  # read-only, immutable, not the user's: said so
             raise WriteError(
                 f"{self.path}: cannot create the run's lock file ({err.strerror or err}); make "
                 f"{self.path.parent} writable, then run the same command again"
