@@ -30,27 +30,10 @@ import numpy as np
 
 from stereovar.audit.offset import MIN_TILES, TEXTURE, offset_check
 from stereovar.audit.sign import sign_check
+from stereovar.audit.synthetic import slanted_texture_means as smooth_frame
 from stereovar.audit.synthetic import synthetic_frame
 
 SIGN = -1
-
-
-def smooth_frame(seed, *, noise, fmax, width, height):
-    """Seed means (H, W, 3) of a smooth texture behind a slanted plane, and its disparity."""
-    rng = np.random.default_rng(seed)
-    freq_x, freq_y = rng.uniform(0.02, fmax, 12), rng.uniform(-0.1, 0.1, 12)
-    phase, amp = rng.uniform(0, 2 * np.pi, 12), rng.uniform(0.5, 1.0, 12)
-    amp *= 0.3 / amp.sum()
-
-    def texture(x, y):
-        waves = amp * np.sin(2 * np.pi * (freq_x * x[..., None] + freq_y * y[..., None]) + phase)
-        return 0.5 + waves.sum(axis=-1)
-
-    a, b, c = rng.uniform(4, 8), rng.uniform(2, 4) / height, rng.uniform(-0.02, 0.02)
-    y, x = np.mgrid[0:height, 0:width].astype(np.float64)
-    left = texture(x, y) + noise * rng.standard_normal((height, width))
-    right = texture((x + a + b * y) / (1 - c), y) + noise * rng.standard_normal((height, width))
-    return left[..., None].repeat(3, -1), right[..., None].repeat(3, -1), a + b * y + c * x
 
 
 def main() -> None:

@@ -19,7 +19,11 @@ import pytest
 
 from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.offset import offset_check, shifted_errors, vertex
-from stereovar.audit.synthetic import synthetic_frame, write_synthetic_audit
+from stereovar.audit.synthetic import (
+    slanted_texture_means,
+    synthetic_frame,
+    write_synthetic_audit,
+)
 from stereovar.io.images import write_field
 from stereovar.jobs.audit import verdict_job
 
@@ -28,31 +32,9 @@ SIGN = -1
 
 
 def fractional_frame(seed: int, *, noise: float = 0.02, width: int = 96, height: int = 64):
-    """Seed means of a smooth texture seen by both views through a slanted plane.
-
-    The texture is a sum of 12 sinusoids (up to 0.25 cycles/px along x), evaluated exactly
-    at each view's pixel: the left pixel x sees T(x, y), the right pixel u sees the texture
-    point whose left pixel x satisfies u = x - d(x, y), with d = a + b y + c x (fractional:
-    4-8 px plus up to 4 px over the height). Gaussian noise of ``noise`` is added to each
-    view's seed mean. Returns left and right (H, W, 3) and the left disparity (H, W).
-    """
-    rng = np.random.default_rng(seed)
-    freq_x, freq_y = rng.uniform(0.02, 0.25, 12), rng.uniform(-0.1, 0.1, 12)
-    phase, amp = rng.uniform(0, 2 * np.pi, 12), rng.uniform(0.5, 1.0, 12)
-    amp *= 0.3 / amp.sum()
-
-    def texture(x, y):
-        waves = amp * np.sin(2 * np.pi * (freq_x * x[..., None] + freq_y * y[..., None]) + phase)
-        return 0.5 + waves.sum(axis=-1)
-
-    a, b, c = rng.uniform(4, 8), rng.uniform(2, 4) / height, rng.uniform(-0.02, 0.02)
-    y, x = np.mgrid[0:height, 0:width].astype(np.float64)
-    disparity = a + b * y + c * x
-    left = texture(x, y)
-    right = texture((x + a + b * y) / (1 - c), y)  # u = x - d(x)  <=>  x = (u + a + b y) / (1 - c)
-    left = left + noise * rng.standard_normal(left.shape)
-    right = right + noise * rng.standard_normal(right.shape)
-    return left[..., None].repeat(3, axis=-1), right[..., None].repeat(3, axis=-1), disparity
+    """Seed means and the known fractional disparity of a smooth texture behind a slanted
+    plane (:func:`stereovar.audit.synthetic.slanted_texture_means`)."""
+    return slanted_texture_means(seed, noise=noise, width=width, height=height)
 
 
 def block_frame(seed: int, **options):

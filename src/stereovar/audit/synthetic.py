@@ -151,3 +151,57 @@ def write_synthetic_audit(
         "convention": convention,
     }
     return settings, frames
+
+
+def slanted_texture_means(
+    seed: int,
+    *,
+    noise: float = 0.02,
+    fmax: float = 0.25,
+    width: int = 96,
+    height: int = 64,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Seed means of a smooth texture seen by both views through a slanted plane, with a
+    fractional disparity known exactly (the offset check's test and calibration frames,
+    :mod:`stereovar.audit.offset`).
+
+    The texture is a sum of 12 sinusoids (up to ``fmax`` cycles/px along x), evaluated
+    exactly at each view's pixel: the left pixel :math:`x` sees :math:`T(x, y)` and the right
+    pixel :math:`u` the texture point of the left pixel with
+
+    .. math::
+
+        u = x - d(x, y), \qquad d(x, y) = a + b\,y + c\,x,
+
+    :math:`a` in 4-8 px, :math:`b\,H` in 2-4 px, :math:`|c| \le 0.02` (the conventional rig).
+    Gaussian noise of standard deviation ``noise`` is added to each view's mean.
+
+    Returns
+    -------
+    left, right : numpy.ndarray (H, W, 3)
+        The views' seed means (grey).
+    disparity : numpy.ndarray (H, W)
+        The left view's disparity, px.
+
+    Examples
+    --------
+    >>> left, right, d = slanted_texture_means(0, noise=0.0, width=32, height=8)
+    >>> left.shape, right.shape, bool((d > 3.9).all() and (d < 13).all())
+    ((8, 32, 3), (8, 32, 3), True)
+    """
+    rng = np.random.default_rng(seed)
+    freq_x, freq_y = rng.uniform(0.02, fmax, 12), rng.uniform(-0.1, 0.1, 12)
+    phase, amp = rng.uniform(0, 2 * np.pi, 12), rng.uniform(0.5, 1.0, 12)
+    amp *= 0.3 / amp.sum()
+
+    def texture(x, y):
+        waves = amp * np.sin(2 * np.pi * (freq_x * x[..., None] + freq_y * y[..., None]) + phase)
+        return 0.5 + waves.sum(axis=-1)
+
+    a, b, c = rng.uniform(4, 8), rng.uniform(2, 4) / height, rng.uniform(-0.02, 0.02)
+    y, x = np.mgrid[0:height, 0:width].astype(np.float64)
+    left = texture(x, y) + noise * rng.standard_normal((height, width))
+    # u = x - d(x)  <=>  x = (u + a + b y) / (1 - c)
+    right = texture((x + a + b * y) / (1 - c), y) + noise * rng.standard_normal((height, width))
+    return left[..., None].repeat(3, -1), right[..., None].repeat(3, -1), a + b * y + c * x
+
