@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import re
 
+import numpy as np
 import pytest
 
 from stereovar.errors import ConfigError
@@ -124,3 +125,79 @@ def test_generator_rows_carry_the_profile_and_every_column():
     assert text["SPP"] == "64 of 1024 (x1/16)"
     assert text["matched null"] == "0.500"
     assert math.isnan(rows[0]["psnr"]) and text["PSNR"] == "n/a"
+
+
+def _generator_run(tmp_path, name, transform, rng, cycles):
+    """One profile's inputs of the generator job, as CSV files: two scenes' correlation and
+    mitigation rows, and 16 calibration replicates per scene through the profile's matched
+    transform (cue-free camera and misaligned nulls, a planted cue)."""
+    from stereovar.calibration.replicates import CALIBRATION_COLUMNS
+    from stereovar.io.tables import write_tables
+
+    paths = {"correlation": [], "scene_rows": [], "calibration": []}
+    for scene in ("a", "b"):
+        corr = []
+        for method in ("warp", "partial"):
+            rho = float(rng.uniform(0.2, 0.6))
+            corr.append({"scene": scene, "region": "all", "method": method, "rho": rho,
+                         "boot_low": rho - 0.05, "boot_high": rho + 0.05, "n_seeds": 8})
+        scene_rows = [{"scene": scene, "region": "all", "quantity": q, "value": v,
+                       "low": v - 0.01, "high": v + 0.01}
+                      for q, v in (("residual_rho_zero", 0.0), ("psnr", 25.0))]
+        replicates = []
+        for r in range(16):
+            for t in dict.fromkeys(["none", transform]):
+                for kind, factor, mean in (("camera", 0.0, 0.0), ("misaligned", 0.0, 0.0),
+                                           ("planted", 1.0, 0.3)):
+                    rho = float(rng.normal(mean, 0.02))
+                    replicates.append({
+                        "scene": scene, "replicate": r, "kind": kind, "strength": factor,
+                        "strength_factor": factor, "transform": t, "region": "all",
+                        "method": "partial", "rho": rho, "boot_low": rho - 0.04,
+                        "boot_high": rho + 0.04, "chance_se": math.nan, "n_pixels": 1000,
+                    })
+        for key, rows, columns in (
+            ("correlation", corr, list(corr[0])),
+            ("scene_rows", scene_rows, list(scene_rows[0])),
+            ("calibration", replicates, CALIBRATION_COLUMNS),
+        ):
+            path = tmp_path / name / key / f"{scene}.csv"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_tables(rows, columns, {"csv": str(path)})
+            paths[key].append(str(path))
+    return {"profile": name, "spp": 64, "generator_spp": 128, "scale": 0.5, "cycles": cycles,
+            "calibration_transform": transform, **paths}
+
+
+def test_the_generator_job_keeps_its_verdicts_calibration_and_quotes_its_upper_bound(
+    tmp_path,
+):
+    """The calibration each profile's verdict is measured against is written beside the
+    table (every check, with the profile), and the table's caption gives the verdict rule's
+    false-positive rate by the upper end of its interval, scenes combined."""
+    from stereovar.calibration.summary import CALIBRATION_TABLE_COLUMNS, calibration_table
+    from stereovar.io.tables import read_rows
+    from stereovar.jobs.generators import generators_table_job
+
+    rng = np.random.default_rng(11)
+    runs = [_generator_run(tmp_path, "paper", "none", rng, {}),
+            _generator_run(tmp_path, "kubric", "denoise", rng, {"denoise": True})]
+    outputs = {fmt: str(tmp_path / f"generators.{fmt}") for fmt in ("csv", "md")}
+    kept = tmp_path / "generators_calibration.csv"
+    generators_table_job(runs, outputs, calibration=str(kept))
+    rows = read_rows(kept)
+    assert list(rows[0]) == ["profile", *CALIBRATION_TABLE_COLUMNS]
+    caption = (tmp_path / "generators.md").read_text()
+    for run in runs:
+        expected, _ = calibration_table([r for p in run["calibration"] for r in read_rows(p)])
+        got = [r for r in rows if r["profile"] == run["profile"]]
+        assert [(r["check"], r["scope"], r["transform"], r["kind"], r["n"]) for r in got] == [
+            (r["check"], r["scope"], r["transform"], r["kind"], r["n"]) for r in expected
+        ]
+        verdict = [r for r in got if r["check"] == "false_positive_rate"
+                   and r["rule"] == "above_null" and r["scope"] == "combined"
+                   and r["transform"] == run["calibration_transform"]]
+        upper = max(r["high"] for r in verdict)
+        assert upper > 0.05  # 16 replicates cannot show the 5% level
+        assert f"{run['profile']} at most {math.ceil(100 * upper)}%" in caption
+    assert "not shown" in caption and "generators_calibration.csv" in caption

@@ -67,3 +67,6 @@ def test_the_generators_target_end_to_end(tmp_path):
     # the denoising profiles are measured against a null passed through the denoiser
     assert rows["kubric"]["null_partial"] > rows["paper"]["null_partial"]
     assert all(math.isfinite(r["mc_specific"]) for r in rows.values())
+    # each verdict's calibration is kept beside the table
+    kept = read_rows(root / "results/tables/generators_calibration.csv")
+    assert {r["profile"] for r in kept} == set(rows)

@@ -69,6 +69,7 @@ __all__ = [
     "estimator_tables",
     "export_dir",
     "generator_calibration_rows",
+    "generator_calibration_table",
     "generator_figure",
     "generator_source",
     "generator_tables",
@@ -361,6 +362,12 @@ def generator_tables() -> list[str]:
     """The generator table: ``results/tables/generators.{csv,md,tex,html}`` (every column,
     and each number beside its interval and matched null)."""
     return table_paths("generators")
+
+
+def generator_calibration_table() -> str:
+    """The calibration of the generator table's verdicts, every profile against its own
+    matched nulls (every check, scope and design): ``results/tables/generators_calibration.csv``."""
+    return f"{RESULTS}/tables/generators_calibration.csv"
 
 
 def generator_figure() -> str:

@@ -3,7 +3,8 @@
 # (render_profile, under results/cycles/{profile}) and under the paper's (the Cycles renders of
 # render.smk), each measured like a mitigation (the variance, warp, correlation and
 # mitigation_scene rules on the source key) against its own matched null (generator_calibration),
-# then results/tables/generators.* and its figure.
+# then results/tables/generators.* and its figure, with the verdicts' calibration
+# (results/tables/generators_calibration.csv).
 
 
 rule render_profile:
@@ -95,6 +96,7 @@ rule generators_table:
             category="Figures",
             labels={"figure": "generators"},
         ),
+        calibration=layout.generator_calibration_table(),
     params:
         runs=generator_table_params(),
     log:

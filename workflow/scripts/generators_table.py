@@ -1,4 +1,4 @@
-"""Snakemake adapter: the generator table and its figure."""
+"""Snakemake adapter: the generator table, its figure and its verdicts' calibration."""
 
 from stereovar.jobs.common import run_job
 from stereovar.jobs.generators import generators_table_job
@@ -10,4 +10,5 @@ run_job(
     runs=snakemake.params.runs,
     outputs=outputs,
     figure=snakemake.output.figure,
+    calibration=snakemake.output.calibration,
 )

@@ -11,8 +11,11 @@ def profile_matched_transform(cycles: dict) -> str:
     return "denoise" if (cycles or {}).get("denoise") else "none"
 
 
-def generators_table_job(runs: list[dict], outputs: dict, *, figure=None) -> list[dict]:
-    """``results/tables/generators.*`` and ``results/figures/generators.png``.
+def generators_table_job(
+    runs: list[dict], outputs: dict, *, figure=None, calibration=None
+) -> list[dict]:
+    """``results/tables/generators.*``, ``results/figures/generators.png`` and
+    ``results/tables/generators_calibration.csv``.
 
     ``runs`` holds per profile, in table order: ``profile``, ``spp``, ``generator_spp``,
     ``scale``, ``cycles`` (the profile as rendered, :class:`stereovar.generators.
@@ -22,9 +25,21 @@ def generators_table_job(runs: list[dict], outputs: dict, *, figure=None) -> lis
     against its own matched nulls (:func:`stereovar.calibration.summary.calibration_table`)
     by :func:`stereovar.statistics.mitigations.mitigation_table`; the CSV keeps every
     column, the other formats each number beside its interval
-    (:func:`stereovar.statistics.generators.compact_table`).
+    (:func:`stereovar.statistics.generators.compact_table`), their caption the upper bound
+    of each verdict's false-positive rate on its matched nulls. ``calibration`` (a path)
+    keeps each profile's calibration table (a ``profile`` column, then
+    :data:`~stereovar.calibration.summary.CALIBRATION_TABLE_COLUMNS`).
     """
-    from ..calibration.summary import calibration_table
+    from ..calibration.summary import (
+        CALIBRATION_TABLE_COLUMNS,
+        LEVEL,
+        NOT_SHOWN,
+        calibration_table,
+        false_positive_text,
+        meets_level,
+        replicates_to_show,
+        worst_false_positive,
+    )
     from ..generators import GeneratorProfile
     from ..io.tables import read_rows, write_tables
     from ..statistics.generators import (
@@ -36,12 +51,21 @@ def generators_table_job(runs: list[dict], outputs: dict, *, figure=None) -> lis
     from ..statistics.mitigations import mitigation_table
 
     rows = []
+    checks = []
+    bounds = []
     for run in runs:
         profile = GeneratorProfile(
             run["profile"], int(run["spp"]), dict(run["cycles"]), float(run["scale"])
         )
         replicates = [r for path in run["calibration"] for r in read_rows(path)]
-        _, nulls = calibration_table(replicates)
+        table, nulls = calibration_table(replicates)
+        checks += [{"profile": profile.name, **r} for r in table]
+        # the verdict's rule on the scenes combined, through the profile's matched transform
+        worst = worst_false_positive(
+            table, scope="combined", transform=run["calibration_transform"], method="partial"
+        )
+        if worst is not None:
+            bounds.append((profile.name, worst))
         entry = {
             "mitigation": profile.name,
             "kind": "profile",
@@ -60,6 +84,22 @@ def generators_table_job(runs: list[dict], outputs: dict, *, figure=None) -> lis
             matched=run["calibration_transform"],
         )
     write_tables(rows, GENERATOR_COLUMNS, {"csv": outputs["csv"]})
+    if calibration is not None:
+        write_tables(checks, ["profile", *CALIBRATION_TABLE_COLUMNS], {"csv": calibration})
+    false_positives = "The verdict's false positives on each profile's matched nulls are not known."
+    if bounds:
+        false_positives = (
+            "The verdict's rule (the Monte Carlo-specific rho's interval above 0) calls a cue "
+            "on each profile's cue-free matched nulls, scenes combined, in "
+            + ", ".join(f"{name} {false_positive_text(r)}" for name, r in bounds)
+            + " (upper end of the 95% Wilson interval, worst matched null)"
+        )
+        if any(meets_level(r["low"], r["high"]) == NOT_SHOWN for _, r in bounds):
+            false_positives += (
+                f"; {NOT_SHOWN}: too few replicates to show the {100 * LEVEL:g}% level, "
+                f"which {replicates_to_show()} null replicates with no false positive would"
+            )
+        false_positives += "."
     write_tables(
         compact_table(rows),
         COMPACT_COLUMNS,
@@ -71,7 +111,8 @@ def generators_table_job(runs: list[dict], outputs: dict, *, figure=None) -> lis
             "the profile's matched null (its value beside it), with its 95% interval and "
             "verdict; the residual coupling is the correlation of the views' standardised "
             "residuals at zero disparity (about 0 for independent seeds); PSNR of one render "
-            "against the converged reference. Every column and region: generators.csv"
+            f"against the converged reference. {false_positives} Every column and region: "
+            "generators.csv; every calibration check: generators_calibration.csv"
         ),
     )
     for row in rows:
