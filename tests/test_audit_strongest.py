@@ -101,7 +101,7 @@ def test_no_tile_stands_out_on_the_matched_null():
 def test_frames_without_a_matched_null_rank_after_those_with_one():
     corr = [
         {"scene": s, "region": "all", "method": "partial", "rho": r, "boot_low": r - 0.05,
-         "boot_high": r + 0.05}
+         "boot_high": r + 0.05, "chance_se": 0.04}
         for s, r in (("a", 0.3), ("b", 0.9), ("c", 0.6))
     ] + [{"scene": "b", "region": "all", "method": "warp", "rho": 1.0}]
     nulls = [
@@ -113,5 +113,6 @@ def test_frames_without_a_matched_null_rank_after_those_with_one():
     assert [r["frame"] for r in ranked] == ["a", "c", "b"]
     assert [r["statistic"] for r in ranked] == ["difference", "difference", "partial"]
     a = ranked[0]
-    half = 1.959964 * math.sqrt((0.1 / (2 * 1.959964)) ** 2 + 0.01**2 + 0.02**2)
+    # the chance standard error 0.04 is above the bootstrap's 0.1 / (2 z) = 0.026
+    half = 1.959964 * math.sqrt(0.04**2 + 0.01**2)
     assert (a["value"], a["low"], a["high"]) == pytest.approx((0.3, 0.3 - half, 0.3 + half))

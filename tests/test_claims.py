@@ -52,11 +52,14 @@ def correlation_rows(rho, half, *, method="warp", region="all", glass=None, non_
 
 
 def scenes_interval(rho, level=0.95):
-    """The interval for the mean over scenes like these, by scipy: the Student-t interval of
-    the scene values (their spread holds the between-scene variance and each scene's
-    error)."""
+    """The interval for the mean rho over scenes like these, by hand: the Student-t interval
+    of the scene values (their spread holds the between-scene variance and each scene's
+    error), taken on Fisher's z = atanh(rho) about the mean rho's z and mapped back with
+    tanh, so that it stays inside [-1, 1]."""
     rho = np.asarray(rho, dtype=np.float64)
-    return stats.t.interval(level, rho.size - 1, loc=rho.mean(), scale=stats.sem(rho))
+    half = stats.t.ppf(0.5 + level / 2, rho.size - 1) * stats.sem(np.arctanh(rho))
+    centre = np.arctanh(rho.mean())
+    return np.tanh(centre - half), np.tanh(centre + half)
 
 
 def ratio_rows(glass, non_glass):
@@ -94,21 +97,22 @@ def log_interval(ratios):
 
 SPREAD = np.array([-3.0, -1.0, 1.0, 3.0])
 """Scene offsets with mean 0 and SD sqrt(20 / 3): scaled by k, the 95% t interval over the
-S = 4 scenes is the mean +- t_{0.975,3} k sqrt(20 / 3) / 2 = +- 4.11 k."""
+S = 4 scenes is the mean +- t_{0.975,3} k sqrt(20 / 3) / 2 = +- 4.11 k on the scale of rho,
+about +- 4.11 k / (1 - rho^2) on Fisher's z (the delta method; the claims' interval)."""
 
 
 @pytest.mark.parametrize(
     ("rho_mean", "k", "sensor", "expected"),
     [
-        # [-0.01, 0.81]: contains 0.754 and 0, so the claim cannot be told from no effect
-        (0.4, 0.1, 0.1, UNTESTABLE),
+        # [-0.08, 0.78]: contains 0.754 and 0, so the claim cannot be told from no effect
+        (0.45, 0.1, 0.1, UNTESTABLE),
         # [0.71, 0.79]: contains 0.754, excludes 0, the sensor's [0.06, 0.14] far below it
         (0.75, 0.01, 0.1, HOLDS),
         # the same, with a sensor at [0.68, 0.76]: ours minus it, 0.03 +- 0.06, reaches 0
         (0.75, 0.01, 0.72, EXPLAINED),
         # [0.12, 0.28]: excludes the paper's value and the null
         (0.2, 0.02, 0.1, FAILS),
-        # [-0.11, 0.31]: contains the null but not the paper's value, which it rules out
+        # [-0.11, 0.30]: contains the null but not the paper's value, which it rules out
         (0.1, 0.05, 0.1, FAILS),
     ],
 )
@@ -123,7 +127,11 @@ def test_level_claim_holds_only_with_the_paper_inside_and_the_null_outside(
     assert row["ours"] == pytest.approx(rho_mean)
     low, high = scenes_interval(ours)
     assert (row["ours_low"], row["ours_high"]) == pytest.approx((low, high))
-    assert high - rho_mean == pytest.approx(4.11 * k, rel=1e-3)
+    normal = stats.t.interval(0.95, S - 1, loc=rho_mean, scale=stats.sem(ours))
+    assert normal[1] - rho_mean == pytest.approx(4.11 * k, rel=1e-3)
+    half_z = (np.arctanh(high) - np.arctanh(low)) / 2
+    assert half_z == pytest.approx(4.11 * k / (1 - rho_mean**2), rel=0.1)
+    assert -1 < low < rho_mean < high < 1
     assert row["control_high"] == pytest.approx(scenes_interval(theirs)[1])
     assert row["null"] == 0.0
     assert row["verdict"] == expected

@@ -11,6 +11,8 @@ from stereovar.statistics.cross_renderer import (
     cross_renderer_table,
 )
 
+from .test_across import on_fisher_z
+
 Z = 1.959963984540054
 
 
@@ -66,8 +68,10 @@ def test_cross_renderer_table_against_brute_force():
             se = np.array([(x["boot_high"] - x["boot_low"]) / (2 * Z) for x in picked])
             half = Z * math.sqrt(float((se**2).sum())) / len(picked)
             assert row[f"rho_{r}"] == pytest.approx(rho.mean(), rel=1e-12)
-            assert row[f"boot_low_{r}"] == pytest.approx(rho.mean() - half, rel=1e-9)
-            assert row[f"boot_high_{r}"] == pytest.approx(rho.mean() + half, rel=1e-9)
+            # a correlation's interval: the normal one's length, placed on Fisher's z
+            assert (row[f"boot_low_{r}"], row[f"boot_high_{r}"]) == pytest.approx(
+                on_fisher_z(rho.mean(), half), rel=1e-9
+            )
             assert row["n_scenes"] == 3
         assert row["diff_cycles_minus_mitsuba"] == pytest.approx(
             row["rho_cycles"] - row["rho_mitsuba"]

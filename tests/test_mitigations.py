@@ -254,9 +254,10 @@ def test_shared_seed_couples_the_views_at_zero_disparity(tmp_path, policy, coupl
 
 
 def test_the_table_summarises_its_inputs_exactly():
-    from stereovar.statistics.across import combined_interval
     from stereovar.statistics.claims import t_interval
     from stereovar.statistics.mitigations import mitigation_table
+
+    from .test_across import on_fisher_z
 
     rng = np.random.default_rng(3)
     corr, scene_rows, intervention = [], [], []
@@ -271,6 +272,7 @@ def test_the_table_summarises_its_inputs_exactly():
                     "rho": rho,
                     "boot_low": rho - 0.1 - 0.01 * k,
                     "boot_high": rho + 0.12,
+                    "chance_se": 0.2 * k * (method == "partial"),
                     "n_seeds": 8,
                 }
             )
@@ -341,18 +343,21 @@ def test_the_table_summarises_its_inputs_exactly():
         nulls,
     )
     part = [r for r in corr if r["method"] == "partial"]
-    want = combined_interval(
-        [r["rho"] for r in part], [r["boot_low"] for r in part], [r["boot_high"] for r in part]
-    )
-    assert (row["partial"], row["partial_low"], row["partial_high"]) == pytest.approx(want)
-    # the Monte Carlo-specific part: each scene's partial minus its null, the half-widths
-    # of the bootstrap interval, the null's standard error and the chance correlation
-    # added in quadrature, then the scenes combined
+    # a correlation: the scenes' bootstrap errors combined as independent normals, the
+    # interval of that length placed on Fisher's z about the mean
     z = 1.959963984540054
+    rho = sum(r["rho"] for r in part) / 3
+    half = z * math.sqrt(sum(((r["boot_high"] - r["boot_low"]) / (2 * z)) ** 2 for r in part)) / 3
+    want = (rho, *on_fisher_z(rho, half))
+    assert (row["partial"], row["partial_low"], row["partial_high"]) == pytest.approx(want)
+    # the Monte Carlo-specific part: each scene's partial minus its null; the larger of the
+    # bootstrap's and the chance standard error, with the null's standard error in
+    # quadrature; then the scenes combined (scene a's chance term 0 is below its bootstrap's
+    # 0.056, scene c's 0.4 above)
     diffs = [r["rho"] - 0.1 * k for k, r in enumerate(part)]
     halves = [
-        z * math.sqrt(((r["boot_high"] - r["boot_low"]) / (2 * z)) ** 2 + 0.01**2 + 0.02**2)
-        for r in part
+        z * math.sqrt(max((r["boot_high"] - r["boot_low"]) / (2 * z), 0.2 * k) ** 2 + 0.01**2)
+        for k, r in enumerate(part)
     ]
     mean = sum(diffs) / 3
     half = z * math.sqrt(sum((h / z) ** 2 for h in halves)) / 3

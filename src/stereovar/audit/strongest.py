@@ -379,7 +379,7 @@ def frame_ranking(correlations: list[dict], nulls: list[dict] | None = None) -> 
         null = table.get(r["scene"])
         if null is not None:
             diff = difference_interval(rho, low, high, null["null_rho"], null["null_se"],
-                                       null.get("chance_sd", math.nan))
+                                       r.get("chance_se", math.nan))
             if all(math.isfinite(x) for x in diff):
                 out.append({"frame": r["scene"], "value": diff[0], "low": diff[1],
                             "high": diff[2], "partial": rho, "null": _f(null["null_rho"]),

@@ -21,7 +21,8 @@ import math
 import numpy as np
 from scipy import stats
 
-from ..statistics.across import combined_interval, rows_interval
+from ..calibration.summary import MIN_EFFECT
+from ..statistics.across import combined_correlation_interval, combined_interval, rows_interval
 from ..statistics.claims import t_interval
 from ..statistics.reliability import corrected_interval
 
@@ -30,25 +31,31 @@ STRENGTHS = ((0.5, "strong"), (0.3, "moderate"), (0.1, "weak"), (-math.inf, "neg
 
 RULES = (
     "The cue is Monte Carlo-specific when the intensity-controlled rho (partial: Pearson of "
-    "ln sigma^2 after removing each view's conditional mean of ln sigma^2 given ln mu) minus "
-    "the same statistic on its matched null (camera-law noise drawn from the frames' own "
-    "seed means, N and disparity, stereovar.calibration) has a 95% interval above 0; its "
-    "strength is the word for that difference (>= 0.5 strong, >= 0.3 moderate, >= 0.1 weak, "
-    "else negligible). The calibration measures how often this rule fires on matched nulls "
-    "and from which planted strength it detects a cue. It works as a matching cue beyond a "
-    "camera when the C_sigma winner-take-all accuracy's lift over chance has an interval "
-    "above 0 and above the same lift on simulated camera frames. Intervals: rho, frames' "
-    "spatial block-bootstrap intervals combined; intervention, Student t over frames (one "
-    "frame: Wilson interval treating pixels as independent, too narrow)."
+    "ln sigma^2 after removing each view's conditional mean of ln sigma^2 given ln mu, its "
+    "chromaticity and its position on the sensor) minus the same statistic on its matched "
+    "null (camera-law noise drawn from the frames' own seed means, N and disparity, through "
+    "the frames' own encoding, stereovar.calibration) has a 95% interval above 0.05, the most "
+    "camera pipelines without a Monte Carlo cue leave; its strength is the word for that "
+    "difference (>= 0.5 strong, >= 0.3 moderate, >= 0.1 weak, else negligible). The "
+    "calibration measures how often this rule fires on matched nulls and on camera pipelines "
+    "outside the null's class, and from which planted strength it detects a cue. It works as "
+    "a matching cue beyond a camera when the C_sigma winner-take-all accuracy's lift over "
+    "chance has an interval above 0 and above the same lift on simulated camera frames. "
+    "Intervals: rho, frames' spatial block-bootstrap intervals combined, each at least as "
+    "wide as two independent fields with the frames' spatial structure would give by "
+    "chance; intervention, Student t over frames (one frame: Wilson interval treating pixels "
+    "as independent, too narrow)."
 )
 
 RULE_ITEMS = (
     "**Monte Carlo-specific cue:** the intensity-controlled :math:`\\rho` minus its matched "
-    "null has a 95% interval above 0. The matched null is camera-law noise drawn from these "
-    "frames' own seed means, :math:`N` and disparity (``stereovar.calibration``).",
+    "null has a 95% interval above 0.05, the most that camera pipelines without a Monte "
+    "Carlo cue leave. The matched null is camera-law noise drawn from these frames' own seed "
+    "means, :math:`N` and disparity, through the frames' own encoding "
+    "(``stereovar.calibration``).",
     "**Intensity-controlled** :math:`\\rho`: Pearson's :math:`\\rho` of "
-    ":math:`\\ln\\sigma^2` after removing each view's conditional mean of "
-    ":math:`\\ln\\sigma^2` given :math:`\\ln\\mu`.",
+    ":math:`\\ln\\sigma^2` after removing what each view's brightness "
+    "(:math:`\\ln\\mu`), colour and position on the sensor explain.",
     "**Strength:** the word for that difference: at least 0.5 strong, 0.3 moderate, 0.1 weak, "
     "else negligible.",
     "**A matching cue beyond a camera:** the :math:`C_\\sigma` winner-take-all accuracy's "
@@ -95,9 +102,15 @@ def _ok(*values) -> bool:
 
 
 def correlation_summary(rows: list[dict], method: str, region: str) -> tuple:
-    """Mean over frames of one statistic with its combined bootstrap interval
-    (:func:`stereovar.statistics.across.combined_interval`); ``corrected``: the
-    attenuation-corrected Pearson :math:`\\rho` with its corrected intervals combined."""
+    """Mean over frames of one statistic with its combined bootstrap interval, placed on
+    Fisher's :math:`z` (:func:`stereovar.statistics.across.combined_correlation_interval`);
+    ``corrected``: the attenuation-corrected Pearson :math:`\\rho` with its corrected intervals
+    (:func:`stereovar.statistics.reliability.corrected_interval`, uncut) combined on the
+    normal scale (:func:`stereovar.statistics.across.combined_interval`) and then cut to
+    :math:`[-1, 1]`: a corrected value is a ratio that can exceed 1, so it has no Fisher
+    :math:`z`, but it estimates a correlation, and cutting the interval to where that lies
+    keeps its coverage. The mean itself is not cut (a value above 1 is flagged where the
+    corrected values are reported)."""
     name = "warp" if method == "corrected" else method
     chosen = [
         {k: _f(v) if k not in ("region", "method", "scene", "reason") else v for k, v in r.items()}
@@ -106,12 +119,13 @@ def correlation_summary(rows: list[dict], method: str, region: str) -> tuple:
     ]
     if method != "corrected":
         return rows_interval(chosen)
-    intervals = [corrected_interval(r) for r in chosen]
-    return combined_interval(
+    intervals = [corrected_interval(r, bounded=False) for r in chosen]
+    mean, low, high = combined_interval(
         [r.get("rho_corrected", math.nan) for r in chosen],
         [lo for lo, _ in intervals],
         [hi for _, hi in intervals],
     )
+    return mean, min(max(low, -1.0), 1.0), min(max(high, -1.0), 1.0)
 
 
 def _interval(value, low, high) -> str:
@@ -259,7 +273,7 @@ def verdict(rows: list[dict]) -> dict:
             f"({partial.get('note') or 'too few valid pixels'}), so whether the variance "
             "structure goes beyond a camera's cannot be told."
         )
-    elif partial["low"] > 0:
+    elif partial["low"] > MIN_EFFECT:
         mc, word = True, strength(partial["value"])
         kind = "Monte Carlo-specific" if against else "intensity-controlled"
         first = (
@@ -272,9 +286,10 @@ def verdict(rows: list[dict]) -> dict:
     else:
         mc, word = False, "none detected"
         first = (
-            "No Monte Carlo-specific cross-view variance cue was detected: once intensity is "
-            f"controlled the correlation{against} is {iv(partial)}, an interval that reaches "
-            "0, as a real camera's would."
+            "No Monte Carlo-specific cross-view variance cue was detected: once intensity, "
+            f"colour and sensor position are controlled the correlation{against} is "
+            f"{iv(partial)}, an interval that does not clear {MIN_EFFECT:g}, the most that "
+            "camera pipelines without a Monte Carlo cue leave."
         )
     second = (
         f" The raw Pearson rho after the warp is {iv(pearson)}; a simulated camera with the "
@@ -369,9 +384,10 @@ both views gives the share of each pixel's noise that the two views' paths have 
 def seeding_summary(rows: list[dict], alignment: str, region: str = "all") -> tuple:
     """Mean over frames of the residual correlation at one alignment (``zero`` or
     ``ground_truth``; :func:`stereovar.jobs.audit.seeding_job` rows), with the frames'
-    block-bootstrap intervals combined (:func:`~stereovar.statistics.across.combined_interval`)."""
+    block-bootstrap intervals combined on Fisher's :math:`z`
+    (:func:`~stereovar.statistics.across.combined_correlation_interval`)."""
     chosen = [r for r in rows if r["alignment"] == alignment and r["region"] == region]
-    return combined_interval(
+    return combined_correlation_interval(
         [_f(r["rho"]) for r in chosen], [_f(r["low"]) for r in chosen],
         [_f(r["high"]) for r in chosen],
     )

@@ -15,11 +15,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..seeding import derive_seed
+from .pipelines import (
+    GAIN_MAP_SCALE,
+    GAIN_MAP_SD,
+    PIPELINES,
+    draw_pipeline,
+    encoded_law,
+    integer_roundtrip,
+    pipeline_encoding,
+)
 from .synthesis import (
     NULL_KINDS,
     camera_law,
     draw_frames,
     planted_pattern,
+    smooth_field,
     variance_fields,
 )
 
@@ -51,9 +61,16 @@ CALIBRATION_COLUMNS = [
     "rho",
     "boot_low",
     "boot_high",
+    "chance_se",
     "n_pixels",
+    "null_kind",
 ]
-"""Columns of one scene's replicate rows (``results/.../calibration/{scene}/spp{spp}.csv``)."""
+"""Columns of one scene's replicate rows (``results/.../calibration/{scene}/spp{spp}.csv``);
+``null_kind``: the design whose replicates are the row's matched null (``camera``, or the
+camera law through an 8-bit pipeline's encoding, ``camera_srgb8_<q>``)."""
+
+PIPELINE_METHODS = ("partial",)
+"""The statistics the pipeline nulls measure: the verdict's."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +95,12 @@ class SceneFrames:
         The scene and SPP (seeds the draws).
     aux : dict, optional
         View to ``{"albedo", "normal"}`` for the denoiser, as the run gives it.
+    encoding : dict, optional
+        How the frames were stored when they were integers (an audit's PNG or HDF5 renders):
+        ``bits``, ``transfer`` and ``scale``
+        (:func:`~stereovar.calibration.pipelines.integer_roundtrip`); every synthetic frame
+        then passes through the same encoding, at the camera law it had before it
+        (:func:`~stereovar.calibration.pipelines.encoded_law`).
     """
 
     mean: dict
@@ -88,6 +111,7 @@ class SceneFrames:
     n_seeds: int
     label: str
     aux: dict | None = None
+    encoding: dict | None = None
 
 
 def transform_stack(
@@ -207,7 +231,7 @@ def statistic_rows(
     from ..estimators.seeds import variance_field
     from ..seeding import derive_seed as seed_of
     from ..statistics.bootstrap import tile_labels
-    from ..statistics.fields import aligned_fields, channel_mean, warped_intensity
+    from ..statistics.fields import aligned_fields, seed_mean_controls
     from ..statistics.pixels import PixelSet
     from ..statistics.registry import METHODS, BootstrapDraws, evaluate
     from ..statistics.warp import align_variance
@@ -225,13 +249,10 @@ def statistic_rows(
         finite_right=np.isfinite(fields["right"]),
     )
     right = np.where(np.isfinite(fields["right"]), fields["right"], np.nan)
-    intensity = (
-        channel_mean(means["left"]),
-        warped_intensity(means["right"], gt_left, sign=scene.sign),
-    )
     aligned_set = aligned_fields(
         fields["left"], right, aligned["warped"], ground_truth_left=gt_left, sign=scene.sign,
-        settings=settings, intensity=intensity,
+        settings=settings,
+        **seed_mean_controls(means["left"], means["right"], gt_left, sign=scene.sign),
     )
     pixels = PixelSet(
         np.asarray(aligned["omega"], dtype=bool),
@@ -246,7 +267,8 @@ def statistic_rows(
 
 
 def measured_rows(
-    frames, name, scene, settings, *, label, seed, options=None, design=None, shipped_only=False
+    frames, name, scene, settings, *, label, seed, options=None, design=None, shipped_only=False,
+    methods=None,
 ):
     """:data:`CALIBRATION_COLUMNS` rows (but ``scene``) of one view pair of frame stacks
     through transform ``name``: as the transform job applies it (unless ``shipped_only``),
@@ -262,9 +284,11 @@ def measured_rows(
                         aux=(scene.aux or {}).get(view), options=options)
             for view in ("left", "right")
         }
-        for row in statistic_rows(stacks, scene, settings, f"{label}|{label_name}"):
+        for row in statistic_rows(stacks, scene, settings, f"{label}|{label_name}",
+                                  methods=methods):
             rows.append(
                 {
+                    "null_kind": "camera",
                     **dict(design or {}),
                     "transform": label_name,
                     "region": row["region"],
@@ -272,6 +296,7 @@ def measured_rows(
                     "rho": row["rho"],
                     "boot_low": row["boot_low"],
                     "boot_high": row["boot_high"],
+                    "chance_se": row["chance_se"],
                     "n_pixels": row["n_pixels"],
                 }
             )
@@ -326,7 +351,8 @@ def camera_residual_variance(scene: SceneFrames, law, rng: np.random.Generator) 
     v = variance_fields(
         "camera", 0.0, mean=scene.mean, law=law, render_variance=scene.variance, rng=rng
     )
-    _, null_field = variance_field(draw_frames(scene.mean["left"], v["left"], scene.n_seeds, rng))
+    _, null_field = variance_field(_encoded(
+        draw_frames(scene.mean["left"], v["left"], scene.n_seeds, rng), scene.encoding))
     return _residual_variance(null_field, scene.mean["left"], scene)
 
 
@@ -364,6 +390,8 @@ def scene_calibration(
     options: dict | None = None,
     seed: int = 0,
     min_strength: float = 0.05,
+    pipelines=(),
+    pipeline_replicates: int = 0,
 ) -> tuple[list[dict], dict]:
     """Every replicate of one scene.
 
@@ -388,6 +416,10 @@ def scene_calibration(
         Seeds every draw with the scene label.
     min_strength : float
         The renders' strength used when they show less (so the planted grid is not all 0).
+    pipelines : sequence of str
+        Pipeline nulls (:data:`~stereovar.calibration.pipelines.PIPELINES`) drawn
+        ``pipeline_replicates`` times each (:func:`pipeline_rows`).
+    pipeline_replicates : int
 
     Returns
     -------
@@ -400,6 +432,10 @@ def scene_calibration(
     mu = {v: np.asarray(m, dtype=np.float64).mean(axis=-1) for v, m in scene.mean.items()}
     gt_valid = np.asarray(scene.ground_truth["left"]["valid"], dtype=bool)
     law = camera_law(scene.variance["left"], mu["left"], gt_valid)
+    if scene.encoding:
+        law = encoded_law(scene.mean["left"], scene.variance["left"], law, scene.n_seeds,
+                          np.random.default_rng(derive_seed("calibration-law", seed, scene.label)),
+                          scene.encoding)
     options = dict(options or {})
     rows: list[dict] = []
     render_s = None
@@ -431,7 +467,8 @@ def scene_calibration(
                 pattern=pattern,
                 rng=rng,
             )
-            frames = {view: draw_frames(scene.mean[view], v[view], scene.n_seeds, rng)
+            frames = {view: _encoded(draw_frames(scene.mean[view], v[view], scene.n_seeds, rng),
+                                     scene.encoding)
                       for view in ("left", "right")}
             for name in chosen:
                 design = {"replicate": r, "kind": kind, "strength": strength,
@@ -443,10 +480,73 @@ def scene_calibration(
                                      factor, name),
                     options=options.get(name), design=design,
                 )
+    rows += pipeline_rows(scene, law, settings, replicates=int(pipeline_replicates),
+                          pipelines=pipelines, seed=seed)
     info = {
         "camera_law": law,
         "render_strength": render_s,
         "replicates": int(replicates),
         "expensive_replicates": int(min(expensive_replicates, replicates)),
+        "pipeline_replicates": int(pipeline_replicates) if pipelines else 0,
     }
     return rows, info
+
+
+def _encoded(frames, encoding):
+    """``frames`` through the data's integer encoding, when it has one."""
+    return frames if not encoding else integer_roundtrip(frames, **encoding)
+
+
+def pipeline_rows(scene: SceneFrames, law, settings, *, replicates: int, pipelines=PIPELINES,
+                  seed: int = 0) -> list[dict]:
+    """The pipeline nulls of one scene: :data:`PIPELINE_METHODS` on ``replicates`` draws of
+    each pipeline (:func:`~stereovar.calibration.pipelines.draw_pipeline`), as shipped
+    (transform ``none``).
+
+    A float pipeline is read against the scene's ``camera`` null. An 8-bit one gets its own
+    matched null, drawn as an audit of such data draws it: the camera law before the encoding
+    (:func:`~stereovar.calibration.pipelines.encoded_law`, from the pipeline's first draw)
+    around that draw's seed means, through the same encoding (kind ``camera_<pipeline>``).
+    """
+    from ..estimators.seeds import variance_field
+
+    rows: list[dict] = []
+    views = ("left", "right")
+    shape = scene.mean["left"].shape[:2]
+    gain_map = np.exp(GAIN_MAP_SD * smooth_field(
+        shape, np.random.default_rng(derive_seed("calibration-gain-map", seed, scene.label)),
+        scale=GAIN_MAP_SCALE))
+    for name in pipelines:
+        encoding = pipeline_encoding(name, scene.mean)
+        null_kind = "camera" if encoding is None else f"camera_{name}"
+        null_law = data_mean = None
+        for r in range(int(replicates)):
+            rng = np.random.default_rng(derive_seed("calibration-pipeline", seed, scene.label,
+                                                    name, r))
+            frames = draw_pipeline(name, scene.mean, law, scene.n_seeds, rng, gain_map)
+            designs_here = [(name, frames)]
+            if encoding is not None:
+                if null_law is None:
+                    data_mean, data_var = zip(*(variance_field(frames[v]) for v in views),
+                                              strict=True)
+                    data_mean = dict(zip(views, data_mean, strict=True))
+                    mu = data_mean["left"].mean(axis=-1)
+                    fitted = camera_law(data_var[0], mu, scene.ground_truth["left"]["valid"])
+                    null_law = encoded_law(data_mean["left"], data_var[0], fitted,
+                                           scene.n_seeds, rng, encoding)
+                a, b = null_law
+                null = {v: integer_roundtrip(draw_frames(
+                    data_mean[v], a * np.maximum(data_mean[v], 0.0) + b, scene.n_seeds, rng),
+                    **encoding) for v in views}
+                designs_here.append((null_kind, null))
+            for kind, stacks in designs_here:
+                rows += measured_rows(
+                    stacks, NONE, scene, settings,
+                    label=f"{scene.label}|{r}|{kind}|pipeline",
+                    seed=derive_seed("calibration-pipeline-transform", seed, scene.label, r,
+                                     kind),
+                    design={"replicate": r, "kind": kind, "strength": 0.0,
+                            "strength_factor": 0.0, "null_kind": null_kind},
+                    methods=PIPELINE_METHODS,
+                )
+    return rows

@@ -14,7 +14,11 @@ statistic:
 ``coverage``
     how often a 95% interval contains the value it estimates, against 95 +/- 2%.
 
-Rates carry their 95% Wilson interval and the number of replicates. The rules:
+Rates carry their 95% Wilson interval and the number of replicates. A rate held to the 5%
+level ``meets_target`` (:func:`meets_level`) only when its whole interval does: ``yes`` when
+the upper bound is at most 5%, ``no`` when the lower bound is above it (refuted), and
+``not shown`` when the interval straddles it (too few replicates to show the level: with no
+false positive that takes :func:`replicates_to_show`, 73). The rules:
 
 ``above_zero``
     the interval lies above 0 (the audit's Monte Carlo rule on ``partial``, the old
@@ -27,7 +31,9 @@ Rates carry their 95% Wilson interval and the number of replicates. The rules:
     that difference's interval lies inside the equivalence margin.
 
 ``scope`` is ``scene`` (one scene's rows) or ``combined`` (the scenes' rows of one replicate
-combined as the tables combine them, :func:`stereovar.statistics.across.combined_interval`).
+combined as the tables combine them:
+:func:`stereovar.statistics.across.combined_correlation_interval` for the statistic and
+:func:`stereovar.statistics.across.combined_interval` for its difference).
 """
 
 from __future__ import annotations
@@ -38,7 +44,7 @@ from collections import defaultdict
 import numpy as np
 from scipy import stats
 
-from ..statistics.across import combined_interval
+from ..statistics.across import combined_correlation_interval, combined_interval
 
 LEVEL = 0.05
 """The level every rule is held to: at most 5% false positives."""
@@ -48,6 +54,19 @@ COVERAGE_TARGET = (0.93, 0.97)
 
 POWER = 0.8
 """The power at which a strength counts as detectable."""
+
+MIN_EFFECT = 0.05
+"""The smallest Monte Carlo-specific :math:`\\rho` a rule calls a cue: the difference from
+the matched null must have its 95% interval above it, not merely above 0. Over 57 600
+pixels the interval is about 0.01 wide, so any small misfit of the control is significant;
+the camera pipelines outside the null's class (:mod:`stereovar.calibration.pipelines`) leave
+0.003-0.025 after the intensity control's colour and position terms (0.015 +/- 0.014 for
+8-bit sRGB at 1 DN, 0.025 +/- 0.007 for a fixed gain map; two scenes, 32 replicates each),
+and fired the rule above 0 on 6-50% of their replicates. A cue this weak is below what a
+camera pipeline leaves, so it is not called Monte Carlo-specific."""
+
+ANY_NULL = "any cue-free design"
+"""The ``kind`` of the false-positive rows that pool every cue-free design of a scope."""
 
 MARGIN_REPLICATES = 8
 """Fewest replicates of the scenes combined whose power curve sets a transform's equivalence
@@ -112,43 +131,91 @@ def rate(k: int, n: int) -> tuple[float, float, float]:
     return k / n, float(ci.low), float(ci.high)
 
 
+NOT_SHOWN = "not shown"
+"""``meets_target`` of a rate whose Wilson interval straddles its level: neither shown nor
+refuted, too few replicates to tell."""
+
+
+def meets_level(low, high, level: float = LEVEL) -> str:
+    """Whether a rate held to at most ``level`` is shown to meet it, from its 95% Wilson
+    interval :math:`[\\ell, h]`: ``yes`` when the whole interval does (:math:`h \\le` level),
+    ``no`` when it lies above (:math:`\\ell >` level: refuted), :data:`NOT_SHOWN` when it
+    straddles the level, ``""`` when it is not known.
+
+    Examples
+    --------
+    >>> [meets_level(*rate(k, n)[1:]) for k, n in ((0, 80), (0, 16), (10, 20))]
+    ['yes', 'not shown', 'no']
+    """
+    low, high = _f(low), _f(high)
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return ""
+    if high <= level:
+        return "yes"
+    if low > level:
+        return "no"
+    return NOT_SHOWN
+
+
+def replicates_to_show(level: float = LEVEL) -> int:
+    """The fewest replicates that can show a rate of at most ``level``: the smallest
+    :math:`n` whose Wilson upper bound with no false positive, :math:`z^2/(n + z^2)`, is at
+    most ``level`` (more are needed when any replicate fires).
+
+    Examples
+    --------
+    >>> replicates_to_show()
+    73
+    """
+    n = max(1, math.floor(Z * Z * (1 - level) / level) - 1)
+    while rate(0, n)[2] > level:
+        n += 1
+    return n
+
+
 def difference_interval(
-    value, low, high, null, null_se, chance_sd=math.nan
+    value, low, high, null, null_se, chance_se=math.nan
 ) -> tuple[float, float, float]:
     """A statistic minus its matched null, with a 95% interval.
 
     .. math::
 
         \\Delta = \\rho - \\bar\\rho_0, \\qquad
-        \\Delta \\pm z_{0.975}\\sqrt{\\Bigl(\\frac{h - \\ell}{2 z_{0.975}}\\Bigr)^2
-            + \\mathrm{se}_0^2 + s_{\\text{chance}}^2}
+        \\Delta \\pm z_{0.975}\\sqrt{\\max\\Bigl(\\Bigl(\\frac{h - \\ell}{2 z_{0.975}}
+            \\Bigr)^2,\\ \\mathrm{se}_{\\text{chance}}^2\\Bigr) + \\mathrm{se}_0^2}
 
-    with :math:`[\\ell, h]` the statistic's 95% interval (spatial block bootstrap, which is
-    conditional on the scene's fields), :math:`\\bar\\rho_0` the camera null's mean over its
-    replicates, :math:`\\mathrm{se}_0` that mean's standard error, and
-    :math:`s_{\\text{chance}}` the standard deviation of the statistic over the ``misaligned``
-    null's replicates: how far two fields with the scene's spatial structure correlate by
-    chance when they are not aligned, which the block bootstrap does not see (the
-    calibration measured a 25% false-positive rate without it on the default scenes).
-    Independent parts, so the variances add.
+    with :math:`[\\ell, h]` the statistic's 95% interval (spatial block bootstrap, which
+    sees dependence within its tiles only), :math:`\\mathrm{se}_{\\text{chance}}` the
+    standard error of the same :math:`\\rho` were the two fields independent, from their
+    own autocovariances over every lag (:func:`stereovar.statistics.chance.chance_se`:
+    how far two fields with this structure correlate by chance, which the bootstrap misses
+    when the structure is larger than a tile), :math:`\\bar\\rho_0` the camera null's mean
+    over its replicates and :math:`\\mathrm{se}_0` that mean's standard error. Under the
+    null the two standard errors estimate the same spread, each missing part of it, so the
+    larger is used, not their sum: the sum counted it twice and covered 100% on the camera
+    null (the bootstrap's 0.004 plus the unaligned renders' 0.02-0.06).
 
     Examples
     --------
     >>> [round(x, 3) for x in difference_interval(0.30, 0.20, 0.40, 0.10, 0.0)]
     [0.2, 0.1, 0.3]
+
+    A chance term smaller than the bootstrap's changes nothing; a larger one replaces it:
+
+    >>> [round(x, 3) for x in difference_interval(0.30, 0.20, 0.40, 0.10, 0.0, 0.01)]
+    [0.2, 0.1, 0.3]
     >>> [round(x, 3) for x in difference_interval(0.30, 0.30, 0.30, 0.10, 0.0, 0.05)]
     [0.2, 0.102, 0.298]
     """
-    value, low, high, null, null_se, chance_sd = (
-        _f(x) for x in (value, low, high, null, null_se, chance_sd)
+    value, low, high, null, null_se, chance_se = (
+        _f(x) for x in (value, low, high, null, null_se, chance_se)
     )
     if not all(math.isfinite(x) for x in (value, low, high, null)):
         return math.nan, math.nan, math.nan
-    se = math.sqrt(
-        ((high - low) / (2 * Z)) ** 2
-        + (null_se if math.isfinite(null_se) else 0.0) ** 2
-        + (chance_sd if math.isfinite(chance_sd) else 0.0) ** 2
-    )
+    own = (high - low) / (2 * Z)
+    if math.isfinite(chance_se):
+        own = max(own, chance_se)
+    se = math.sqrt(own**2 + (null_se if math.isfinite(null_se) else 0.0) ** 2)
     diff = value - null
     return diff, diff - Z * se, diff + Z * se
 
@@ -171,29 +238,39 @@ def _sd(values) -> float:
     return float(v.std(ddof=1)) if v.size > 1 else math.nan
 
 
+def is_null_kind(kind: str) -> bool:
+    """Whether a design's replicates serve as a matched null: ``camera``, or the camera law
+    through an encoding (``camera_<pipeline>``)."""
+    return kind == "camera" or str(kind).startswith("camera_")
+
+
 def matched_nulls(rows: list[dict]) -> dict:
-    """Per (scene, transform, region, method): the ``camera`` null's mean :math:`\\rho` over
-    its replicates, that mean's standard error and the number of replicates, the
-    ``misaligned`` null's standard deviation (the chance correlation of unaligned fields),
-    and the per-replicate values of both (for leave-one-out use)."""
+    """Per (scene, transform, region, method, null kind): the null's mean :math:`\\rho`
+    over its replicates, that mean's standard error and the number of replicates, the
+    per-replicate values (for leave-one-out use), and for the ``camera`` null the
+    ``misaligned`` null's standard deviation (``chance_sd``, the chance correlation of
+    unaligned fields with the renders' structure, a diagnostic)."""
     out: dict = {}
     keys = ("scene", "transform", "region", "method")
-    for kind in ("camera", "misaligned"):
-        chosen = [r for r in rows if r["kind"] == kind]
-        for key, group in _group(chosen, keys).items():
-            entry = out.setdefault(key, {"mean": math.nan, "se": math.nan, "n": 0,
-                                         "values": {}, "chance": {}, "chance_sd": math.nan})
-            values = {int(r["replicate"]): _f(r["rho"]) for r in group}
-            if kind == "misaligned":
-                entry["chance"] = values
-                entry["chance_sd"] = _sd(values.values())
-                continue
-            finite = np.array([v for v in values.values() if math.isfinite(v)])
-            entry["values"] = values
-            entry["n"] = int(finite.size)
-            if finite.size:
-                entry["mean"] = float(finite.mean())
-                entry["se"] = _sd(finite) / math.sqrt(finite.size)
+
+    def entry(key):
+        return out.setdefault(key, {"mean": math.nan, "se": math.nan, "n": 0,
+                                    "values": {}, "chance": {}, "chance_sd": math.nan})
+
+    for key, group in _group([r for r in rows if r["kind"] == "misaligned"], keys).items():
+        values = {int(r["replicate"]): _f(r["rho"]) for r in group}
+        e = entry((*key, "camera"))
+        e["chance"], e["chance_sd"] = values, _sd(values.values())
+    chosen = [r for r in rows if is_null_kind(r["kind"])]
+    for key, group in _group(chosen, (*keys, "kind")).items():
+        e = entry(key)
+        values = {int(r["replicate"]): _f(r["rho"]) for r in group}
+        finite = np.array([v for v in values.values() if math.isfinite(v)])
+        e["values"] = values
+        e["n"] = int(finite.size)
+        if finite.size:
+            e["mean"] = float(finite.mean())
+            e["se"] = _sd(finite) / math.sqrt(finite.size)
     return out
 
 
@@ -211,37 +288,41 @@ def _loo_null(null: dict, replicate: int) -> tuple[float, float]:
 
 def with_differences(rows: list[dict], nulls: dict) -> list[dict]:
     """Each replicate row with ``diff``, ``diff_low`` and ``diff_high``: the statistic minus
-    its scene's matched null through the same transform (:func:`difference_interval`; a null
-    replicate is compared with the other replicates only)."""
+    its scene's matched null (the row's ``null_kind``, ``camera`` by default) through the
+    same transform (:func:`difference_interval`; a null replicate is compared with the other
+    replicates only)."""
     out = []
     for r in rows:
-        key = (r["scene"], r["transform"], r["region"], r["method"])
+        null_kind = r.get("null_kind") or "camera"
+        key = (r["scene"], r["transform"], r["region"], r["method"], null_kind)
         null = nulls.get(key)
         if null is None:
             d = (math.nan,) * 3
         else:
             replicate = int(r["replicate"])
             mean, se = (
-                _loo_null(null, replicate) if r["kind"] == "camera" else (null["mean"], null["se"])
+                _loo_null(null, replicate) if r["kind"] == null_kind
+                else (null["mean"], null["se"])
             )
-            chance = null["chance_sd"]
-            if r["kind"] == "misaligned":
-                chance = _sd(v for k, v in null["chance"].items() if k != replicate)
-            d = difference_interval(r["rho"], r["boot_low"], r["boot_high"], mean, se, chance)
+            d = difference_interval(r["rho"], r["boot_low"], r["boot_high"], mean, se,
+                                    r.get("chance_se", math.nan))
         out.append({**r, "diff": d[0], "diff_low": d[1], "diff_high": d[2]})
     return out
 
 
 def combined_rows(rows: list[dict]) -> list[dict]:
     """The scenes of each replicate combined as the tables combine them: the mean of the
-    scenes' values with :func:`~stereovar.statistics.across.combined_interval`, for the
-    statistic and for its difference from the matched null."""
+    scenes' values, for the statistic with its interval on Fisher's :math:`z`
+    (:func:`~stereovar.statistics.across.combined_correlation_interval`, inside
+    :math:`[-1, 1]`) and for its difference from the matched null with the normal one
+    (:func:`~stereovar.statistics.across.combined_interval`: a difference of two
+    correlations lies in :math:`[-2, 2]`)."""
     keys = ("replicate", "kind", "strength_factor", "transform", "region", "method")
     out = []
     for key, group in _group(rows, keys).items():
         row = dict(zip(keys, key, strict=True))
         row["scene"] = "combined"
-        row["rho"], row["boot_low"], row["boot_high"] = combined_interval(
+        row["rho"], row["boot_low"], row["boot_high"] = combined_correlation_interval(
             [g["rho"] for g in group], [g["boot_low"] for g in group],
             [g["boot_high"] for g in group],
         )
@@ -261,7 +342,7 @@ def _fires(rule: str, r: dict, margin=math.nan) -> bool | None:
     if not (math.isfinite(low) and math.isfinite(high)):
         return None
     if rule == "above_null":
-        return low > 0
+        return low > MIN_EFFECT
     if rule == "removed":
         return equivalent(low, high, margin)
     raise ValueError(f"unknown rule {rule!r}")
@@ -373,9 +454,12 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
         groups = _group(scoped, ("transform", "method"))
         for (transform, method), group in groups.items():
             by_design = _group(group, ("kind", "strength_factor"))
-            # the rules on the nulls: at most 5% false positives
-            for kind in ("camera", "misaligned"):
-                chosen = by_design.get((kind, 0.0), [])
+            # the rules on the nulls: at most 5% false positives, per cue-free design and
+            # over all of them (the level a verdict is held to on data of unknown kind)
+            cue_free = [k for (k, f) in by_design if k not in ("planted", "renders")]
+            pooled = [r for k in cue_free for r in by_design[(k, 0.0)]]
+            for kind, chosen in [*((k, by_design[(k, 0.0)]) for k in cue_free),
+                                 *([(ANY_NULL, pooled)] if len(cue_free) > 1 else [])]:
                 for rule in ("above_zero", "above_null"):
                     k, n = _count(rule, chosen)
                     if not n:
@@ -444,7 +528,9 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
         return margins.get(("scene", transform, method), (math.nan, 0))[0]
 
     nulls = []
-    for (scene, transform, region_, method), null in null_means.items():
+    for (scene, transform, region_, method, kind), null in null_means.items():
+        if kind != "camera":  # an encoded null of a pipeline, not of the run's frames
+            continue
         nulls.append(
             {
                 "scene": scene,
@@ -478,10 +564,8 @@ def _interpolated_diff(by_design, strength) -> float:
 
 
 def _meets_rate(r) -> str:
-    """``yes`` when the rate's Wilson interval reaches the level, ``no`` when it lies above."""
-    if not math.isfinite(r[1]):
-        return ""
-    return "yes" if r[1] <= LEVEL else "no"
+    """:func:`meets_level` of a :func:`rate` against :data:`LEVEL`."""
+    return meets_level(r[1], r[2])
 
 
 def _meets_coverage(r) -> str:
@@ -501,62 +585,98 @@ def _pick(table, **match) -> list[dict]:
     return [r for r in table if all(r.get(k) == v for k, v in match.items())]
 
 
+def worst_false_positive(
+    table: list[dict], *, scope: str = "scene", transform: str = "none",
+    method: str = "partial", rule: str = "above_null",
+) -> dict | None:
+    """The false-positive row of ``rule`` over the matched nulls whose Wilson upper bound is
+    highest (what "at most" can claim), or ``None``."""
+    rows = _pick(table, check="false_positive_rate", rule=rule, scope=scope,
+                 transform=transform, method=method)
+    rows = [r for r in rows if math.isfinite(_f(r["value"])) and math.isfinite(_f(r["high"]))]
+    return max(rows, key=lambda r: (_f(r["high"]), _f(r["value"]))) if rows else None
+
+
+def _at_most(row) -> str:
+    """A rate's Wilson upper bound in percent, rounded up: ``at most 6%``."""
+    return f"at most {math.ceil(round(100 * _f(row['high']), 6)):.0f}%"
+
+
+def _fired(row) -> str:
+    """A rate as replicates: ``0 of 64``."""
+    n = int(_f(row["n"]))
+    return f"{round(_f(row['value']) * n)} of {n}"
+
+
 def headline(table: list[dict], *, transform: str = "none", method: str = "partial") -> str:
-    """The calibration in one sentence, for the results and verdict pages: the verdict
-    rule's worst false-positive rate over the matched nulls, per scene and with the scenes
-    combined, and the smallest planted strength it detects with 80% power (scenes
-    combined).
+    """The calibration in a few plain words, for the results and verdict pages: the upper
+    end of the 95% Wilson interval of the verdict rule's false-positive rate (worst over the
+    matched nulls), per scene and with the scenes combined; the smallest planted strength it
+    detects with 80% power (scenes combined); and, where an upper bound is above the 5%
+    level, that the replicates run cannot show it and how many would
+    (:func:`replicates_to_show`).
 
     Examples
     --------
     >>> row = {"check": "false_positive_rate", "rule": "above_null", "transform": "none",
     ...        "method": "partial", "kind": "camera"}
     >>> table = [
-    ...     {**row, "scope": "scene", "value": 0.03, "low": 0.01, "high": 0.09, "n": 64},
-    ...     {**row, "scope": "combined", "value": 0.0, "low": 0.0, "high": 0.19, "n": 16},
+    ...     {**row, "scope": "scene", "value": 0.0, "low": 0.0, "high": 0.0566, "n": 64},
+    ...     {**row, "scope": "combined", "value": 0.0, "low": 0.0, "high": 0.1936, "n": 16},
     ...     {"check": "smallest_detectable", "rule": "above_null", "scope": "combined",
     ...      "transform": "none", "method": "partial", "kind": "planted", "value": 0.3,
     ...      "note": "equivalence margin (mean rho minus null there) 0.0200"},
     ... ]
     >>> print(headline(table))  # doctest: +NORMALIZE_WHITESPACE
     On data like yours, this instrument calls a Monte Carlo-specific cue where there is none
-    3% of the time per scene [1, 9] (worst matched null, 64 replicates; 0% [0, 19] with the
-    scenes combined, 16), and detects one from 0.3x the strength the renders show (80%
-    power; intensity-controlled rho 0.0200 above its null).
+    in at most 6% of cue-free frames per scene (95% confidence; worst matched null, 0 of 64
+    replicates; at most 20% with the scenes combined, 0 of 16), and detects one from 0.3x the
+    strength the renders show (80% power; intensity-controlled rho 0.0200 above its null).
+    64 replicates per scene (16 with the scenes combined) cannot show the 5% level: 73 null
+    replicates with no false positive would.
     """
-
-    def worst(scope):
-        rows = _pick(table, check="false_positive_rate", rule="above_null", scope=scope,
-                     transform=transform, method=method)
-        rows = [r for r in rows if math.isfinite(_f(r["value"]))]
-        return max(rows, key=lambda r: _f(r["value"])) if rows else None
-
-    def pct(r):
-        return (f"{100 * _f(r['value']):.0f}%", f"[{100 * _f(r['low']):.0f}, "
-                f"{100 * _f(r['high']):.0f}]", int(_f(r["n"])))
-
-    scene, combined = worst("scene"), worst("combined")
+    scene = worst_false_positive(table, scope="scene", transform=transform, method=method)
+    combined = worst_false_positive(table, scope="combined", transform=transform, method=method)
     if scene is None:
         return "No calibration replicates: the instrument's false-positive rate is not known."
-    value, interval, n = pct(scene)
     text = (
         "On data like yours, this instrument calls a Monte Carlo-specific cue where there is "
-        f"none {value} of the time per scene {interval} (worst matched null, {n} replicates"
+        f"none in {_at_most(scene)} of cue-free frames per scene (95% confidence; worst "
+        f"matched null, {_fired(scene)} replicates"
     )
     if combined is not None:
-        c_value, c_interval, c_n = pct(combined)
-        text += f"; {c_value} {c_interval} with the scenes combined, {c_n}"
+        text += f"; {_at_most(combined)} with the scenes combined, {_fired(combined)}"
     text += "), and "
     smallest = _pick(table, check="smallest_detectable", scope="combined",
                      transform=transform, method=method)
     value = _f(smallest[0]["value"]) if smallest else math.nan
     if not math.isfinite(value):
-        return text + "detects no planted cue with 80% power up to the strongest planted."
-    margin = smallest[0].get("note", "").rsplit(" ", 1)[-1]
-    return text + (
-        f"detects one from {value:.2g}x the strength the renders show (80% power; "
-        f"intensity-controlled rho {margin} above its null)."
-    )
+        text += "detects no planted cue with 80% power up to the strongest planted."
+    else:
+        margin = smallest[0].get("note", "").rsplit(" ", 1)[-1]
+        text += (
+            f"detects one from {value:.2g}x the strength the renders show (80% power; "
+            f"intensity-controlled rho {margin} above its null)."
+        )
+    scopes = [(r, where) for r, where in ((scene, "per scene"),
+                                          (combined, "with the scenes combined")) if r]
+    refuted = [(r, where) for r, where in scopes if meets_level(r["low"], r["high"]) == "no"]
+    short = [(r, where) for r, where in scopes if meets_level(r["low"], r["high"]) == NOT_SHOWN]
+    for r, where in refuted:
+        low = math.floor(round(100 * _f(r["low"]), 6))
+        text += (
+            f" {where.capitalize()} the rate is above the {100 * LEVEL:g}% level "
+            f"(at least {low:.0f}%)."
+        )
+    if short:
+        said = [f"{int(_f(r['n']))} replicates {where}" for r, where in short]
+        if len(said) == 2:
+            said = [f"{said[0]} ({said[1].replace(' replicates', '', 1)})"]
+        text += (
+            f" {said[0]} cannot show the {100 * LEVEL:g}% level: {replicates_to_show()} null "
+            "replicates with no false positive would."
+        )
+    return text
 
 
 COMPACT_COLUMNS = [
@@ -572,14 +692,37 @@ COMPACT_COLUMNS = [
     "replicates per scene",
 ]
 """Columns of ``results/tables/calibration.md``: one row per transform and statistic (the
-CSV beside it has every check, scope and design). False-positive rates are the worst over
-the matched nulls; the rule ``above 0`` is the audit's former Monte Carlo rule; coverage is
-the lowest over the designs, pooled over scenes."""
+CSV beside it has every check, scope and design). A false-positive rate is the worst over
+the matched nulls, read by the upper end of its 95% Wilson interval: ``at most 6% (0 of 64;
+not shown)``, with the replicates that fired and, unless the interval shows the 5% level,
+``not shown`` (it straddles the level) or ``no`` (it lies above); the rule ``above 0`` is the
+audit's former Monte Carlo rule; coverage is the lowest over the designs, pooled over
+scenes."""
+
+
+def false_positive_text(row) -> str:
+    """A rate held to :data:`LEVEL` as what it shows: the upper end of its 95% Wilson
+    interval, the replicates that fired and, unless it is ``yes``, its :func:`meets_level`
+    word.
+
+    Examples
+    --------
+    >>> value, low, high = rate(0, 64)
+    >>> false_positive_text({"value": value, "low": low, "high": high, "n": 64})
+    'at most 6% (0 of 64; not shown)'
+    """
+    meets = row.get("meets_target") or meets_level(row["low"], row["high"])
+    return f"{_at_most(row)} ({_fired(row)}" + ("" if meets == "yes" else f"; {meets}") + ")"
 
 
 def _percent(row) -> str:
+    """A rate's cell: a rate held to :data:`LEVEL` by its upper bound
+    (:func:`false_positive_text`), a coverage by its value and interval with its
+    ``meets_target`` word when it is not ``yes``."""
     if not row or not math.isfinite(_f(row["value"])):
         return "n/a"
+    if str(row.get("target", "")).startswith("<=") and math.isfinite(_f(row["high"])):
+        return false_positive_text(row)
     value, low, high = (100 * _f(row[k]) for k in ("value", "low", "high"))
     text = f"{value:.0f}% [{low:.0f}, {high:.0f}]"
     return text + ("" if row.get("meets_target") in ("yes", "") else f" ({row['meets_target']})")
@@ -598,8 +741,10 @@ def compact_table(table: list[dict]) -> list[dict]:
     """:data:`COMPACT_COLUMNS` rows of the calibration table: per transform and statistic
     the worst false-positive rate of each rule (per scene, and for the verdict rule also with
     the scenes combined), the smallest detectable strength with its margin (scenes
-    combined), and the lowest coverage over the designs (per scene), each rate with its 95%
-    Wilson interval and whether it meets its target."""
+    combined), and the lowest coverage over the designs (per scene): a false-positive rate
+    by the upper end of its 95% Wilson interval (the worst over the matched nulls,
+    :func:`worst_false_positive`), a coverage with its interval, each with whether it meets
+    its target (:func:`meets_level`)."""
     out = []
     keys = list(dict.fromkeys((r["transform"], r["method"]) for r in table))
     for transform, method in keys:
@@ -616,13 +761,16 @@ def compact_table(table: list[dict]) -> list[dict]:
                 "transform": transform,
                 "method": method,
                 "false positives above its null, per scene": _percent(
-                    _worst(scene, "false_positive_rate", "above_null")
+                    worst_false_positive(table, scope="scene", transform=transform,
+                                         method=method, rule="above_null")
                 ),
                 "false positives above its null, scenes combined": _percent(
-                    _worst(combined, "false_positive_rate", "above_null")
+                    worst_false_positive(table, scope="combined", transform=transform,
+                                         method=method, rule="above_null")
                 ),
                 "false positives above 0, per scene": _percent(
-                    _worst(scene, "false_positive_rate", "above_zero")
+                    worst_false_positive(table, scope="scene", transform=transform,
+                                         method=method, rule="above_zero")
                 )
                 if method == "partial"
                 else "not a Monte Carlo test (a camera correlates too)",

@@ -426,7 +426,7 @@ def intensity_residuals(log_variance, log_intensity, *, intervals: int | None = 
 
 
 def partial_pair(
-    a, b, mu_a, mu_b, *, intervals: int | None = None
+    a, b, mu_a, mu_b, *, intervals: int | None = None, covariates=None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The intensity-controlled pair of one region: each view's residuals.
 
@@ -451,7 +451,12 @@ def partial_pair(
     mu_a, mu_b : numpy.ndarray, shape (n,)
         The intensities :math:`\\mu_L` and :math:`\\hat\\mu_{R\\to L}` at the same pixels.
     intervals : int, keyword-only, optional
-        Fixed number of knot intervals for both views (default: chosen per view).
+        Fixed number of knot intervals for both views (default: chosen per view; without
+        ``covariates`` only).
+    covariates : tuple of two tuples of numpy.ndarray (n,), keyword-only, optional
+        Each view's chromaticity (two arrays, or none) then its position :math:`(x, y)` on
+        its own sensor (:func:`stereovar.statistics.fields.control_covariates`): the
+        control then removes them too (:func:`stereovar.controls.covariates.fit_control`).
 
     Returns
     -------
@@ -492,6 +497,14 @@ def partial_pair(
     lb, _ = log_floor(b)
     lma, _ = log_floor(mu_a)
     lmb, _ = log_floor(mu_b)
+    if covariates is not None and intervals is None:
+        from .covariates import fit_control
+
+        out = []
+        for y, x, side in ((la, lma, covariates[0]), (lb, lmb, covariates[1])):
+            colour = tuple(side[:2]) if len(side) == 4 else None
+            out.append(fit_control(y, x, colour=colour, position=tuple(side[-2:])).residuals)
+        return out[0], out[1]
     return (
         intensity_residuals(la, lma, intervals=intervals),
         intensity_residuals(lb, lmb, intervals=intervals),

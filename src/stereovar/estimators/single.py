@@ -401,7 +401,7 @@ def single_render_statistics(
     """
     from ..seeding import derive_seed
     from ..statistics.bootstrap import tile_labels
-    from ..statistics.fields import aligned_fields, channel_mean, warped_intensity
+    from ..statistics.fields import aligned_fields, seed_mean_controls
     from ..statistics.pixels import PixelSet
     from ..statistics.registry import METHODS as STATISTICS
     from ..statistics.registry import BootstrapDraws, evaluate
@@ -412,13 +412,11 @@ def single_render_statistics(
         left, right, ground_truth_left, sign=sign,
         finite_left=np.isfinite(left), finite_right=np.isfinite(right),
     )
-    intensity = (
-        channel_mean(fields["left"].mean),
-        warped_intensity(fields["right"].mean, ground_truth_left, sign=sign),
-    )
     aligned_set = aligned_fields(
         left, np.where(np.isfinite(right), right, np.nan), aligned["warped"],
-        ground_truth_left=ground_truth_left, sign=sign, settings=settings, intensity=intensity,
+        ground_truth_left=ground_truth_left, sign=sign, settings=settings,
+        **seed_mean_controls(fields["left"].mean, fields["right"].mean, ground_truth_left,
+                             sign=sign),
     )
     pixels = PixelSet(
         np.asarray(aligned["omega"], dtype=bool),

@@ -20,7 +20,9 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     power of the ``above_null`` rule against the planted strength (a multiple of what the
     renders show), one line per transform, with 95% Wilson intervals and the 80% power line;
     and the false-positive rate of ``above_zero`` and ``above_null`` on each matched null,
-    with the 5% level.
+    with the 5% level: blue where its 95% Wilson interval shows the level, orange where the
+    interval straddles it (not shown), red where it lies above
+    (:func:`stereovar.calibration.summary.meets_level`).
 
     Parameters
     ----------
@@ -74,11 +76,16 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
         for r in rows
         if r["check"] == "false_positive_rate" and math.isfinite(_f(r["value"]))
     ]
+    from ..calibration.summary import meets_level
+
+    # whether the 5% level is shown (the whole interval at or below it), refuted (above it)
+    # or not shown (the interval straddles it: too few replicates to tell)
+    colours_by_word = {"yes": "tab:blue", "no": "tab:red"}
     labels = []
     for i, r in enumerate(bars):
         value = _f(r["value"])
         above_null = r["rule"] == "above_null"
-        colour = "tab:red" if _f(r["low"]) > 0.05 else "tab:blue"
+        colour = colours_by_word.get(meets_level(r["low"], r["high"]), "tab:orange")
         fpr_ax.errorbar(
             i,
             value,
@@ -95,7 +102,8 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     fpr_ax.set_ylim(-0.03, 1.03)
     fpr_ax.set_ylabel("false-positive rate")
     fpr_ax.set_title(
-        "Calls a cue on a matched null:\nfilled, above its null (the verdict); open, above 0",
+        "Calls a cue on a matched null:\nfilled, above its null (the verdict); open, above 0\n"
+        "blue, 5% shown; orange, not shown; red, refuted",
         fontsize=9,
     )
     fig.suptitle(f"Calibration of {method} on synthetic frames from this run", fontsize=11)

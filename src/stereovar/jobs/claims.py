@@ -118,6 +118,7 @@ def claims_job(
                 "std_rho",
                 "n_scenes",
                 "mean_rho_corrected",
+                "chance_se",
             )
         }
         for r in statistics_table(rows, spp=int(spp))

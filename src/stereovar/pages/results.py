@@ -250,7 +250,10 @@ def matched_headline(
             + \\frac{1}{S^2}\\sum_s \\bigl(\\mathrm{se}_{0,s}^2 + s_{\\text{chance},s}^2\\bigr)}
 
     with :math:`[\\ell, h]` the statistic's interval from the scenes' block bootstraps
-    combined (:func:`stereovar.statistics.across.combined_interval`). This is
+    combined (:func:`stereovar.statistics.across.combined_correlation_interval`: placed on
+    Fisher's :math:`z` but as long as :func:`stereovar.statistics.across.combined_interval`'s,
+    so :math:`(h - \\ell)/(2 z_{0.975})` is still the mean's standard error; the difference
+    keeps the normal interval, being no correlation). This is
     :func:`stereovar.statistics.mitigations.matched_difference` (each scene's difference
     with :func:`stereovar.calibration.summary.difference_interval`, combined over scenes)
     written with the scenes' mean: the same number and interval as the mitigation table's
@@ -313,7 +316,10 @@ def matched_headline(
     diff = value - null
     out |= {"value": diff, "null": null, "text": interval_text(diff, math.nan, math.nan)}
     if math.isfinite(low) and math.isfinite(high):
-        se = math.sqrt(((high - low) / (2 * Z)) ** 2 + (sq("null_se") + sq("chance_sd")) / s**2)
+        own = (high - low) / (2 * Z)
+        chance = _f(row.get("chance_se"))
+        own = max(own, chance) if math.isfinite(chance) else own
+        se = math.sqrt(own**2 + sq("null_se") / s**2)
         out |= {"low": diff - Z * se, "high": diff + Z * se}
         out["text"] = interval_text(diff, out["low"], out["high"])
         out["verdict"] = mc_cue_state(out["low"], out["high"], out["margin"])

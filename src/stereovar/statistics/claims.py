@@ -8,7 +8,9 @@ statistic and control (:data:`STATISTICS`) on a run and gives one row per claim 
 of :func:`verdict`, whose rules the file states for the table's caption
 (:meth:`Claims.caption`). Every interval is 95% and, for a level, is for the mean over scenes
 like those run (:func:`~stereovar.statistics.across.random_effects_interval`: the variance
-between scenes is counted; one scene gives no interval). The rules:
+between scenes is counted; one scene gives no interval; for a mean :math:`\\rho`, on Fisher's
+:math:`z`, :func:`~stereovar.statistics.across.random_effects_correlation_interval`). The
+rules:
 
 * **level** claims (a value, e.g. :math:`\\rho = 0.754`): *not testable at this scale* when
   ours or its interval is undefined; *does not hold* when the paper's value is outside our
@@ -56,7 +58,7 @@ from scipy import stats
 
 from ..errors import ClaimsError
 from ..schema import load_yaml
-from .across import random_effects_interval
+from .across import random_effects_correlation_interval, random_effects_interval
 
 HOLDS = "holds"
 FAILS = "does not hold"
@@ -398,10 +400,14 @@ def _select(rows, region, method):
     return [r for r in rows if r["region"] == region and r["method"] == method]
 
 
-def _over_scenes(values, level) -> Estimate:
-    """:func:`~stereovar.statistics.across.random_effects_interval`, with a note when one
-    scene leaves no between-scene variance to estimate."""
-    value, low, high = random_effects_interval(values, level=level)
+def _over_scenes(values, level, *, correlation: bool = False) -> Estimate:
+    """:func:`~stereovar.statistics.across.random_effects_interval` (``correlation``: of
+    correlations, on Fisher's :math:`z`,
+    :func:`~stereovar.statistics.across.random_effects_correlation_interval`, so that it stays
+    inside :math:`[-1, 1]`), with a note when one scene leaves no between-scene variance to
+    estimate."""
+    interval = random_effects_correlation_interval if correlation else random_effects_interval
+    value, low, high = interval(values, level=level)
     note = ""
     if math.isfinite(value) and not math.isfinite(low):
         note = (
@@ -413,13 +419,15 @@ def _over_scenes(values, level) -> Estimate:
 
 def _rho(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate:
     """Mean :math:`\\rho` over scenes with the random-effects interval (the variance between
-    scenes with the scenes' own errors)."""
-    return _over_scenes([r["rho"] for r in _select(inputs.rows, region, method)], level)
+    scenes with the scenes' own errors) on Fisher's :math:`z`."""
+    rhos = [r["rho"] for r in _select(inputs.rows, region, method)]
+    return _over_scenes(rhos, level, correlation=True)
 
 
 def _rho_difference(inputs: ClaimInputs, *, region, minus, method, level=0.95) -> Estimate:
     """Mean over scenes of :math:`\\rho_{region} - \\rho_{minus}` with the random-effects
-    interval of the per-scene differences."""
+    interval of the per-scene differences (on the normal scale: a difference of two
+    correlations lies in :math:`[-2, 2]`)."""
     selected = [r for r in inputs.rows if r["method"] == method and r["region"] in (region, minus)]
     diffs = []
     for pair in _per_scene(selected, "region").values():

@@ -35,11 +35,14 @@ RESULT_KEYS = (
     "top_share",
     "n_fireflies",
     "n_nonfinite",
+    "chance_se",
     "reason",
 )
 """What every registered statistic returns (:mod:`stereovar.statistics.registry`):
 ``fisher_low``/``fisher_high`` assume independent pixels; ``boot_low``/``boot_high`` are the
-spatial block bootstrap's (:mod:`stereovar.statistics.bootstrap`); ``mean_a`` is the mean of
+spatial block bootstrap's (:mod:`stereovar.statistics.bootstrap`); ``chance_se`` is the
+standard error of :math:`\\rho` were the two fields independent, for the statistics that
+declare it (:func:`stereovar.statistics.chance.chance_se`; NaN otherwise); ``mean_a`` is the mean of
 the statistic's left field over the pixels used (for ``warp``, Table 2's mean
 :math:`\\sigma_L^2`)."""
 
@@ -61,6 +64,7 @@ def undefined_result(n_pixels: int, n_nonfinite: int, reason: str) -> dict:
         "top_share": nan,
         "n_fireflies": 0,
         "n_nonfinite": int(n_nonfinite),
+        "chance_se": nan,
         "reason": reason,
     }
 

@@ -94,6 +94,7 @@ def aligned_fields(
     settings: AnalysisSettings | None = None,
     intensity: tuple | None = None,
     sensor: dict[str, Callable] | None = None,
+    colour: tuple | None = None,
 ) -> AlignedFields:
     """Build :class:`AlignedFields` with the control fields this run can compute.
 
@@ -113,6 +114,10 @@ def aligned_fields(
     sensor : dict, optional
         ``sensor_left``, ``sensor_warped``, ``sensor_sim_left``, ``sensor_sim_warped``: arrays
         or functions computing them (:mod:`stereovar.controls.sensor`).
+    colour : tuple of numpy.ndarray (mean_left, mean_warped), optional
+        The left seed mean and the right one warped into the left view, per channel
+        (H, W, C) (:func:`warped_colour`): the intensity control's chromaticity
+        (:func:`control_covariates`).
     """
     from ..controls.null_warps import flipped_warp, shifted_warp
 
@@ -139,6 +144,10 @@ def aligned_fields(
     else:
         for name in ("mean_left", "mean_warped", "relative_left", "relative_warped"):
             missing[name] = "the variance store has no seed mean"
+    d_left = None if ground_truth_left is None else ground_truth_left["disparity"]
+    extra["control_covariates"] = lambda: control_covariates(
+        np.shape(left), colour=colour, disparity=d_left, sign=sign
+    )
     for name in ("sensor_left", "sensor_warped", "sensor_sim_left", "sensor_sim_warped"):
         missing[name] = (
             "fewer than 2 seeds to simulate sensor frames"
@@ -147,6 +156,75 @@ def aligned_fields(
         )
     extra.update(sensor or {})
     return AlignedFields(left, warped, right, extra=extra, missing=missing)
+
+
+def chromaticity(mean) -> tuple[np.ndarray, np.ndarray] | None:
+    """:math:`(\\mu_R/\\bar\\mu, \\mu_B/\\bar\\mu)` of a seed mean (H, W, C), 1 where
+    :math:`\\bar\\mu \\le 0`; None for fewer than 3 channels."""
+    mean = np.asarray(mean, dtype=np.float64)
+    if mean.ndim != 3 or mean.shape[-1] < 3:
+        return None
+    mu = mean[..., :3].mean(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = tuple(np.where(mu > 0, mean[..., c] / mu, 1.0) for c in (0, 2))
+    return ratios[0], ratios[1]
+
+
+def control_covariates(shape, *, colour=None, disparity=None, sign: int = 1) -> tuple:
+    """What the intensity control reads beside :math:`\\ln\\bar\\mu`
+    (:func:`stereovar.controls.covariates.fit_control`), as (H, W) fields in left-view
+    coordinates: each view's chromaticity (:func:`chromaticity`, when ``colour`` is given)
+    and each pixel's position on its own sensor,
+
+    .. math:: (x_L, y), \\qquad (x_R, y) = (x_L + s\\,d_L,\\ y)
+
+    (Eq. 2's relation, paper Sec. 2.2; :math:`x_R = x_L` without a disparity).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The left view's fields, then the right view's, in the same order: chromaticity
+        (2, when given), then :math:`x` and :math:`y`.
+    """
+    h, w = (int(s) for s in shape[:2])
+    y, x = np.indices((h, w), dtype=np.float64)
+    x_right = x if disparity is None else x + sign * np.nan_to_num(
+        np.asarray(disparity, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+    sides = ([], [])
+    if colour is not None:
+        for side, mean in zip(sides, colour, strict=True):
+            ratios = chromaticity(mean)
+            if ratios is None:
+                sides = ([], [])
+                break
+            side.extend(ratios)
+    return (*sides[0], x, y, *sides[1], x_right, y)
+
+
+def warped_colour(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:
+    """The right view's seed mean warped into the left view channel by channel (Eq. 2);
+    NaN outside the warp's valid set."""
+    plan = plan or WarpPlan(
+        np.asarray(ground_truth_left["disparity"]),
+        sign=sign,
+        valid=np.asarray(ground_truth_left["valid"]),
+    )
+    mean_right = np.asarray(mean_right, dtype=np.float64)
+    return np.stack(
+        [np.where(plan.omega, plan.apply(mean_right[..., c]), np.nan)
+         for c in range(mean_right.shape[-1])], axis=-1)
+
+
+def seed_mean_controls(mean_left, mean_right, ground_truth_left, *, sign: int, plan=None):
+    """The intensity control's inputs from the two seed means: ``intensity``
+    (:math:`\\mu_L`, :math:`\\hat\\mu_{R\\to L}`, the RGB means) and ``colour`` (the left
+    seed mean and the right one warped, per channel), the keyword arguments of
+    :func:`aligned_fields`."""
+    colour = warped_colour(mean_right, ground_truth_left, sign=sign, plan=plan)
+    return {
+        "intensity": (channel_mean(mean_left), colour.mean(axis=-1)),
+        "colour": (np.asarray(mean_left, dtype=np.float64), colour),
+    }
 
 
 def warped_intensity(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:

@@ -120,7 +120,8 @@ def _f(value) -> float:
 
 def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
     """The verdict on a Monte Carlo-specific difference's 95% interval: ``remains`` (above
-    0), ``reversed`` (below 0), ``removed`` (inside :math:`(-\\delta, \\delta)`, the
+    :data:`~stereovar.calibration.summary.MIN_EFFECT`, the smallest cue the rules call),
+    ``reversed`` (below its negative), ``removed`` (inside :math:`(-\\delta, \\delta)`, the
     equivalence margin: two one-sided tests), ``inconclusive`` (covers 0 but reaches past the
     margin, or no margin), or ``n/a`` (no interval).
 
@@ -130,12 +131,16 @@ def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
     ('remains', 'removed')
     >>> mc_cue_state(-0.1, 0.2, 0.02), mc_cue_state(float("nan"), 1.0)
     ('inconclusive', 'n/a')
+    >>> mc_cue_state(0.02, 0.08, 0.02)  # above 0, not above the smallest cue called
+    'inconclusive'
     """
+    from ..calibration.summary import MIN_EFFECT
+
     if not (math.isfinite(low) and math.isfinite(high)):
         return "n/a"
-    if low > 0:
+    if low > MIN_EFFECT:
         return "remains"
-    if high < 0:
+    if high < -MIN_EFFECT:
         return "reversed"
     if math.isfinite(margin) and margin > 0 and -margin < low and high < margin:
         return "removed"
@@ -152,7 +157,7 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
         \\bar\\Delta = \\frac1S \\sum_s \\Delta_s
 
     with each scene's interval from its bootstrap interval, the null mean's standard error
-    and the chance correlation of unaligned fields
+    and the fields' own chance standard error
     (:func:`stereovar.calibration.summary.difference_interval`), combined over scenes
     (:func:`stereovar.statistics.across.combined_interval`).
 
@@ -190,7 +195,7 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
             r["boot_high"],
             null["null_rho"],
             null["null_se"],
-            null.get("chance_sd", math.nan),
+            r.get("chance_se", math.nan),
         )
         if not all(math.isfinite(x) for x in d):
             continue

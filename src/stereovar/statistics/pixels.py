@@ -36,6 +36,7 @@ class PixelSet:
 
     def __init__(self, mask, labels=None, *, parent: PixelSet | None = None):
         mask = np.asarray(mask, dtype=bool)
+        self.shape = mask.shape
         self.index = np.flatnonzero(mask)
         self.tiles = None
         if labels is not None:

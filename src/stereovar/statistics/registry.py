@@ -79,6 +79,10 @@ class Method:
         level is the point).
     curve : bool
         Report this statistic at :math:`N' < N` seeds too.
+    chance : bool
+        Report ``chance_se``, the standard error of :math:`\\rho` if the two fields were
+        independent (:func:`stereovar.statistics.chance.chance_se`): the chance term of the
+        statistic's difference from its matched null.
     """
 
     pair: Callable[..., tuple]
@@ -86,6 +90,7 @@ class Method:
     transform: Callable | None = None
     estimator_noise: bool = True
     curve: bool = False
+    chance: bool = False
 
 
 METHODS = Registry("statistic")
@@ -105,6 +110,7 @@ def register_method(
     transform: Callable | None = None,
     estimator_noise: bool = True,
     curve: bool = False,
+    chance: bool = False,
     replace: bool = False,
 ):
     """Decorator registering ``pair(fields) -> (a, b, ...)`` as statistic ``name``."""
@@ -112,7 +118,7 @@ def register_method(
     def decorator(pair):
         METHODS.register(
             name,
-            Method(pair, description, transform, estimator_noise, curve),
+            Method(pair, description, transform, estimator_noise, curve, chance),
             replace=replace,
         )
         return pair
@@ -300,6 +306,11 @@ def evaluate(
             medians=(pixels.median(raw[0]), pixels.median(raw[1])),
         ),
     }
+    if method.chance:
+        from .chance import chance_se
+
+        where = pixels.index if selected is None else pixels.index[selected]
+        result["chance_se"] = chance_se(da, db, where, pixels.shape)
     if pixels.tiles is not None and draws is not None:
         tiles = pixels.tiles if selected is None else pixels.tiles[selected]
         sums = product_sums(tiles, da, db, products)
@@ -362,7 +373,11 @@ def _trimmed(values, settings):
 def _partial(values, settings):
     from ..controls.intensity import partial_pair
 
-    return partial_pair(*values)
+    covariates = values[4:]
+    half = len(covariates) // 2
+    return partial_pair(
+        *values[:4], covariates=(covariates[:half], covariates[half:]) if half else None
+    )
 
 
 # ---------------------------------------------------------------- the statistics
@@ -454,12 +469,18 @@ def flipped_pair(fields: AlignedFields):
 
 @register_method(
     "partial",
-    "Pearson of ln sigma^2 residuals after a spline in ln mu (knots by GCV), per view and region",
+    "Pearson of ln sigma^2 residuals after a spline in ln mu (knots by GCV), chromaticity and "
+    "sensor position, per view and region",
     transform=_partial,
+    chance=True,
 )
 def partial_pair(fields: AlignedFields):
-    """Intensity-controlled correlation (:func:`stereovar.controls.intensity.partial_pair`)."""
-    return fields.left, fields.warped, fields["mean_left"], fields["mean_warped"]
+    """Intensity-controlled correlation (:func:`stereovar.controls.intensity.partial_pair`),
+    with each view's chromaticity and sensor position
+    (:func:`stereovar.statistics.fields.control_covariates`)."""
+    covariates = fields["control_covariates"] if "control_covariates" in fields else ()
+    return (fields.left, fields.warped, fields["mean_left"], fields["mean_warped"],
+            *covariates)
 
 
 @register_method("relative", "Pearson of the relative variance sigma^2 / mu^2")

@@ -69,10 +69,54 @@ def curve_summary(values) -> dict:
     }
 
 
-def corrected_interval(row: dict) -> tuple[float, float]:
-    """The bootstrap interval of a correlation row divided by :math:`\\sqrt{r_L r_R}`, the
-    interval of its attenuation-corrected :math:`\\rho` (NaN where the row has none)."""
+def corrected_interval(row: dict, *, bounded: bool = True) -> tuple[float, float]:
+    """The interval of a correlation row's attenuation-corrected :math:`\\rho`: its bootstrap
+    interval divided by :math:`\\sqrt{r_L r_R}` (the reliabilities held fixed), cut to
+    :math:`[-1, 1]`.
+
+    .. math::
+
+        \\Bigl[\\max\\Bigl(-1, \\frac{\\ell}{\\sqrt{r_L r_R}}\\Bigr),\\
+            \\min\\Bigl(1, \\frac{h}{\\sqrt{r_L r_R}}\\Bigr)\\Bigr]
+
+    The corrected :math:`\\rho` estimates a correlation, which lies in :math:`[-1, 1]`, so the
+    interval is intersected with :math:`[-1, 1]`: the intersection covers the true value
+    whenever the divided interval does (the true value is never outside), so it keeps the
+    interval's coverage. The interval is cut rather than formed on Fisher's :math:`z`: the
+    corrected value is a ratio, not a sample correlation, and can itself exceed 1 when the
+    reliabilities are noisy estimates (flagged by :data:`CORRECTED_ABOVE_1`), where it has no
+    :math:`z`. An interval wholly above 1 becomes the point 1 (wholly below -1, -1): the
+    reliabilities are then inconsistent with the observed :math:`\\rho`, and the point
+    estimate is flagged.
+
+    Parameters
+    ----------
+    row : dict
+        A correlation row (``boot_low``, ``boot_high``, ``reliability_left``,
+        ``reliability_right``, ``rho_corrected``).
+    bounded : bool, keyword-only
+        False: the divided interval uncut (for combining over scenes before cutting, as
+        :func:`stereovar.audit.verdict.correlation_summary` does: cut intervals are shorter
+        and would understate each scene's error).
+
+    Returns
+    -------
+    low, high : float
+        NaN where the row has no corrected :math:`\\rho`.
+
+    Examples
+    --------
+    >>> row = {"rho": 0.9, "boot_low": 0.8, "boot_high": 0.95, "reliability_left": 0.9,
+    ...        "reliability_right": 0.9, "rho_corrected": 1.0}
+    >>> [round(v, 3) for v in corrected_interval(row, bounded=False)]
+    [0.889, 1.056]
+    >>> [round(v, 3) for v in corrected_interval(row)]
+    [0.889, 1.0]
+    """
     r = row.get("reliability_left", math.nan) * row.get("reliability_right", math.nan)
     if not r > 0 or not math.isfinite(row.get("rho_corrected", math.nan)):
         return math.nan, math.nan
-    return row["boot_low"] / math.sqrt(r), row["boot_high"] / math.sqrt(r)
+    low, high = row["boot_low"] / math.sqrt(r), row["boot_high"] / math.sqrt(r)
+    if not bounded:
+        return low, high
+    return min(max(low, -1.0), 1.0), min(max(high, -1.0), 1.0)

@@ -19,9 +19,8 @@ from .fields import (
     AlignedFields,
     AnalysisSettings,
     aligned_fields,
-    channel_mean,
+    seed_mean_controls,
     warp_field,
-    warped_intensity,
 )
 from .pixels import PixelSet
 from .regions import REGIONS, as_field, region_masks
@@ -142,7 +141,7 @@ def sensor_fields(inputs: SceneInputs) -> dict:
     return fields
 
 
-def _fields(left, right, warped, inputs: SceneInputs, settings, intensity, sensor=None):
+def _fields(left, right, warped, inputs: SceneInputs, settings, controls, sensor=None):
     return aligned_fields(
         left,
         right,
@@ -150,8 +149,8 @@ def _fields(left, right, warped, inputs: SceneInputs, settings, intensity, senso
         ground_truth_left=inputs.ground_truth_left,
         sign=inputs.sign,
         settings=settings,
-        intensity=intensity,
         sensor=sensor,
+        **(controls or {}),
     )
 
 
@@ -234,18 +233,16 @@ def correlation_rows(
         fin_right &= as_field(finite_right).astype(bool)
     right = np.where(fin_right, right, np.nan)
     warped = as_field(aligned["warped"]).astype(np.float64)
-    intensity = None
+    controls = None
     sensor = None
     if inputs.mean is not None and inputs.ground_truth_left is not None:
-        intensity = (
-            channel_mean(inputs.mean["left"]),
-            warped_intensity(
-                inputs.mean["right"], inputs.ground_truth_left, sign=inputs.sign, plan=inputs.plan
-            ),
+        controls = seed_mean_controls(
+            inputs.mean["left"], inputs.mean["right"], inputs.ground_truth_left,
+            sign=inputs.sign, plan=inputs.plan,
         )
         if inputs.sensor is not None:
             sensor = sensor_fields(inputs)
-    fields = _fields(left, right, warped, inputs, settings, intensity, sensor)
+    fields = _fields(left, right, warped, inputs, settings, controls, sensor)
     halves = None
     if inputs.halves is not None and inputs.ground_truth_left is not None:
         halves = [
@@ -255,7 +252,7 @@ def correlation_rows(
                 inputs.warp(inputs.halves["right"][h]),
                 inputs,
                 settings,
-                intensity,
+                controls,
             )
             for h in range(2)
         ]
