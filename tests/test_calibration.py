@@ -263,25 +263,40 @@ def test_a_rate_meets_the_level_only_when_its_whole_interval_does(fired, n, word
 
 
 def test_the_headline_claims_the_upper_bound_and_says_when_5_percent_is_not_shown():
-    """The sentence quotes what the replicates support, the upper end of the interval, and
-    where that is above 5% how many null replicates with no false positive would show it."""
+    """The sentence quotes what the replicates support, the upper end of the interval, in the
+    scope the verdicts use (the scenes combined, every cue-free design together), and where
+    that is above 5% how many null replicates with no false positive would show it."""
+    from stereovar.calibration.summary import ANY_NULL
+
     needed = 1
     while wilson(0, needed)[1] > 0.05:
         needed += 1
 
-    def table(n_scene, n_combined):
+    def table(n_scene, n_combined, n_pooled=None):
         row = {"check": "false_positive_rate", "rule": "above_null", "transform": "none",
                "method": "partial", "kind": "camera", "target": "<= 0.05"}
-        return [{**row, "scope": scope, "value": 0.0, "low": 0.0, "high": wilson(0, n)[1],
+        rows = [{**row, "scope": scope, "value": 0.0, "low": 0.0, "high": wilson(0, n)[1],
                  "n": n} for scope, n in (("scene", n_scene), ("combined", n_combined))]
+        if n_pooled is not None:
+            rows += [{**row, "kind": ANY_NULL, "scope": scope, "value": 0.0, "low": 0.0,
+                      "high": wilson(0, n)[1], "n": n}
+                     for scope, n in (("scene", 4 * n_pooled), ("combined", n_pooled))]
+        return rows
 
+    # one design: the combined scope leads, and 16 replicates cannot show 5%
     sentence = headline(table(64, 16))
-    upper = 100 * wilson(0, 64)[1]  # 5.7%
-    assert f"in at most {math.ceil(upper)}% of cue-free frames per scene" in sentence
-    assert "0 of 64" in sentence and "% of the time" not in sentence
+    upper = 100 * wilson(0, 16)[1]  # 19.4%
+    assert f"in at most {math.ceil(upper)}% of cue-free frames with the scenes combined" in (
+        sentence)
+    assert "0 of 16" in sentence and "% of the time" not in sentence
     assert "cannot show the 5% level" in sentence
-    assert f"{needed} null replicates with no false positive" in sentence
-    # enough replicates: the level is shown and nothing more is asked for
+    assert f"{needed} with no false positive would" in sentence
+    # every cue-free design together: enough replicates show the level; each design alone
+    # is still quoted with its own bound
+    sentence = headline(table(64, 16, n_pooled=224))
+    assert f"in at most {math.ceil(100 * wilson(0, 224)[1])}% of cue-free frames" in sentence
+    assert "0 of 224" in sentence and "cannot show" not in sentence
+    assert f"Each design alone: at most {math.ceil(upper)}%" in sentence
     assert "cannot show" not in headline(table(needed, needed))
     assert "cannot show" in headline(table(needed, needed - 1))
 

@@ -102,20 +102,26 @@ def calibration_runtime(
     transforms: int,
     denoised_replicates: int = 0,
     denoisers: int = 0,
+    pipeline_replicates: int = 0,
+    pipeline_designs: int = 0,
     attempt=1,
 ) -> int:
     """Wall-time request (minutes) of one scene's calibration: every replicate draws
     :math:`2N` images per design and transform (plus :math:`N/2` for what a seed-mean
     transform ships) and measures them; each denoiser sees 3 designs in
-    ``denoised_replicates`` replicates at OIDN's cost per image.
+    ``denoised_replicates`` replicates at OIDN's cost per image; the pipeline nulls
+    (``pipeline_designs``, with the 8-bit ones' encoded nulls) are measured untransformed
+    ``pipeline_replicates`` times each.
 
     .. math::
 
-        t = 30 + WH\\,\\bigl(c\\, R\\, D\\, T \\cdot 2.5 N + c_{\\text{OIDN}}\\, R_d \\cdot 3
-            \\cdot T_d \\cdot 2N\\bigr)
+        t = 30 + WH\\,\\bigl(c\\, (R\\, D\\, T + R_p D_p) \\cdot 2.5 N
+            + c_{\\text{OIDN}}\\, R_d \\cdot 3 \\cdot T_d \\cdot 2N\\bigr)
     """
     pixels = int(width) * int(height)
-    cheap = CALIBRATION_SECONDS_PER_PIXEL * replicates * designs * transforms * 2.5 * n_seeds
+    cheap = CALIBRATION_SECONDS_PER_PIXEL * (
+        replicates * designs * transforms + pipeline_replicates * pipeline_designs
+    ) * 2.5 * n_seeds
     denoise = DENOISE_SECONDS_PER_PIXEL * denoised_replicates * 3 * denoisers * 2 * n_seeds
     return _minutes(30.0 + pixels * (cheap + denoise), attempt)
 

@@ -59,7 +59,7 @@ rule generator_calibration:
             dict.fromkeys(["none", profile_matched_transform(GENERATOR_ROWS[wc.profile].cycles)])
         ),
         options={},
-        calibration=config["calibration"],
+        calibration={**config["calibration"], "pipelines": []},
         analysis=config["analysis"],
         controls=config["controls"],
     log:

@@ -101,6 +101,11 @@ class SceneFrames:
         (:func:`~stereovar.calibration.pipelines.integer_roundtrip`); every synthetic frame
         then passes through the same encoding, at the camera law it had before it
         (:func:`~stereovar.calibration.pipelines.encoded_law`).
+    channel_correlation : float, optional
+        The renders' noise correlation between the channels of a pixel
+        (:func:`~stereovar.calibration.synthesis.channel_correlation`; a path tracer's is near
+        0.9): the synthetic frames' channels share their noise as much, so that Eq. 1's
+        estimation noise, and with it the renders' strength, is the renders'.
     """
 
     mean: dict
@@ -112,6 +117,7 @@ class SceneFrames:
     label: str
     aux: dict | None = None
     encoding: dict | None = None
+    channel_correlation: float = 0.0
 
 
 def transform_stack(
@@ -352,7 +358,8 @@ def camera_residual_variance(scene: SceneFrames, law, rng: np.random.Generator) 
         "camera", 0.0, mean=scene.mean, law=law, render_variance=scene.variance, rng=rng
     )
     _, null_field = variance_field(_encoded(
-        draw_frames(scene.mean["left"], v["left"], scene.n_seeds, rng), scene.encoding))
+        draw_frames(scene.mean["left"], v["left"], scene.n_seeds, rng,
+                    channel_correlation=scene.channel_correlation), scene.encoding))
     return _residual_variance(null_field, scene.mean["left"], scene)
 
 
@@ -467,7 +474,8 @@ def scene_calibration(
                 pattern=pattern,
                 rng=rng,
             )
-            frames = {view: _encoded(draw_frames(scene.mean[view], v[view], scene.n_seeds, rng),
+            frames = {view: _encoded(draw_frames(scene.mean[view], v[view], scene.n_seeds, rng,
+                                                 channel_correlation=scene.channel_correlation),
                                      scene.encoding)
                       for view in ("left", "right")}
             for name in chosen:

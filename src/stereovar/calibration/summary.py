@@ -587,12 +587,14 @@ def _pick(table, **match) -> list[dict]:
 
 def worst_false_positive(
     table: list[dict], *, scope: str = "scene", transform: str = "none",
-    method: str = "partial", rule: str = "above_null",
+    method: str = "partial", rule: str = "above_null", pooled: bool = False,
 ) -> dict | None:
-    """The false-positive row of ``rule`` over the matched nulls whose Wilson upper bound is
-    highest (what "at most" can claim), or ``None``."""
+    """The false-positive row of ``rule`` over the cue-free designs whose Wilson upper bound
+    is highest (what "at most" can claim), or ``None``; with ``pooled`` the row of every
+    cue-free design together (:data:`ANY_NULL`)."""
     rows = _pick(table, check="false_positive_rate", rule=rule, scope=scope,
                  transform=transform, method=method)
+    rows = [r for r in rows if (r["kind"] == ANY_NULL) == pooled]
     rows = [r for r in rows if math.isfinite(_f(r["value"])) and math.isfinite(_f(r["high"]))]
     return max(rows, key=lambda r: (_f(r["high"]), _f(r["value"]))) if rows else None
 
@@ -610,42 +612,59 @@ def _fired(row) -> str:
 
 def headline(table: list[dict], *, transform: str = "none", method: str = "partial") -> str:
     """The calibration in a few plain words, for the results and verdict pages: the upper
-    end of the 95% Wilson interval of the verdict rule's false-positive rate (worst over the
-    matched nulls), per scene and with the scenes combined; the smallest planted strength it
-    detects with 80% power (scenes combined); and, where an upper bound is above the 5%
-    level, that the replicates run cannot show it and how many would
-    (:func:`replicates_to_show`).
+    end of the 95% Wilson interval of the verdict rule's false-positive rate over every
+    cue-free design together (matched nulls and camera pipelines, :data:`ANY_NULL`) with the
+    scenes combined, the scope the verdicts use, and per scene; the worst single design; the
+    smallest planted strength it detects with 80% power (scenes combined); and, where an
+    upper bound is above the 5% level, that the replicates run cannot show it and how many
+    would (:func:`replicates_to_show`).
 
     Examples
     --------
     >>> row = {"check": "false_positive_rate", "rule": "above_null", "transform": "none",
-    ...        "method": "partial", "kind": "camera"}
+    ...        "method": "partial"}
     >>> table = [
-    ...     {**row, "scope": "scene", "value": 0.0, "low": 0.0, "high": 0.0566, "n": 64},
-    ...     {**row, "scope": "combined", "value": 0.0, "low": 0.0, "high": 0.1936, "n": 16},
+    ...     {**row, "kind": "camera", "scope": "scene", "value": 0.0, "low": 0.0,
+    ...      "high": 0.0566, "n": 64},
+    ...     {**row, "kind": "camera", "scope": "combined", "value": 0.0, "low": 0.0,
+    ...      "high": 0.1936, "n": 16},
+    ...     {**row, "kind": ANY_NULL, "scope": "combined", "value": 0.0, "low": 0.0,
+    ...      "high": 0.0169, "n": 224},
+    ...     {**row, "kind": ANY_NULL, "scope": "scene", "value": 0.0, "low": 0.0,
+    ...      "high": 0.0085, "n": 448},
     ...     {"check": "smallest_detectable", "rule": "above_null", "scope": "combined",
     ...      "transform": "none", "method": "partial", "kind": "planted", "value": 0.3,
     ...      "note": "equivalence margin (mean rho minus null there) 0.0200"},
     ... ]
     >>> print(headline(table))  # doctest: +NORMALIZE_WHITESPACE
     On data like yours, this instrument calls a Monte Carlo-specific cue where there is none
-    in at most 6% of cue-free frames per scene (95% confidence; worst matched null, 0 of 64
-    replicates; at most 20% with the scenes combined, 0 of 16), and detects one from 0.3x the
-    strength the renders show (80% power; intensity-controlled rho 0.0200 above its null).
-    64 replicates per scene (16 with the scenes combined) cannot show the 5% level: 73 null
-    replicates with no false positive would.
+    in at most 2% of cue-free frames with the scenes combined (95% confidence; 0 of 224
+    replicates of the matched nulls and camera pipelines together; per scene at most 1%, 0
+    of 448), and detects one from 0.3x the strength the renders show (80% power;
+    intensity-controlled rho 0.0200 above its null). Each design alone: at most 20% (worst,
+    camera, 0 of 16 with the scenes combined; 73 replicates with no false positive would
+    show 5%).
     """
-    scene = worst_false_positive(table, scope="scene", transform=transform, method=method)
-    combined = worst_false_positive(table, scope="combined", transform=transform, method=method)
-    if scene is None:
+    pooled = {scope: worst_false_positive(table, scope=scope, transform=transform,
+                                          method=method, pooled=True)
+              for scope in ("combined", "scene")}
+    single = {scope: worst_false_positive(table, scope=scope, transform=transform,
+                                          method=method)
+              for scope in ("combined", "scene")}
+    if single["scene"] is None:
         return "No calibration replicates: the instrument's false-positive rate is not known."
+    lead = pooled["combined"] or single["combined"] or single["scene"]
+    where = "with the scenes combined" if lead["scope"] == "combined" else "per scene"
+    what = ("the matched nulls and camera pipelines together" if lead["kind"] == ANY_NULL
+            else f"worst design, {lead['kind']}")
     text = (
         "On data like yours, this instrument calls a Monte Carlo-specific cue where there is "
-        f"none in {_at_most(scene)} of cue-free frames per scene (95% confidence; worst "
-        f"matched null, {_fired(scene)} replicates"
+        f"none in {_at_most(lead)} of cue-free frames {where} (95% confidence; "
+        f"{_fired(lead)} replicates of {what}"
     )
-    if combined is not None:
-        text += f"; {_at_most(combined)} with the scenes combined, {_fired(combined)}"
+    second = pooled["scene"] if lead["kind"] == ANY_NULL else None
+    if second is not None:
+        text += f"; per scene {_at_most(second)}, {_fired(second)}"
     text += "), and "
     smallest = _pick(table, check="smallest_detectable", scope="combined",
                      transform=transform, method=method)
@@ -658,30 +677,32 @@ def headline(table: list[dict], *, transform: str = "none", method: str = "parti
             f"detects one from {value:.2g}x the strength the renders show (80% power; "
             f"intensity-controlled rho {margin} above its null)."
         )
-    scopes = [(r, where) for r, where in ((scene, "per scene"),
-                                          (combined, "with the scenes combined")) if r]
-    refuted = [(r, where) for r, where in scopes if meets_level(r["low"], r["high"]) == "no"]
-    short = [(r, where) for r, where in scopes if meets_level(r["low"], r["high"]) == NOT_SHOWN]
-    for r, where in refuted:
-        low = math.floor(round(100 * _f(r["low"]), 6))
+    state = meets_level(lead["low"], lead["high"])
+    if state == "no":
+        low = math.floor(round(100 * _f(lead["low"]), 6))
+        text += f" The rate is above the {100 * LEVEL:g}% level (at least {low:.0f}%)."
+    elif state == NOT_SHOWN:
         text += (
-            f" {where.capitalize()} the rate is above the {100 * LEVEL:g}% level "
-            f"(at least {low:.0f}%)."
+            f" {int(_f(lead['n']))} replicates cannot show the {100 * LEVEL:g}% level: "
+            f"{replicates_to_show()} with no false positive would."
         )
-    if short:
-        said = [f"{int(_f(r['n']))} replicates {where}" for r, where in short]
-        if len(said) == 2:
-            said = [f"{said[0]} ({said[1].replace(' replicates', '', 1)})"]
+    worst = single["combined"] or single["scene"]
+    if lead["kind"] == ANY_NULL and worst is not None:
+        scope = "with the scenes combined" if worst["scope"] == "combined" else "per scene"
         text += (
-            f" {said[0]} cannot show the {100 * LEVEL:g}% level: {replicates_to_show()} null "
-            "replicates with no false positive would."
+            f" Each design alone: {_at_most(worst)} (worst, {worst['kind']}, {_fired(worst)} "
+            f"{scope}"
         )
+        if meets_level(worst["low"], worst["high"]) == NOT_SHOWN:
+            text += f"; {replicates_to_show()} replicates with no false positive would show 5%"
+        text += ")."
     return text
 
 
 COMPACT_COLUMNS = [
     "transform",
     "method",
+    "false positives above its null, every cue-free design, scenes combined",
     "false positives above its null, per scene",
     "false positives above its null, scenes combined",
     "false positives above 0, per scene",
@@ -692,12 +713,13 @@ COMPACT_COLUMNS = [
     "replicates per scene",
 ]
 """Columns of ``results/tables/calibration.md``: one row per transform and statistic (the
-CSV beside it has every check, scope and design). A false-positive rate is the worst over
-the matched nulls, read by the upper end of its 95% Wilson interval: ``at most 6% (0 of 64;
-not shown)``, with the replicates that fired and, unless the interval shows the 5% level,
-``not shown`` (it straddles the level) or ``no`` (it lies above); the rule ``above 0`` is the
-audit's former Monte Carlo rule; coverage is the lowest over the designs, pooled over
-scenes."""
+CSV beside it has every check, scope and design). The first rate pools every cue-free
+design (the matched nulls and the camera pipelines, :data:`ANY_NULL`), the level a verdict
+is held to; the others are the worst single design. Each is read by the upper end of its
+95% Wilson interval: ``at most 6% (0 of 64; not shown)``, with the replicates that fired
+and, unless the interval shows the 5% level, ``not shown`` (it straddles the level) or
+``no`` (it lies above); the rule ``above 0`` is the audit's former Monte Carlo rule;
+coverage is the lowest over the designs, pooled over scenes."""
 
 
 def false_positive_text(row) -> str:
@@ -760,6 +782,9 @@ def compact_table(table: list[dict]) -> list[dict]:
             {
                 "transform": transform,
                 "method": method,
+                "false positives above its null, every cue-free design, scenes combined":
+                _percent(worst_false_positive(table, scope="combined", transform=transform,
+                                              method=method, pooled=True)),
                 "false positives above its null, per scene": _percent(
                     worst_false_positive(table, scope="scene", transform=transform,
                                          method=method, rule="above_null")

@@ -8,6 +8,11 @@ DEFAULTS = {
     "replicates": 16,
     "denoised_replicates": 2,
     "strengths": [0.0625, 0.125, 0.25, 1.0, 2.0],
+    "pipelines": [
+        "shading", "gain_map", "srgb8_0.2", "srgb8_0.4", "srgb8_1", "white_balance",
+        "colour_matrix", "power_law", "correlated",
+    ],
+    "pipeline_replicates": 8,
     "seed": 0,
 }
 """The ``calibration`` config section's defaults (``config.schema.yaml`` states them)."""
@@ -94,6 +99,21 @@ def calibration_scene_job(
     settings, _ = analysis_settings(analysis, controls)
     cal = {**DEFAULTS, **dict(calibration or {})}
     scene = scene_frames(variance, ground_truth, aux)
+    stacks = {}
+    if renders:
+        import dataclasses
+
+        import numpy as np
+
+        from ..calibration.synthesis import channel_correlation
+        from .common import view_stack
+
+        for view, paths in renders.items():
+            stack, seeds, _, _ = view_stack(paths)
+            stacks[view] = stack[np.argsort(seeds, kind="stable")]
+        # the renders' channels share their noise: the synthetic frames' do as much
+        scene = dataclasses.replace(scene, channel_correlation=channel_correlation(
+            stacks["left"], scene.ground_truth["left"]["valid"]))
     expensive = frozenset(
         t for t in transforms if t != "none" and get_transform(t).expensive
     )
@@ -107,16 +127,10 @@ def calibration_scene_job(
         expensive=expensive,
         options=options,
         seed=int(cal["seed"]),
+        pipelines=list(cal["pipelines"]),
+        pipeline_replicates=int(cal["pipeline_replicates"]),
     )
-    if renders:
-        import numpy as np
-
-        from .common import view_stack
-
-        stacks = {}
-        for view, paths in renders.items():
-            stack, seeds, _, _ = view_stack(paths)
-            stacks[view] = stack[np.argsort(seeds, kind="stable")]
+    if stacks:
         rows += renders_shipped_rows(
             stacks, scene, transforms=transforms, settings=settings, options=options,
             seed=int(cal["seed"]),
@@ -126,13 +140,17 @@ def calibration_scene_job(
         row["scene"] = name
     log.info(
         "%s: camera law a %.4g b %.4g; the renders' strength (sd of ln sigma^2 beyond "
-        "intensity and estimation noise) %.3f; %d replicates (%d through %s)",
+        "intensity and estimation noise) %.3f; channels correlated %.2f; %d replicates (%d "
+        "through %s); %d of each of %d pipeline nulls",
         name,
         *info["camera_law"],
         info["render_strength"],
+        scene.channel_correlation,
         info["replicates"],
         info["expensive_replicates"],
         ", ".join(sorted(expensive)) or "no denoiser",
+        info["pipeline_replicates"],
+        len(cal["pipelines"]),
     )
     write_tables(rows, CALIBRATION_COLUMNS, {"csv": out})
     return rows

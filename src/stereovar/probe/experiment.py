@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..calibration.synthesis import camera_law
+from ..calibration.synthesis import camera_law, channel_correlation
 from ..errors import ConfigError
 from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
@@ -298,39 +298,6 @@ def scene_law(left, valid=None) -> tuple[float, float]:
     r = ratio[ok]
     k = float(r[r <= np.quantile(r, 0.999)].mean()) if r.size else 1.0
     return a * k, b * k
-
-
-def channel_correlation(left, valid=None) -> float:
-    """The correlation :math:`\\rho` between the channels of a pixel's noise over a scene's
-    renders, from the grey image's share of the channels' variance.
-
-    .. math::
-
-        \\rho = \\frac{3 r - 1}{2}, \\qquad
-        r = \\frac{\\sum_p \\operatorname{Var}_n \\bar g_p}{\\sum_p \\frac13 \\sum_c
-            \\operatorname{Var}_n I_{c,p}},
-
-    with :math:`g` the RGB mean (for channels of equal variance, the grey variance is
-    :math:`\\sigma^2 (1 + 2\\rho)/3`), clipped to [0, 1].
-
-    Examples
-    --------
-    >>> rng = np.random.default_rng(0)
-    >>> z = rng.standard_normal((6, 50, 50, 1))
-    >>> stack = 0.5 + 0.1 * np.repeat(z, 3, axis=3)
-    >>> round(channel_correlation(stack), 2)
-    1.0
-    >>> round(channel_correlation(0.5 + 0.1 * rng.standard_normal((6, 50, 50, 3))), 1)
-    0.0
-    """
-    stack = np.asarray(left, dtype=np.float64)
-    ok = np.ones(stack.shape[1:3], bool) if valid is None else np.asarray(valid, dtype=bool)
-    per_channel = stack.var(axis=0).mean(axis=-1)[ok]
-    grey = stack.mean(axis=-1).var(axis=0)[ok]
-    total = float(per_channel.sum())
-    if not total > 0:
-        return 1.0
-    return float(np.clip((3 * float(grey.sum()) / total - 1) / 2, 0.0, 1.0))
 
 
 def planted_stacks(left, right, truth_left, truth_right, *, sign, law, strength, seed) -> tuple:

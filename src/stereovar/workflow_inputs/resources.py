@@ -156,6 +156,10 @@ def calibration_resources(
             transforms=len(transforms) - len(denoisers),
             denoised_replicates=int(calibration["denoised_replicates"]),
             denoisers=len(denoisers),
+            pipeline_replicates=int(calibration.get("pipeline_replicates", 0)),
+            pipeline_designs=sum(
+                2 if str(p).startswith("srgb8_") else 1 for p in calibration.get("pipelines", [])
+            ),
             attempt=attempt,
         )
 

@@ -3,7 +3,6 @@
 
 # The calibration (stereovar.calibration): each scene of the run's source, at the main SPP,
 # through "none" and every store transform of the mitigation rows.
-from stereovar.calibration.replicates import reads_seed_mean
 
 CALIBRATION_TRANSFORMS = [
     "none",
@@ -39,8 +38,9 @@ def calibration_resources():
 
 
 def calibration_scene_inputs(wildcards):
-    """One scene's seeds variance store and ground truth, and each view's auxiliary passes
-    when a calibrated transform reads them and the source renders them."""
+    """One scene's seeds variance store and ground truth, each view's auxiliary passes when a
+    calibrated transform reads them and the source renders them, and the seed renders (their
+    channel correlation, and what a seed-mean transform ships)."""
     source = wildcards.renderer
     inputs = {
         "variance": layout.variance_store(
@@ -51,7 +51,7 @@ def calibration_scene_inputs(wildcards):
     if mitigation_inputs.reads_aux(CALIBRATION_TRANSFORMS[1:], source):
         for view in VIEWS:
             inputs[f"aux_{view}"] = layout.aux_store(source, wildcards.scene, view)
-    if wildcards.estimator == "seeds" and any(reads_seed_mean(t) for t in CALIBRATION_TRANSFORMS):
+    if wildcards.estimator == "seeds":  # their channel correlation, and what ships
         stores = seed_stores(run_config(source), wildcards.scene, wildcards.spp)
         inputs.update({f"renders_{view}": paths for view, paths in stores.items()})
     return inputs
