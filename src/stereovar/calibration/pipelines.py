@@ -227,6 +227,81 @@ def pipeline_encoding(name: str, mean: dict) -> dict | None:
     return {"bits": 8, "transfer": "srgb", "scale": 1.0 / exposure_for(mean["left"])}
 
 
+def _code_slope(v: np.ndarray, transfer: str) -> np.ndarray:
+    """:math:`dT/dv` of the transfer curve at :math:`v \\in [0, 1]`."""
+    if transfer != "srgb":
+        return np.ones_like(v)
+    safe = np.maximum(v, 0.0031308)
+    return np.where(v <= 0.0031308, 12.92, 1.055 / 2.4 * safe ** (1 / 2.4 - 1))
+
+
+def dequantised_mean(mean, law, encoding: dict, n: int) -> np.ndarray:
+    """The clean image behind the seed mean of :math:`N` integer-coded frames, where the
+    noise is below half a code.
+
+    With noise of :math:`\\sigma` codes around a clean value :math:`k + f` (code :math:`k`,
+    :math:`0 \\le f < 1`), a frame reads :math:`k + 1` with probability
+    :math:`p = \\Phi((f - \\tfrac12)/\\sigma)`, so the share :math:`\\hat p` of frames
+    that do, which the seed mean gives in codes, estimates
+
+    .. math:: \\hat f = \\tfrac12 + \\sigma\\,\\Phi^{-1}(\\hat p)
+
+    (:math:`\\hat f = 0` or 1 where every frame read the same code). The seed mean itself
+    sits near a code wherever the frames rarely flip, so a null drawn around it flips less
+    often than the data did where they did: a matched null drawn around :math:`\\hat f`
+    reproduces each pixel's flips, and with them the variance pattern that 8-bit
+    quantisation of a low-noise image gives both views alike. Where the noise is half a code
+    or more the seed mean is kept.
+
+    Parameters
+    ----------
+    mean : numpy.ndarray (H, W, C)
+        The seed mean of the decoded frames, linear.
+    law : (a, b)
+        The camera law before the encoding (:func:`encoded_law`).
+    encoding : dict
+        :func:`integer_roundtrip`'s ``bits``, ``transfer`` and ``scale``.
+    n : int
+        Frames behind the seed mean.
+    """
+    from scipy.special import ndtri
+
+    from ..io.images import linear_to_srgb, srgb_to_linear
+
+    mean = np.asarray(mean, dtype=np.float64)
+    scale, transfer = float(encoding["scale"]), encoding.get("transfer", "srgb")
+    full = float(2 ** int(encoding["bits"]) - 1)
+    v = np.clip(mean / scale, 0.0, 1.0)
+    code = full * (linear_to_srgb(v) if transfer == "srgb" else v)
+    a, b = law
+    sigma = np.sqrt(np.maximum(a * np.maximum(mean, 0.0) + b, 0.0)) / scale
+    sigma = sigma * _code_slope(v, transfer) * full
+    k = np.floor(code + 1e-6)
+    p = code - k
+    tiny = 0.25 / max(int(n), 1)
+    f = 0.5 + sigma * ndtri(np.clip(p, tiny, 1 - tiny))
+    f = np.where(p < tiny, 0.0, np.where(p > 1 - tiny, 1.0, np.clip(f, 0.0, 1.0)))
+    centre = np.clip((k + f) / full, 0.0, 1.0)
+    linear = (srgb_to_linear(centre) if transfer == "srgb" else centre) * scale
+    return np.where(sigma < 0.5, linear, mean)
+
+
+def encoded_clean(mean, variance, law, n: int, rng: np.random.Generator, encoding: dict):
+    """The camera law before the encoding and the clean image a matched null is drawn around:
+    :func:`encoded_law` on the seed mean, then :func:`dequantised_mean` at that law and the
+    law again around it.
+
+    Returns
+    -------
+    law : (a, b)
+    clean : numpy.ndarray (H, W, C)
+    """
+    first = encoded_law(mean, variance, law, n, rng, encoding)
+    clean = dequantised_mean(mean, first, encoding, n)
+    second = encoded_law(clean, variance, law, n, rng, encoding)
+    return second, dequantised_mean(mean, second, encoding, n)
+
+
 LAW_FACTORS = np.geomspace(1e-3, 10.0, 17)
 """Multipliers of the camera law tried by :func:`encoded_law`."""
 
@@ -259,14 +334,14 @@ def encoded_law(mean, variance, law, n: int, rng: np.random.Generator, encoding:
     a, b : float
     """
     clean = np.maximum(np.asarray(mean, dtype=np.float64), 0.0)
-    target = float(np.nanmedian(np.asarray(variance, dtype=np.float64)))
+    target = float(np.nanmean(np.asarray(variance, dtype=np.float64)))
     a, b = law
     noise = rng.standard_normal((int(n), *clean.shape))
     base = np.sqrt(a * clean + b)
     medians = []
     for c in factors:
         frames = integer_roundtrip(clean + np.sqrt(c) * base * noise, **encoding)
-        medians.append(float(np.median(frames.astype(np.float64).var(axis=0).mean(axis=-1))))
+        medians.append(float(np.mean(frames.astype(np.float64).var(axis=0).mean(axis=-1))))
     logs = np.log(np.maximum(medians, 1e-300))
     order = np.argsort(logs, kind="stable")
     c = float(np.exp(np.interp(np.log(max(target, 1e-300)), logs[order],

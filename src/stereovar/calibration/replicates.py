@@ -19,8 +19,9 @@ from .pipelines import (
     GAIN_MAP_SCALE,
     GAIN_MAP_SD,
     PIPELINES,
+    dequantised_mean,
     draw_pipeline,
-    encoded_law,
+    encoded_clean,
     integer_roundtrip,
     pipeline_encoding,
 )
@@ -439,10 +440,14 @@ def scene_calibration(
     mu = {v: np.asarray(m, dtype=np.float64).mean(axis=-1) for v, m in scene.mean.items()}
     gt_valid = np.asarray(scene.ground_truth["left"]["valid"], dtype=bool)
     law = camera_law(scene.variance["left"], mu["left"], gt_valid)
-    if scene.encoding:
-        law = encoded_law(scene.mean["left"], scene.variance["left"], law, scene.n_seeds,
-                          np.random.default_rng(derive_seed("calibration-law", seed, scene.label)),
-                          scene.encoding)
+    clean = scene.mean
+    if scene.encoding:  # the law before the encoding, around the clean image behind it
+        law, _ = encoded_clean(
+            scene.mean["left"], scene.variance["left"], law, scene.n_seeds,
+            np.random.default_rng(derive_seed("calibration-law", seed, scene.label)),
+            scene.encoding)
+        clean = {v: dequantised_mean(m, law, scene.encoding, scene.n_seeds)
+                 for v, m in scene.mean.items()}
     options = dict(options or {})
     rows: list[dict] = []
     render_s = None
@@ -468,13 +473,13 @@ def scene_calibration(
             v = variance_fields(
                 kind,
                 strength,
-                mean=scene.mean,
+                mean=clean,
                 law=law,
                 render_variance=scene.variance,
                 pattern=pattern,
                 rng=rng,
             )
-            frames = {view: _encoded(draw_frames(scene.mean[view], v[view], scene.n_seeds, rng,
+            frames = {view: _encoded(draw_frames(clean[view], v[view], scene.n_seeds, rng,
                                                  channel_correlation=scene.channel_correlation),
                                      scene.encoding)
                       for view in ("left", "right")}
@@ -537,11 +542,12 @@ def pipeline_rows(scene: SceneFrames, law, settings, *, replicates: int, pipelin
                 if null_law is None:
                     data_mean, data_var = zip(*(variance_field(frames[v]) for v in views),
                                               strict=True)
-                    data_mean = dict(zip(views, data_mean, strict=True))
-                    mu = data_mean["left"].mean(axis=-1)
+                    mu = data_mean[0].mean(axis=-1)
                     fitted = camera_law(data_var[0], mu, scene.ground_truth["left"]["valid"])
-                    null_law = encoded_law(data_mean["left"], data_var[0], fitted,
-                                           scene.n_seeds, rng, encoding)
+                    null_law, _ = encoded_clean(data_mean[0], data_var[0], fitted,
+                                                scene.n_seeds, rng, encoding)
+                    data_mean = {v: dequantised_mean(m, null_law, encoding, scene.n_seeds)
+                                 for v, m in zip(views, data_mean, strict=True)}
                 a, b = null_law
                 null = {v: integer_roundtrip(draw_frames(
                     data_mean[v], a * np.maximum(data_mean[v], 0.0) + b, scene.n_seeds, rng),
