@@ -56,12 +56,14 @@ def test_no_pipeline_is_called_a_cue(coloured_scene):
         pipeline_replicates=3, min_strength=0.5,
     )
     assert info["pipeline_replicates"] == 3
-    table, _ = calibration_table([{**r, "scene": "s"} for r in rows], methods=("partial",))
-    fired = {r["kind"]: r["value"] for r in table
-             if (r["check"], r["rule"], r["scope"]) == ("false_positive_rate", "above_null",
-                                                       "scene")}
-    assert set(PIPELINES) <= set(fired)
-    assert {k: v for k, v in fired.items() if v > 0} == {}
+    table, _ = calibration_table([{**r, "scene": "s"} for r in rows],
+                                 methods=("partial", "shared_streams"))
+    for method, rule in (("partial", "above_null"), ("shared_streams", "shared")):
+        fired = {r["kind"]: r["value"] for r in table
+                 if (r["check"], r["rule"], r["scope"], r["method"])
+                 == ("false_positive_rate", rule, "scene", method)}
+        assert set(PIPELINES) <= set(fired)
+        assert {k: v for k, v in fired.items() if v > 0} == {}
     # the planted cue is still found (power is not given away for the pipelines)
     power = next(r for r in table if (r["check"], r["scope"], r["strength_factor"])
                  == ("power", "scene", 1.0))
@@ -135,3 +137,22 @@ def test_encoded_law_finds_the_level_before_the_encoding():
     # about 0.2 DN: the level is found to within 60% (measured 1.54x), nearer than the
     # decoded law (2.1x); the errors of the seed mean's own flips bias it up
     assert abs(np.log(found[0] / law[0])) < min(np.log(1.6), off)
+
+
+def test_the_shared_streams_check_fires_on_shared_noise_only(coloured_scene):
+    """The calibration's shared-streams check is the audit's: frames whose right view repeats
+    the left view's noise (one sampler seed for both) read far above the threshold, frames
+    drawn independently about 0."""
+    from stereovar.calibration.replicates import _shared_streams_row
+    from stereovar.statistics.residuals import SHARED_STREAMS
+
+    rng = np.random.default_rng(8)
+    left = draw_frames(coloured_scene.mean["left"], 1e-3, 8, rng)
+    noise = left - coloured_scene.mean["left"][None]
+    shared = {"left": left, "right": (coloured_scene.mean["right"][None] + noise)
+              .astype(np.float32)}
+    apart = {"left": left, "right": draw_frames(coloured_scene.mean["right"], 1e-3, 8, rng)}
+    row = _shared_streams_row(shared, coloured_scene, AnalysisSettings())
+    assert row["boot_low"] > SHARED_STREAMS and row["rho"] > 0.5
+    row = _shared_streams_row(apart, coloured_scene, AnalysisSettings())
+    assert row["boot_low"] < SHARED_STREAMS and abs(row["rho"]) < 0.05

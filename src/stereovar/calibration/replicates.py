@@ -70,8 +70,13 @@ CALIBRATION_COLUMNS = [
 ``null_kind``: the design whose replicates are the row's matched null (``camera``, or the
 camera law through an 8-bit pipeline's encoding, ``camera_srgb8_<q>``)."""
 
-PIPELINE_METHODS = ("partial",)
-"""The statistics the pipeline nulls measure: the verdict's."""
+SHARED_STREAMS_METHOD = "shared_streams"
+"""The audit's shared-streams check, measured on the cue-free designs as the calibration's
+``method`` of that name: its ``rho`` is the per-seed residuals' cross-view correlation at
+zero disparity (:func:`_shared_streams_row`)."""
+
+PIPELINE_METHODS = ("partial", SHARED_STREAMS_METHOD)
+"""The statistics the pipeline nulls measure: the verdict's, and the shared-streams check."""
 
 
 @dataclass(frozen=True)
@@ -268,9 +273,33 @@ def statistic_rows(
     draws = BootstrapDraws(settings.bootstrap, seed_of(settings.bootstrap.seed, label, "all"))
     rows = []
     for name in methods or CALIBRATED_METHODS:
+        if name == SHARED_STREAMS_METHOD:
+            rows.append(_shared_streams_row(stacks, scene, settings))
+            continue
         result = evaluate(METHODS.get(name), aligned_set, pixels, settings=settings, draws=draws)
         rows.append({"region": "all", "method": name, **result})
     return rows
+
+
+def _shared_streams_row(stacks, scene: SceneFrames, settings) -> dict:
+    """The audit's shared-streams check on one view pair of frame stacks: the per-seed
+    residuals' cross-view correlation at zero disparity over the valid set
+    (:func:`stereovar.statistics.residuals.residual_correlation`), frame :math:`n` of the
+    left view with frame :math:`n` of the right."""
+    from ..statistics.regions import valid_set
+    from ..statistics.residuals import residual_correlation
+
+    gt = scene.ground_truth["left"]
+    disparity = np.asarray(gt["disparity"], dtype=np.float64)
+    valid = np.asarray(gt["valid"], dtype=bool)
+    (row,) = residual_correlation(
+        np.asarray(stacks["left"]), np.asarray(stacks["right"]), disparity, sign=scene.sign,
+        masks={"all": valid_set(disparity, sign=scene.sign, valid=valid)}, valid=valid,
+        alignments=("zero",), settings=settings.bootstrap, min_pixels=settings.min_pixels,
+    )
+    return {"region": "all", "method": SHARED_STREAMS_METHOD, "rho": row["rho"],
+            "boot_low": row["low"], "boot_high": row["high"], "chance_se": float("nan"),
+            "n_pixels": row["n_pixels"]}
 
 
 def measured_rows(
@@ -486,12 +515,14 @@ def scene_calibration(
             for name in chosen:
                 design = {"replicate": r, "kind": kind, "strength": strength,
                           "strength_factor": factor}
+                checks = (*CALIBRATED_METHODS, SHARED_STREAMS_METHOD) if (
+                    name == NONE and kind in NULL_KINDS) else None
                 rows += measured_rows(
                     frames, name, scene, settings,
                     label=f"{scene.label}|{r}|{kind}|{factor:g}|{name}",
                     seed=derive_seed("calibration-transform", seed, scene.label, r, kind,
                                      factor, name),
-                    options=options.get(name), design=design,
+                    options=options.get(name), design=design, methods=checks,
                 )
     rows += pipeline_rows(scene, law, settings, replicates=int(pipeline_replicates),
                           pipelines=pipelines, seed=seed)

@@ -25,10 +25,20 @@ false positive that takes :func:`replicates_to_show`, 73). The rules:
     mitigation ``remains``);
 ``above_null``
     the statistic minus its matched null through the same transform (the mean over the
-    ``camera`` null's other replicates) has an interval above 0
-    (:func:`difference_interval`): what "Monte Carlo-specific" means here;
+    ``camera`` null's other replicates, or the encoded null of an 8-bit pipeline) has an
+    interval above :data:`MIN_EFFECT` (:func:`difference_interval`): what "Monte
+    Carlo-specific" means here;
 ``removed``
-    that difference's interval lies inside the equivalence margin.
+    that difference's interval lies inside the equivalence margin;
+``shared``
+    the audit's shared-streams check (``shared_streams``: the per-seed residuals'
+    cross-view correlation at zero disparity) has an interval above
+    :data:`~stereovar.statistics.residuals.SHARED_STREAMS`, on frames whose views are
+    independent.
+
+Cue-free designs are the matched nulls (``camera``, ``misaligned``) and the camera pipelines
+(:mod:`stereovar.calibration.pipelines`, with the 8-bit ones' encoded nulls); each rule's
+false-positive rate is given per design and over all of them (:data:`ANY_NULL`).
 
 ``scope`` is ``scene`` (one scene's rows) or ``combined`` (the scenes' rows of one replicate
 combined as the tables combine them:
@@ -106,7 +116,8 @@ NULL_COLUMNS = [  # margin: the equivalence margin of the row's transform and st
 """Columns of ``results/tables/calibration_nulls.csv``: each scene's matched null per
 transform and statistic, and the equivalence margin."""
 
-SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative", "null_shift")
+SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative", "null_shift",
+                   "shared_streams")
 """The statistics the table reports (every calibrated one stays in the replicate rows)."""
 
 
@@ -335,6 +346,11 @@ def combined_rows(rows: list[dict]) -> list[dict]:
 
 
 def _fires(rule: str, r: dict, margin=math.nan) -> bool | None:
+    if rule == "shared":
+        from ..statistics.residuals import SHARED_STREAMS
+
+        low = _f(r["boot_low"])
+        return None if not math.isfinite(low) else low > SHARED_STREAMS
     if rule == "above_zero":
         low = _f(r["boot_low"])
         return None if not math.isfinite(low) else low > 0
@@ -458,9 +474,10 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             # over all of them (the level a verdict is held to on data of unknown kind)
             cue_free = [k for (k, f) in by_design if k not in ("planted", "renders")]
             pooled = [r for k in cue_free for r in by_design[(k, 0.0)]]
+            rules = ("shared",) if method == "shared_streams" else ("above_zero", "above_null")
             for kind, chosen in [*((k, by_design[(k, 0.0)]) for k in cue_free),
                                  *([(ANY_NULL, pooled)] if len(cue_free) > 1 else [])]:
-                for rule in ("above_zero", "above_null"):
+                for rule in rules:
                     k, n = _count(rule, chosen)
                     if not n:
                         continue
@@ -490,10 +507,12 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             replicates = max((len(v) for k, v in by_design.items() if k[0] == "planted"),
                              default=0)
             margins[(scope, transform, method)] = (margin, replicates)
-            add("smallest_detectable", "above_null", scope, transform, method, "planted",
-                smallest, (smallest, math.nan, math.nan), sum(len(v) for v in by_design.values()),
-                "", "", f"equivalence margin (mean rho minus null there) {margin:.4f}"
-                if math.isfinite(margin) else "no planted strength reaches 80% power")
+            if planted:
+                add("smallest_detectable", "above_null", scope, transform, method, "planted",
+                    smallest, (smallest, math.nan, math.nan),
+                    sum(len(v) for v in by_design.values()), "", "",
+                    f"equivalence margin (mean rho minus null there) {margin:.4f}"
+                    if math.isfinite(margin) else "no planted strength reaches 80% power")
             # removed: how often the equivalence rule calls a cue removed
             for kind, factor in [("camera", 0.0), *(("planted", f) for f in planted)]:
                 chosen = by_design.get((kind, factor), [])

@@ -45,6 +45,13 @@ RESULT_KEYS = ("rho", "low", "high", "n_pixels", "n_seeds", "n_tiles", "reason")
 """What :func:`residual_correlation` gives per region, alignment and band, beside ``region``,
 ``alignment`` and ``band``."""
 
+SHARED_STREAMS = 0.05
+"""The views share their random streams when the per-seed residuals' cross-view correlation
+at zero disparity (:func:`residual_correlation`) has a 95% interval above this (independent
+seeds give 0; the same seed in both views gives the share of each pixel's noise that the two
+views' paths have in common). The calibration measures how often it fires on frames whose
+views are independent (``shared_streams`` in ``calibration.csv``)."""
+
 MIN_PIXELS = 30
 """Fewest left pixels for a defined correlation (as :func:`~stereovar.statistics.correlation.
 pearson_over_mask`'s default)."""
