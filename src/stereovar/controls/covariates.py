@@ -23,6 +23,8 @@ generalised cross-validation chooses. Why additive: for shot noise through per-c
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
@@ -37,7 +39,7 @@ cannot follow a pattern finer than about a ninth of the image."""
 COLOUR_DEGREES = (0, 1, 2, 3)
 """Total degrees of the chromaticity polynomial tried (0: none)."""
 
-BACKFIT_ROUNDS = 3
+BACKFIT_ROUNDS = 2
 """Rounds of backfitting: the spline in :math:`\\ln\\bar\\mu` refitted on what the
 polynomials leave, and the polynomials on what the spline leaves."""
 
@@ -83,10 +85,36 @@ def _total_degree(u: np.ndarray, v: np.ndarray, degree: int) -> tuple[np.ndarray
     return columns, [i + j for i, j in pairs]
 
 
+POSITION_CACHE_SIZE = 4
+"""Position blocks kept (:func:`_position_block`): both views of a scene's two largest
+regions, whose pixels every replicate of the calibration shares."""
+
+_POSITION_CACHE: OrderedDict = OrderedDict()
+
+
+def _position_block(position, degree: int) -> tuple[np.ndarray, list]:
+    """The centred position columns of a pixel set and their degrees, kept for the next call
+    on the same pixels (the same coordinates, by a digest of their bytes)."""
+    x = np.ascontiguousarray(position[0], dtype=np.float64)
+    y = np.ascontiguousarray(position[1], dtype=np.float64)
+    key = (degree, x.size, hashlib.blake2b(x.tobytes() + y.tobytes(), digest_size=16).digest())
+    hit = _POSITION_CACHE.get(key)
+    if hit is None:
+        z, deg = _total_degree(_unit(x), _unit(y), degree)
+        z -= z.mean(axis=0)
+        hit = (z, deg)
+        _POSITION_CACHE[key] = hit
+        while len(_POSITION_CACHE) > POSITION_CACHE_SIZE:
+            _POSITION_CACHE.popitem(last=False)
+    else:
+        _POSITION_CACHE.move_to_end(key)
+    return hit
+
+
 def design(colour, position, *, colour_degree=COLOUR_DEGREES[-1],
-           position_degree=POSITION_DEGREES[-1]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+           position_degree=POSITION_DEGREES[-1]):
     """Every candidate column of :math:`h_c` and :math:`h_p`, centred, with each column's
-    degree in its term.
+    degree in its term and their Gram matrix.
 
     Parameters
     ----------
@@ -100,24 +128,23 @@ def design(colour, position, *, colour_degree=COLOUR_DEGREES[-1],
     columns : numpy.ndarray (n, p)
     colour_degrees, position_degrees : numpy.ndarray (p,)
         Each column's degree in the chromaticity and position terms (0 for the other term).
+    gram : numpy.ndarray (p, p)
+        :math:`Z^\\top Z` of the columns.
     """
-    blocks, cd, pd = [], [], []
-    if colour is not None:
-        z, deg = _total_degree(_unit(np.asarray(colour[0], float)),
-                               _unit(np.asarray(colour[1], float)), colour_degree)
-        blocks.append(z)
-        cd += deg
-        pd += [0] * len(deg)
-    if position is not None:
-        z, deg = _total_degree(_unit(np.asarray(position[0], float)),
-                               _unit(np.asarray(position[1], float)), position_degree)
-        blocks.append(z)
-        pd += deg
-        cd += [0] * len(deg)
     n = len(colour[0]) if colour is not None else len(position[0]) if position is not None else 0
-    columns = np.concatenate(blocks, axis=1) if blocks else np.empty((n, 0))
-    columns -= columns.mean(axis=0)
-    return columns, np.asarray(cd, dtype=int), np.asarray(pd, dtype=int)
+    c = np.empty((n, 0))
+    cdeg: list = []
+    if colour is not None:
+        c, cdeg = _total_degree(_unit(np.asarray(colour[0], float)),
+                                _unit(np.asarray(colour[1], float)), colour_degree)
+        c -= c.mean(axis=0)
+    p, pdeg = (np.empty((n, 0)), []) if position is None else (
+        _position_block(position, position_degree))
+    columns = np.concatenate([c, p], axis=1)
+    gram = columns.T @ columns
+    cd = np.asarray(cdeg + [0] * len(pdeg), dtype=int)
+    pd = np.asarray([0] * len(cdeg) + list(pdeg), dtype=int)
+    return columns, cd, pd, gram
 
 
 def _solve(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -131,7 +158,8 @@ def _solve(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return solve(ridged, rhs, assume_a="pos", check_finite=False)
 
 
-def choose_degrees(residuals, columns, colour_degrees, position_degrees, *, spline_df: int = 0):
+def choose_degrees(residuals, columns, colour_degrees, position_degrees, *, spline_df: int = 0,
+                   gram=None):
     """The degrees of :math:`h_c` and :math:`h_p` that minimise the generalised
     cross-validation score of the polynomials fitted to ``residuals``.
 
@@ -148,7 +176,8 @@ def choose_degrees(residuals, columns, colour_degrees, position_degrees, *, spli
     """
     y = np.asarray(residuals, dtype=np.float64)
     n = y.size
-    gram, rhs = columns.T @ columns, columns.T @ y
+    gram = columns.T @ columns if gram is None else gram
+    rhs = columns.T @ y
     yy = float(y @ y)
     best = None
     colours = sorted({0, *colour_degrees.tolist()}) if colour_degrees.size else [0]
@@ -221,14 +250,14 @@ def fit_control(log_variance, log_intensity, *, colour=None, position=None) -> C
     first = fit_intensity(y, x)
     if (colour is None and position is None) or not np.isfinite(first.residuals).all():
         return ControlFit(first.residuals, first.intervals, 0, 0, first.gcv)
-    columns, cdeg, pdeg = design(colour, position)
+    columns, cdeg, pdeg, full_gram = design(colour, position)
     dc, dp = choose_degrees(first.residuals, columns, cdeg, pdeg,
-                            spline_df=first.intervals + 3)
+                            spline_df=first.intervals + 3, gram=full_gram)
     use = np.flatnonzero((cdeg <= dc) & (pdeg <= dp))
     if not use.size:
         return ControlFit(first.residuals, first.intervals, 0, 0, first.gcv)
-    z = columns[:, use]
-    gram = z.T @ z
+    z = columns[:, use] if use.size < columns.shape[1] else columns
+    gram = full_gram[np.ix_(use, use)]
     spline_part = y - first.residuals
     fit = first
     for _ in range(BACKFIT_ROUNDS):
