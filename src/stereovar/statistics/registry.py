@@ -375,9 +375,17 @@ def _partial(values, settings):
 
     covariates = values[4:]
     half = len(covariates) // 2
-    return partial_pair(
+    e_a, e_b = partial_pair(
         *values[:4], covariates=(covariates[:half], covariates[half:]) if half else None
     )
+    if e_a.size and np.isnan(e_a).all() and np.isfinite(values[0]).any():
+        from ..controls.intensity import MIN_RESIDUAL_VARIANCE
+
+        raise MissingField(
+            f"the control explains ln sigma^2 to within a variance of {MIN_RESIDUAL_VARIANCE:g}: "
+            "the field is a function of the seed mean, with nothing left to correlate"
+        )
+    return e_a, e_b
 
 
 # ---------------------------------------------------------------- the statistics
