@@ -359,6 +359,9 @@ def test_verdict_rules_on_known_rows():
     assert lifts["low"] == pytest.approx(0.31 - half)
     assert lifts["high"] == pytest.approx(0.31 + half)
     none = verdict(verdict_rows(corr + [row("partial", 0.05, -0.02, 0.12)], iv))
-    assert none["mc_specific"] is False and "reaches 0" in none["text"]
+    assert none["mc_specific"] is False and "does not clear 0.05" in none["text"]
+    # above 0 but not above the smallest cue called (what camera pipelines leave)
+    slight = verdict(verdict_rows(corr + [row("partial", 0.05, 0.01, 0.09)], iv))
+    assert slight["mc_specific"] is False
     weak = verdict(verdict_rows(corr + [row("partial", 0.2, 0.1, 0.3)], iv))
     assert weak["strength"] == "weak"

@@ -146,7 +146,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         gt, gt_files = _frame_ground_truth(
             settings, frame, size, sign, source, fr, reads, report
         )
-    datasets, means, view_files = {}, {}, {}
+    datasets, means, view_files, depths = {}, {}, {}, {}
     for view in VIEWS:
         labels = list(frame.renders[view])
         paths = view_files[view] = [str(p) for p in frame.renders[view].values()]
@@ -162,6 +162,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
         means[view] = seed_mean(images, n_bad)
         valid = gt["valid"].sel(view=view).values
         bits = [integer_bits(p, channel=render_channel) for p in paths]
+        depths[view] = _bit_depth(bits, paths, frame.name, view)
         if 8 in bits:
             fr.floored[view] = floored_fraction(images, valid)
         if any(b is not None for b in bits):
@@ -185,9 +186,9 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
                 "height": int(size[0]),
                 "seed_labels": labels,
                 "source_files": paths,
-                "transfer": transfer or "",
             },
         )
+    storage = _storage(depths, view_files, frame.name, transfer, scale)
     with report.timed("hash"):  # ground truth no statistic reads (a right-view mask)
         for path in frame.files():
             if str(path) not in reads.records:
@@ -196,7 +197,7 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
     digest = config_digest({"files": files, "settings": settings_digest(settings)})
     for view in VIEWS:
         datasets[view].attrs.update(
-            scene_digest=digest, source_sha256=[files[p] for p in view_files[view]]
+            scene_digest=digest, source_sha256=[files[p] for p in view_files[view]], **storage
         )
     gt.attrs.update(scene_digest=digest, source_sha256=[files[p] for p in gt_files])
     with report.timed("sign check"):
@@ -242,6 +243,53 @@ def _import_frame(settings, frame: Frame, size, pool, report: ImportReport):
                 frame.name,
             )
     return fr, {str(p): reads.records[str(p)] for p in frame.files()}
+
+
+def _depth_word(depth: int) -> str:
+    return f"{depth}-bit integer" if depth else "float"
+
+
+def _bit_depth(bits: list, paths: list, frame: str, view: str) -> int:
+    """The bit depth of one view's renders (:func:`~stereovar.io.images.integer_bits` of
+    each file, ``bits``): 8 or 16 when every file stores integers of that depth, 0 when every
+    one stores floats. A view whose files mix depths is refused (one line naming a file of
+    each): its variance would mix the quantisations, and the matched null passes every
+    frame through one encoding."""
+    found = {int(b or 0): p for b, p in zip(bits, paths, strict=True)}
+    if len(found) > 1:
+        raise AuditError(
+            f"frame {frame}, view {view}: its renders are stored at different depths ("
+            + ", ".join(f"{_depth_word(d)} {p}" for d, p in sorted(found.items()))
+            + "); export every render alike (all 8-bit PNG, all 16-bit PNG or all float "
+            "EXR) and import again"
+        )
+    return next(iter(found))
+
+
+def _storage(depths: dict, view_files: dict, frame: str, transfer, scale) -> dict:
+    """How a frame's renders were stored, for every render store's attrs (and so, as
+    :data:`~stereovar.io.contracts.RENDER_PROVENANCE`, every store computed from them):
+    ``bit_depth`` (:func:`_bit_depth`; 0: floats), the ``transfer`` that decoded them
+    (``audit.transfer``, else ``srgb``, for integers; ``linear`` for floats, which
+    :func:`~stereovar.io.images.read_image` reads as they are), ``full_scale`` (``audit.scale``
+    for integers; 0 for floats, which it does not scale) and ``file_format`` (the files'
+    format, e.g. ``PNG``). The calibration draws its matched null through this encoding
+    (:func:`stereovar.jobs.calibration.scene_frames`). A frame whose two views are stored at
+    different depths is refused: one encoding passes both views of the null."""
+    if depths["left"] != depths["right"]:
+        raise AuditError(
+            f"frame {frame}: its left renders are {_depth_word(depths['left'])} "
+            f"({view_files['left'][0]}) and its right renders {_depth_word(depths['right'])} "
+            f"({view_files['right'][0]}); export both views alike and import again"
+        )
+    depth = depths["left"]
+    formats = {image_format(p).upper() for paths in view_files.values() for p in paths}
+    return {
+        "bit_depth": depth,
+        "transfer": (transfer or "srgb") if depth else "linear",
+        "full_scale": float(scale) if depth else 0.0,
+        "file_format": "/".join(sorted(formats)),
+    }
 
 
 def _frame_ground_truth(

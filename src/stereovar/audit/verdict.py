@@ -25,6 +25,7 @@ from ..calibration.summary import MIN_EFFECT
 from ..statistics.across import combined_correlation_interval, combined_interval, rows_interval
 from ..statistics.claims import t_interval
 from ..statistics.reliability import corrected_interval
+from ..statistics.residuals import SHARED_STREAMS
 
 STRENGTHS = ((0.5, "strong"), (0.3, "moderate"), (0.1, "weak"), (-math.inf, "negligible"))
 """Words for the intensity-controlled :math:`\\rho` (Cohen's conventions for a correlation)."""
@@ -49,10 +50,9 @@ RULES = (
 
 RULE_ITEMS = (
     "**Monte Carlo-specific cue:** the intensity-controlled :math:`\\rho` minus its matched "
-    "null has a 95% interval above 0.05, the most that camera pipelines without a Monte "
-    "Carlo cue leave. The matched null is camera-law noise drawn from these frames' own seed "
-    "means, :math:`N` and disparity, through the frames' own encoding "
-    "(``stereovar.calibration``).",
+    "null has a 95% interval above 0.05, more than camera pipelines leave. The matched null "
+    "is camera-law noise drawn from these frames' seed means, :math:`N` and disparity, "
+    "through their own encoding.",
     "**Intensity-controlled** :math:`\\rho`: Pearson's :math:`\\rho` of "
     ":math:`\\ln\\sigma^2` after removing what each view's brightness "
     "(:math:`\\ln\\mu`), colour and position on the sensor explain.",
@@ -359,6 +359,48 @@ def summary_lines(name: str, found: str, rows: list[dict], result: dict) -> list
     ]
 
 
+HALF_FLOAT_NULL = "float: the renders' half-float storage is not reproduced by the null"
+"""How :func:`null_encoding` words a null drawn in float for half-float renders."""
+
+
+def null_encoding(stores: list[dict], records=()) -> str:
+    """One sentence: the encoding the matched null was drawn through, as each frame's
+    variance store says its renders were stored (``bit_depth``, ``transfer``,
+    ``file_format``: :data:`~stereovar.io.contracts.RENDER_PROVENANCE`, the attrs from which
+    :func:`stereovar.jobs.calibration.scene_frames` sets the null's encoding), and whether
+    the import found half-float renders (``records``, each frame's import record: ``half``).
+    Empty without stores.
+
+    Examples
+    --------
+    >>> null_encoding([{"scene": "f0", "bit_depth": 8, "transfer": "srgb",
+    ...                 "file_format": "PNG"}])
+    'The matched null was drawn in 8-bit sRGB, as the PNG files were.'
+    >>> null_encoding([{"scene": "f0", "bit_depth": 0, "file_format": "EXR"}],
+    ...               [{"frame": "f0", "found": {"half": {"left": 0.2}}}]) == (
+    ...     f"The matched null was drawn in {HALF_FLOAT_NULL}.")
+    True
+    """
+    half = {r.get("frame") for r in records if (r.get("found") or {}).get("half")}
+    groups: dict = {}
+    for attrs in stores:
+        frame, depth = str(attrs.get("scene", "")), attrs.get("bit_depth")
+        files = f"the {attrs.get('file_format') or 'render'} files were"
+        if depth is None:
+            words = ("float: the import recorded no encoding (import the frames again to draw "
+                     "it through theirs)")
+        elif int(depth):
+            curve = "sRGB" if attrs.get("transfer") == "srgb" else "linear"
+            words = f"{int(depth)}-bit {curve}, as {files}"
+        else:
+            words = HALF_FLOAT_NULL if frame in half else f"float, as {files}"
+        groups.setdefault(words, []).append(frame)
+    if len(groups) < 2:
+        return "".join(f"The matched null was drawn in {w}." for w in groups)
+    return "The matched null was drawn in each frame's own encoding: " + "; ".join(
+        f"{w} ({', '.join(frames)})" for w, frames in groups.items()) + "."
+
+
 def as_table(rows: list[dict]) -> list[dict]:
     """Verdict rows with rounded numbers for the page."""
     out = []
@@ -373,12 +415,6 @@ def as_table(rows: list[dict]) -> list[dict]:
             }
         )
     return out
-
-
-SHARED_STREAMS = 0.05
-"""The views share their random streams when the per-seed residuals' cross-view correlation
-at zero disparity has a 95% interval above this (independent seeds give 0; the same seed in
-both views gives the share of each pixel's noise that the two views' paths have in common)."""
 
 
 def seeding_summary(rows: list[dict], alignment: str, region: str = "all") -> tuple:

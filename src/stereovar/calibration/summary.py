@@ -843,7 +843,8 @@ def compact_table(table: list[dict]) -> list[dict]:
         value = _f(smallest[0]["value"]) if smallest else math.nan
         note = smallest[0].get("note", "") if smallest else ""
         n = max(
-            (int(_f(r["n"])) for r in scene if r["check"] == "false_positive_rate"), default=0
+            (int(_f(r["n"])) for r in scene
+             if r["check"] == "false_positive_rate" and r["kind"] != ANY_NULL), default=0
         )
         out.append(
             {

@@ -41,8 +41,16 @@ RENDER_PROVENANCE = (
     "sampler",
     "seed_policy",
     "config_digest",
+    "bit_depth",
+    "transfer",
+    "full_scale",
+    "file_format",
 )
-"""Render attrs carried into every store computed from the renders."""
+"""Render attrs carried into every store computed from the renders. An audit's imported
+renders also say how they were stored (``bit_depth``, 0 for floats; the ``transfer`` that
+decoded them; ``full_scale``; ``file_format``: :func:`stereovar.audit.importer.import_frame`),
+through which the calibration draws their matched null
+(:func:`stereovar.jobs.calibration.scene_frames`); the project's own renders carry none."""
 
 
 def config_digest(settings: dict) -> str:

@@ -259,14 +259,15 @@ def verdict_job(
     cost (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure; with
     ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure; with
     ``calibration`` and ``nulls`` (the audit's calibration table and matched nulls,
-    :mod:`stereovar.calibration`), the Monte Carlo-specific row the verdict rests on and the
-    calibration's sentence; with ``statistics_figure`` (the run's ``statistics_dots.png``),
-    every statistic against its controls; with the frames' ``variance``, ``warped`` and
-    ``ground_truth`` stores, where the cue is strongest (:func:`strongest_section`: the
-    frames ranked, the top tiles of the top frames, and their figure at
-    ``outputs["strongest"]`` when given). Every figure has a caption that says what it shows
-    (:data:`stereovar.audit.page.CAPTIONS`). ``summary.json`` carries ``schema_version`` and
-    is validated against its schema before it is written
+    :mod:`stereovar.calibration`), the Monte Carlo-specific row the verdict rests on, the
+    encoding its matched null was drawn through, as the frames' ``variance`` stores say
+    (:func:`stereovar.audit.verdict.null_encoding`), and the calibration's sentence; with
+    ``statistics_figure`` (the run's ``statistics_dots.png``), every statistic against its
+    controls; with the frames' ``variance``, ``warped`` and ``ground_truth`` stores, where
+    the cue is strongest (:func:`strongest_section`: the frames ranked, the top tiles of the
+    top frames, and their figure at ``outputs["strongest"]`` when given). Every figure has a
+    caption that says what it shows (:data:`stereovar.audit.page.CAPTIONS`). ``summary.json``
+    carries ``schema_version`` and is validated against its schema before it is written
     (:mod:`stereovar.audit.summary_schema`)."""
     from ..audit.page import (
         caption,
@@ -304,6 +305,13 @@ def verdict_job(
 
         calibrated = headline(read_rows(calibration))
     result = verdict(rows)
+    encoded = ""
+    if result["matched_null"] and variance:  # what the null was drawn through (its stores)
+        from ..audit.verdict import null_encoding
+        from ..io.store import open_dataset
+
+        encoded = null_encoding([dict(open_dataset(p).attrs) for p in variance], records)
+        result = {**result, "text": f"{result['text']} {encoded}"}
     if calibrated:
         result = {**result, "text": f"{result['text']} {calibrated}"}
     shared = seeding_finding(residual)
@@ -317,8 +325,8 @@ def verdict_job(
     lines = summary_lines(name, found, rows, result)
     lines.insert(0, f"{opening['light'].upper()}: {opening['headline']}")
     lines.append(f"  seeding: {shared['text']}")
-    if calibrated:
-        lines.append(f"  calibration: {calibrated}")
+    if calibrated or encoded:  # the matched null's encoding, then how it calibrates
+        lines.append("  calibration: " + " ".join(t for t in (encoded, calibrated) if t))
     lines += [f"  flag: {f['text']}" for f in flags]
     if findings:
         lines.append(f"mitigations: {findings[-1]}")

@@ -12,7 +12,7 @@ DEFAULTS = {
         "shading", "gain_map", "srgb8_0.2", "srgb8_0.4", "srgb8_1", "white_balance",
         "colour_matrix", "power_law", "correlated",
     ],
-    "pipeline_replicates": 8,
+    "pipeline_replicates": 4,
     "seed": 0,
 }
 """The ``calibration`` config section's defaults (``config.schema.yaml`` states them)."""
@@ -21,7 +21,11 @@ DEFAULTS = {
 def scene_frames(variance, ground_truth, aux=None):
     """:class:`~stereovar.calibration.replicates.SceneFrames` of one scene: its seeds
     variance store (the variance contract) and ground truth, and each view's auxiliary-pass
-    store when the run's denoiser reads them."""
+    store when the run's denoiser reads them. Renders an audit imported from integers say so
+    in the store's attrs (``bit_depth`` 8 or 16, ``transfer``, ``full_scale``:
+    :data:`~stereovar.io.contracts.RENDER_PROVENANCE`); their ``encoding`` is then set, and
+    the matched null passes through it. Float renders (the project's own, EXR imports) have
+    none."""
     import numpy as np
 
     from ..calibration.replicates import SceneFrames
@@ -66,7 +70,18 @@ def scene_frames(variance, ground_truth, aux=None):
         n_seeds=int(v.attrs.get("n_draws", v.attrs["n_seeds"])),
         label=f"{v.attrs['scene']}|spp{int(v.attrs['spp'])}",
         aux=passes,
+        encoding=stored_encoding(v.attrs),
     )
+
+
+def stored_encoding(attrs) -> dict | None:
+    """The integer encoding a store's renders were read from
+    (:func:`~stereovar.calibration.pipelines.integer_roundtrip`'s ``bits``, ``transfer`` and
+    ``scale``) when its attrs say ``bit_depth`` is 8 or 16; None otherwise."""
+    bits = int(attrs.get("bit_depth") or 0)
+    if bits not in (8, 16):
+        return None
+    return {"bits": bits, "transfer": str(attrs["transfer"]), "scale": float(attrs["full_scale"])}
 
 
 def calibration_scene_job(
