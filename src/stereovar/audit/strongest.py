@@ -192,7 +192,7 @@ def tile_correlation(a, b, mask, *, tile: int = TILE, min_pixels: int = 30):
     return np.clip(rho, -1.0, 1.0), n
 
 
-def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None):
+def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None, covariates=None):
     """The two views' :math:`\\ln\\sigma^2` residuals after intensity, as images.
 
     .. math:: e_V = \\ln\\sigma_V^2 - \\hat g_V(\\ln\\mu_V)
@@ -210,6 +210,9 @@ def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None):
         The valid set of Eq. 3.
     mu_left, mu_warped : array_like (H, W), optional
         :math:`\\mu_L` and :math:`\\hat\\mu_{R\\to L}`.
+    covariates : tuple of numpy.ndarray (H, W), optional
+        :func:`stereovar.statistics.fields.control_covariates`: the control then removes
+        each view's chromaticity and sensor position too, as the ``partial`` statistic does.
 
     Returns
     -------
@@ -231,7 +234,15 @@ def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None):
     e_left, e_right = np.full(a.shape, np.nan), np.full(a.shape, np.nan)
     if keep.sum() < 2:
         return e_left, e_right, controlled
-    if controlled:
+    if controlled and covariates:
+        fields = [np.asarray(c, dtype=np.float64) for c in covariates]
+        for f in fields:
+            keep &= np.isfinite(f)
+        half = len(fields) // 2
+        picked = [f[keep] for f in fields]
+        ea, eb = partial_pair(a[keep], b[keep], mu_a[keep], mu_b[keep],
+                              covariates=(picked[:half], picked[half:]))
+    elif controlled:
         ea, eb = partial_pair(a[keep], b[keep], mu_a[keep], mu_b[keep])
     else:
         ea, eb = log_floor(a[keep])[0], log_floor(b[keep])[0]

@@ -141,26 +141,26 @@ def frame_residuals(variance, warped, ground_truth) -> tuple:
     from ..audit.strongest import residual_fields
     from ..io.contracts import read_alignment
     from ..io.store import load_store
-    from ..statistics.fields import channel_mean, warped_intensity
+    from ..statistics.fields import control_covariates, seed_mean_controls
 
     v = load_store(variance, "variance store")
     aligned = read_alignment(load_store(warped, "warped store"))
     sigma_l = v["variance"].sel(view="left").transpose("y", "x").values
-    mean_left = mu_l = mu_w = None
+    mean_left = mu_l = mu_w = covariates = None
     if "mean" in v:
         gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
         gl = gt.sel(view="left")
         means = {k: v["mean"].sel(view=k).transpose("y", "x", "channel").values
                  for k in ("left", "right")}
         mean_left = means["left"]
-        mu_l = channel_mean(mean_left)
-        mu_w = warped_intensity(
-            means["right"],
-            {k: gl[k].transpose("y", "x").values for k in ("disparity", "valid")},
-            sign=int(gt.attrs["disparity_sign"]),
-        )
+        truth = {k: gl[k].transpose("y", "x").values for k in ("disparity", "valid")}
+        sign = int(gt.attrs["disparity_sign"])
+        controls = seed_mean_controls(mean_left, means["right"], truth, sign=sign)
+        mu_l, mu_w = controls["intensity"]
+        covariates = control_covariates(sigma_l.shape, colour=controls["colour"],
+                                        disparity=truth["disparity"], sign=sign)
     e_left, e_right, controlled = residual_fields(sigma_l, aligned["warped"], aligned["omega"],
-                                                  mu_l, mu_w)
+                                                  mu_l, mu_w, covariates)
     if mean_left is None:  # no seed mean: show the variance field itself
         mean_left = np.repeat(np.sqrt(np.maximum(sigma_l, 0))[..., None], 3, axis=-1)
     return mean_left, e_left, e_right, controlled
