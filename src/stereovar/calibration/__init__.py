@@ -2,7 +2,9 @@
 known (``DESIGN.md``, Calibration).
 
 :mod:`~stereovar.calibration.synthesis` draws matched nulls and planted cues from a run's own
-frames, :mod:`~stereovar.calibration.replicates` passes them through the run's transforms and
-statistics, and :mod:`~stereovar.calibration.summary` turns the replicates into false-positive
-rates, power curves and interval coverage.
+frames, :mod:`~stereovar.calibration.pipelines` camera pipelines without a Monte Carlo cue
+(lens shading, gain maps, 8-bit sRGB, white balance, colour matrices) and the integer
+encodings a null passes through, :mod:`~stereovar.calibration.replicates` passes them through
+the run's transforms and statistics, and :mod:`~stereovar.calibration.summary` turns the
+replicates into false-positive rates, power curves and interval coverage.
 """

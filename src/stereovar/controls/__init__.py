@@ -4,6 +4,9 @@
     A Poisson-Gaussian camera on the clean seed mean (the level a real sensor reaches).
 ``intensity``
     The variance-intensity relation removed (partial correlation, relative variance).
+``covariates``
+    The intensity control's colour and sensor-position terms (white balance, colour
+    matrices, lens-shading correction).
 ``null_warps``
     Deliberately wrong alignments (the level an unrelated alignment reaches).
 

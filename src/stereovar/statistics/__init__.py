@@ -29,6 +29,8 @@ interval, and the tables built from the per-scene rows.
     Split-half reliability of Eq. 1 and the attenuation of :math:`\\rho` by finite N.
 ``residuals``
     The cross-view correlation of the per-seed residuals (shared random streams).
+``chance``
+    How far two independent fields with spatial structure correlate by chance (Bartlett).
 ``agreement``
     Agreement of two estimates of one variance field (the estimator validation).
 ``rows``
