@@ -245,18 +245,11 @@ def combined_correlation_interval(rhos, lows, highs) -> tuple[float, float, floa
     >>> round(high - low, 4)  # the normal interval's length
     0.0791
     """
-    triples = [
-        (float(r), float(lo), float(hi))
-        for r, lo, hi in zip(rhos, lows, highs, strict=True)
-        if all(math.isfinite(float(v)) for v in (r, lo, hi))
-    ]
-    if not triples:
-        return math.nan, math.nan, math.nan
-    r, lo, hi = (np.array(c) for c in zip(*triples, strict=True))
-    _fisher_z(r)  # refuses values that are not correlations
-    se = (hi - lo) / (2 * Z)
-    width = 2 * Z * math.sqrt(float((se * se).sum())) / r.size
-    mean = float(r.mean())
+    mean, low, high = combined_interval(rhos, lows, highs)
+    if not math.isfinite(mean):
+        return mean, low, high
+    _fisher_z(np.array([float(r) for r in rhos if math.isfinite(float(r))]))  # correlations only
+    width = high - low  # the normal interval's length: the same standard error
     if width >= 2:
         return mean, -1.0, 1.0
     if width == 0:  # no error: exactly the mean, not tanh(atanh(mean))
