@@ -70,8 +70,9 @@ MIN_EFFECT = 0.05
 the matched null must have its 95% interval above it, not merely above 0. Over 57 600
 pixels the interval is about 0.01 wide, so any small misfit of the control is significant;
 the camera pipelines outside the null's class (:mod:`stereovar.calibration.pipelines`) leave
-0.003-0.025 after the intensity control's colour and position terms (0.015 +/- 0.014 for
-8-bit sRGB at 1 DN, 0.025 +/- 0.007 for a fixed gain map; two scenes, 32 replicates each),
+0.000-0.032 after the intensity control's colour and position terms (0.018 +/- 0.015 for
+8-bit sRGB at 1 DN, 0.032 +/- 0.009 and at most 0.048 for a fixed gain map; the default
+scenes, 16 replicates each),
 and fired the rule above 0 on 6-50% of their replicates. A cue this weak is below what a
 camera pipeline leaves, so it is not called Monte Carlo-specific."""
 
