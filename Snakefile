@@ -20,6 +20,10 @@ CONFIGFILE = default_configfile(workflow.basedir)
 check_config_files_or_exit([CONFIGFILE, *workflow.overwrite_configfiles])
 # What envs/stereovar.post-deploy.sh installs into a job's conda environment (--sdm conda).
 export_install_requirement(os.environ)
+# One BLAS thread per job: Snakemake runs jobs side by side, and OpenBLAS rounds a product
+# differently with the threads it finds (a SLURM node's tables would differ from a laptop's
+# in the last bit) and spins on cores other jobs use. Set it before a run to override.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
 configfile: CONFIGFILE
