@@ -144,6 +144,11 @@ def design(colour, position, *, colour_degree=COLOUR_DEGREES[-1],
     gram = columns.T @ columns
     cd = np.asarray(cdeg + [0] * len(pdeg), dtype=int)
     pd = np.asarray([0] * len(cdeg) + list(pdeg), dtype=int)
+    # a term the region holds constant (a grey scene's chromaticity) has nothing to fit
+    diagonal = np.diag(gram)
+    keep = diagonal > 1e-12 * max(float(diagonal.max(initial=0.0)), 1e-300)
+    if not keep.all():
+        columns, cd, pd, gram = columns[:, keep], cd[keep], pd[keep], gram[np.ix_(keep, keep)]
     return columns, cd, pd, gram
 
 
