@@ -19,9 +19,10 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     """Two panels for one statistic (default the intensity-controlled :math:`\\rho`): the
     power of the ``above_null`` rule against the planted strength (a multiple of what the
     renders show), one line per transform, with 95% Wilson intervals and the 80% power line;
-    and the false-positive rate of ``above_zero`` and ``above_null`` on each matched null,
-    with the 5% level: blue where its 95% Wilson interval shows the level, orange where the
-    interval straddles it (not shown), red where it lies above
+    and the false-positive rate of ``above_null`` (the verdict) on each cue-free design
+    (matched nulls, camera pipelines, and all of them together), one row each, with the 5%
+    level: blue where its 95% Wilson interval shows the level, orange where the interval
+    straddles it (not shown), red where it lies above
     (:func:`stereovar.calibration.summary.meets_level`).
 
     Parameters
@@ -37,7 +38,16 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     rows = [r for r in table if r["method"] == method and r["scope"] == scope]
     transforms = list(dict.fromkeys(r["transform"] for r in rows))
     colours = plt.get_cmap("tab10")
-    fig, (power_ax, fpr_ax) = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    bars = [
+        r
+        for r in rows
+        if r["check"] == "false_positive_rate" and r["rule"] == "above_null"
+        and math.isfinite(_f(r["value"]))
+    ]
+    fig, (power_ax, fpr_ax) = plt.subplots(
+        1, 2, figsize=(11.0, max(4.2, 1.6 + 0.17 * len(bars))),
+        gridspec_kw={"width_ratios": [1.2, 1.0]},
+    )
     for k, name in enumerate(transforms):
         points = sorted(
             (_f(r["strength_factor"]), _f(r["value"]), _f(r["low"]), _f(r["high"]))
@@ -71,12 +81,7 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     if transforms:
         # beside the axes: the points sit at 0 and 1 across every strength, so no corner is free
         power_ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    bars = [
-        r
-        for r in rows
-        if r["check"] == "false_positive_rate" and math.isfinite(_f(r["value"]))
-    ]
-    from ..calibration.summary import meets_level
+    from ..calibration.summary import ANY_NULL, meets_level
 
     # whether the 5% level is shown (the whole interval at or below it), refuted (above it)
     # or not shown (the interval straddles it: too few replicates to tell)
@@ -84,26 +89,29 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     labels = []
     for i, r in enumerate(bars):
         value = _f(r["value"])
-        above_null = r["rule"] == "above_null"
         colour = colours_by_word.get(meets_level(r["low"], r["high"]), "tab:orange")
+        pooled = r["kind"] == ANY_NULL
         fpr_ax.errorbar(
-            i,
             value,
-            yerr=[[value - _f(r["low"])], [_f(r["high"]) - value]],
-            fmt="s" if above_null else "o",
-            mfc=colour if above_null else "white",
+            i,
+            xerr=[[value - _f(r["low"])], [_f(r["high"]) - value]],
+            fmt="D" if pooled else "s",
+            mfc=colour,
             color=colour,
-            capsize=3,
+            capsize=2,
+            ms=5 if pooled else 4,
         )
-        labels.append(f"{r['transform']}: {r['kind']}")
-    fpr_ax.axhline(0.05, color="0.5", lw=0.8, ls="--")
-    fpr_ax.set_xticks(range(len(bars)))
-    fpr_ax.set_xticklabels(labels, rotation=70, ha="right", fontsize=7)
-    fpr_ax.set_ylim(-0.03, 1.03)
-    fpr_ax.set_ylabel("false-positive rate")
+        n = _f(r.get("n"))
+        labels.append(f"{r['transform']}: {r['kind']}" + (f" (n={n:.0f})" if math.isfinite(n)
+                                                          else ""))
+    fpr_ax.axvline(0.05, color="0.5", lw=0.8, ls="--")
+    fpr_ax.set_yticks(range(len(bars)))
+    fpr_ax.set_yticklabels(labels, fontsize=7)
+    fpr_ax.invert_yaxis()
+    fpr_ax.set_xlim(-0.02, 1.02)
+    fpr_ax.set_xlabel("false-positive rate (95% Wilson interval)")
     fpr_ax.set_title(
-        "Calls a cue on a matched null:\nfilled, above its null (the verdict); open, above 0\n"
-        "blue, 5% shown; orange, not shown; red, refuted",
+        "Calls a cue on data without one\n(blue: 5% shown; orange: not shown;\nred: refuted)",
         fontsize=9,
     )
     fig.suptitle(f"Calibration of {method} on synthetic frames from this run", fontsize=11)
