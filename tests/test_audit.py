@@ -311,7 +311,8 @@ def row(method, rho, low, high, region="all"):
     }
 
 
-def lift(source, value, chance, scene):
+def lift(source, value, chance, scene, half=0.02):
+    """A frame's C_sigma accuracy row with its tile-bootstrap interval (+/- ``half``)."""
     return {
         "cost": "variance_cost",
         "metric": "wta_accuracy",
@@ -319,10 +320,17 @@ def lift(source, value, chance, scene):
         "region": "all",
         "source": source,
         "value": value,
+        "low": value - half,
+        "high": value + half,
         "chance": chance,
         "n_pixels": 1000,
         "scene": scene,
     }
+
+
+def null(method, scene, value, se):
+    return {"scene": scene, "transform": "none", "region": "all", "method": method,
+            "null_rho": value, "null_se": se}
 
 
 def test_verdict_rules_on_known_rows():
@@ -338,24 +346,44 @@ def test_verdict_rules_on_known_rows():
         "null_shift",
         "null_flip",
     ]
-    corr = [row(m, 0.5, 0.4, 0.6) for m in methods]
-    strong = corr + [row("partial", 0.55, 0.52, 0.58)]
+    corr = [{**row(m, 0.5, 0.4, 0.6), "scene": "a"} for m in methods]
+    strong = corr + [{**row("partial", 0.55, 0.52, 0.58), "scene": "a"}]
     iv = [
         lift("render", 0.5, 0.2, "a"),
-        lift("render", 0.52, 0.2, "b"),
         lift("sensor", 0.22, 0.2, "a"),
-        lift("sensor", 0.21, 0.2, "b"),
     ]
-    rows = verdict_rows(strong, iv)
+    # the matched null of each frame: partial rho 0.01, C_sigma lift 0.10 (+/- se 0.01)
+    nulls = [null("partial", "a", 0.01, 0.0), null("c_sigma_lift", "a", 0.10, 0.01)]
+    rows = verdict_rows(strong, iv, nulls)
     corrected = next(r for r in rows if r["quantity"] == "attenuation-corrected rho")
     assert corrected["value"] == pytest.approx(0.5 / 0.81)
     assert corrected["low"] == pytest.approx(0.4 / 0.81, rel=1e-9)  # one-frame interval
     result = verdict(rows)
     assert result["mc_specific"] and result["strength"] == "strong"
+    # the lift 0.30 +/- 0.02 (bootstrap) against its null 0.10 +/- 0.01 (se): the difference
+    # 0.20 with the two standard errors in quadrature
+    beyond = next(r for r in rows if r["quantity"] == "C_sigma WTA lift beyond its matched null")
+    se = np.hypot(0.02 / 1.959963984540054, 0.01)
+    assert beyond["value"] == pytest.approx(0.20)
+    assert beyond["low"] == pytest.approx(0.20 - 1.959963984540054 * se)
+    assert beyond["null"] == pytest.approx(0.10)
     assert result["matching_cue"] is True
-    # two frames' lifts: mean 0.31, Student t interval over frames
-    lifts = next(r for r in rows if r["quantity"].endswith("renders"))
-    half = 12.706204736174707 * np.std([0.3, 0.32], ddof=1) / np.sqrt(2)
+    # a lift no larger than its matched null's (a camera pipeline the null reproduces) is no
+    # matching cue, however far above chance and above a plain camera's
+    same = [lift("render", 0.31, 0.2, "a"), lift("sensor", 0.22, 0.2, "a")]
+    assert verdict(verdict_rows(strong, same, nulls))["matching_cue"] is False
+    # nor is a lift above its null where the cue is not Monte Carlo-specific
+    flat = corr + [{**row("partial", 0.03, 0.0, 0.06), "scene": "a"}]
+    plain = verdict(verdict_rows(flat, iv, nulls))
+    assert plain["mc_specific"] is False and plain["matching_cue"] is False
+    # without a matched null the lift is reported, never read as a matching cue
+    alone = verdict(verdict_rows(strong, iv))
+    assert alone["matching_cue"] is None and "without a matched null" in alone["text"]
+    # two frames' lifts: mean 0.31, their bootstrap intervals combined
+    two = [lift("render", 0.5, 0.2, "a"), lift("render", 0.52, 0.2, "b", half=0.04)]
+    lifts = next(r for r in verdict_rows(strong, two) if r["quantity"].endswith("renders"))
+    half = np.hypot(0.02, 0.04) / 2
+    assert lifts["value"] == pytest.approx(0.31)
     assert lifts["low"] == pytest.approx(0.31 - half)
     assert lifts["high"] == pytest.approx(0.31 + half)
     none = verdict(verdict_rows(corr + [row("partial", 0.05, -0.02, 0.12)], iv))

@@ -513,7 +513,7 @@ def test_renders_blender_wrote_audit_to_the_native_verdict(tmp_path):
     assert own["matched_null"] is summary["matched_null"] is True
     assert summary["mc_specific"] is own["mc_specific"]
     assert summary["strength"] == own["strength"]
-    assert summary["matching_cue"] == expected["matching_cue"]
+    assert summary["matching_cue"] == own["matching_cue"]
 
     def row(rows, quantity):
         r = next(r for r in rows if r["quantity"].startswith(quantity) and r["region"] == "all")

@@ -17,6 +17,7 @@ rule calibration_scene:
         calibration=config["calibration"],
         analysis=config["analysis"],
         controls=config["controls"],
+        intervention=config["intervention"],
     log:
         "logs/{renderer}/{estimator}/calibration/{scene}/spp{spp}.log",
     benchmark:

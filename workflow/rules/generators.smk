@@ -62,6 +62,7 @@ rule generator_calibration:
         calibration={**config["calibration"], "pipelines": []},
         analysis=config["analysis"],
         controls=config["controls"],
+        intervention=config["intervention"],
     log:
         "logs/generators/{profile}/calibration/{scene}/spp{spp}.log",
     benchmark:

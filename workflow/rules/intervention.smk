@@ -11,6 +11,7 @@ rule intervention:
     params:
         **{k: v for k, v in config["intervention"].items() if k not in ("n_seeds", "spp")},
         sensor=config["controls"]["sensor"],
+        bootstrap=config["analysis"]["bootstrap"],
     log:
         "logs/{renderer}/seeds/intervention/{scene}.log",
     benchmark:

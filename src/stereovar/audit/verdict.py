@@ -4,14 +4,14 @@
 its 95% interval): Pearson's :math:`\\rho` of Eq. 3 and its attenuation-corrected value, the
 robust statistics, the intensity-controlled :math:`\\rho`, the camera baselines, the null
 warps, and the residual-shuffle intervention's :math:`C_\\sigma` winner-take-all lift over
-chance beside the same lift on simulated camera frames. :func:`verdict` applies
-:data:`RULES` to them.
+chance beside the same lift on the matched null (camera-law frames through the data's own
+encoding). :func:`verdict` applies :data:`RULES` to them.
 
 A real camera's noise variance is a function of intensity (:math:`a\\mu + b`), so it
 correlates across views wherever intensity does; the part of the variance that intensity does
 not explain (the ``partial`` statistic) is what only Monte Carlo noise carries. The verdict
 rests on its interval, and on whether a variance-matching cost finds the true disparity more
-often than on camera frames.
+often than on its matched null.
 """
 
 from __future__ import annotations
@@ -19,11 +19,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 
 from ..calibration.summary import MIN_EFFECT
 from ..statistics.across import combined_correlation_interval, combined_interval, rows_interval
-from ..statistics.claims import t_interval
 from ..statistics.reliability import corrected_interval
 from ..statistics.residuals import SHARED_STREAMS
 
@@ -39,13 +37,14 @@ RULES = (
     "camera pipelines without a Monte Carlo cue leave; its strength is the word for that "
     "difference (>= 0.5 strong, >= 0.3 moderate, >= 0.1 weak, else negligible). The "
     "calibration measures how often this rule fires on matched nulls and on camera pipelines "
-    "outside the null's class, and from which planted strength it detects a cue. It works as "
-    "a matching cue beyond a camera when the C_sigma winner-take-all accuracy's lift over "
-    "chance has an interval above 0 and above the same lift on simulated camera frames. "
+    "outside the null's class, and from which planted strength it detects a cue. A "
+    "Monte Carlo-specific cue works as a matching cue beyond a camera when, besides, the "
+    "C_sigma winner-take-all accuracy's lift over chance minus the same lift on its matched "
+    "null has a 95% interval above 0 (the calibration measures this rule too). "
     "Intervals: rho, frames' spatial block-bootstrap intervals combined, each at least as "
     "wide as two independent fields with the frames' spatial structure would give by "
-    "chance; intervention, Student t over frames (one frame: Wilson interval treating pixels "
-    "as independent, too narrow)."
+    "chance; C_sigma lift, the same tile bootstrap over its per-pixel hits, combined over "
+    "frames."
 )
 
 RULE_ITEMS = (
@@ -58,12 +57,11 @@ RULE_ITEMS = (
     "(:math:`\\ln\\mu`), colour and position on the sensor explain.",
     "**Strength:** the word for that difference: at least 0.5 strong, 0.3 moderate, 0.1 weak, "
     "else negligible.",
-    "**A matching cue beyond a camera:** the :math:`C_\\sigma` winner-take-all accuracy's "
-    "lift over chance has a 95% interval above 0 and above the same lift on simulated camera "
-    "frames.",
-    "**Intervals:** for :math:`\\rho`, the frames' spatial block-bootstrap intervals "
-    "combined; for the intervention, Student t over frames (one frame: a Wilson interval that "
-    "treats pixels as independent, too narrow).",
+    "**A matching cue beyond a camera:** a Monte Carlo-specific cue whose "
+    ":math:`C_\\sigma` winner-take-all lift over chance, minus the same lift on its matched "
+    "null, has a 95% interval above 0.",
+    "**Intervals:** the frames' spatial block-bootstrap intervals combined, for "
+    ":math:`\\rho` and for the :math:`C_\\sigma` lift alike.",
     "**Calibration:** how often this rule fires on matched nulls, and from which planted "
     "strength it detects a cue, is measured on these frames.",
 )
@@ -150,30 +148,41 @@ def _reason(rows, region) -> str:
     return "; ".join(sorted(reasons))
 
 
+def lift_rows(intervention: list[dict], source: str = "render",
+              region: str = "all") -> list[dict]:
+    """Per frame, the :math:`C_\\sigma` winner-take-all accuracy minus chance (normal
+    condition) with its tile-bootstrap interval where the intervention computed one
+    (:func:`stereovar.intervention.lift.wta_lift`), as rows shaped like correlation rows
+    (``scene``, ``region``, ``method`` :data:`~stereovar.intervention.lift.LIFT_METHOD`,
+    ``rho``, ``boot_low``, ``boot_high``), so that they meet their matched null as a
+    correlation does (:func:`stereovar.statistics.mitigations.matched_difference`)."""
+    from ..intervention.lift import LIFT_METHOD
+
+    out = []
+    for r in intervention:
+        if not (r["cost"] == "variance_cost" and r["metric"] == "wta_accuracy"
+                and r["condition"] == "normal" and r["region"] == region
+                and str(r.get("source") or "render") == source
+                and _ok(r["value"], r["chance"])):
+            continue
+        chance = _f(r["chance"])
+        out.append({"scene": r.get("scene"), "region": region, "method": LIFT_METHOD,
+                    "rho": _f(r["value"]) - chance,
+                    "boot_low": _f(r.get("low")) - chance,
+                    "boot_high": _f(r.get("high")) - chance})
+    return out
+
+
 def wta_lift(intervention: list[dict], source: str, region: str = "all") -> tuple:
     """The :math:`C_\\sigma` winner-take-all accuracy minus chance (normal condition), mean
-    over frames with its 95% interval: Student t over frames, or for one frame a Wilson
-    interval over its scoreable pixels (pixels taken as independent)."""
-    chosen = [
-        r
-        for r in intervention
-        if r["cost"] == "variance_cost"
-        and r["metric"] == "wta_accuracy"
-        and r["condition"] == "normal"
-        and r["region"] == region
-        and str(r.get("source") or "render") == source
-        and _ok(r["value"], r["chance"])
-    ]
-    lifts = [_f(r["value"]) - _f(r["chance"]) for r in chosen]
-    if len(lifts) != 1:
-        return t_interval(lifts)
-    n = int(_f(chosen[0]["n_pixels"]))
-    if n < 1:
-        return lifts[0], math.nan, math.nan
-    k = int(round(_f(chosen[0]["value"]) * n))
-    ci = stats.binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
-    chance = _f(chosen[0]["chance"])
-    return lifts[0], ci.low - chance, ci.high - chance
+    over frames with its 95% interval: the frames' tile-bootstrap intervals combined
+    (:func:`stereovar.statistics.across.combined_interval`); NaN bounds where a frame has
+    none."""
+    rows = lift_rows(intervention, source, region)
+    if not rows:
+        return math.nan, math.nan, math.nan
+    return combined_interval([r["rho"] for r in rows], [r["boot_low"] for r in rows],
+                             [r["boot_high"] for r in rows])
 
 
 SPECIFIC = "Monte Carlo-specific rho"
@@ -219,7 +228,22 @@ def verdict_rows(
         value, low, high = wta_lift(intervention, source)
         quantity = f"C_sigma WTA accuracy minus chance, {label}"
         out.append(_row(quantity, "all", value, low, high, "intervention (Sec. 3.4)"))
+        if source == "render" and nulls is not None:
+            from ..intervention.lift import LIFT_METHOD
+            from ..statistics.mitigations import matched_difference
+
+            null, *diff = matched_difference(lift_rows(intervention), nulls, transform="none",
+                                             region="all", method=LIFT_METHOD)
+            out.append({**_row(
+                MATCHING, "all", *diff,
+                f"renders' lift minus its matched null's ({100 * null:+.1f} pp)" if _ok(null)
+                else "no matched null for these frames"), "null": null})
     return out
+
+
+MATCHING = "C_sigma WTA lift beyond its matched null"
+"""The label of the matching-cue rule's row: the renders' :math:`C_\\sigma` lift minus the
+same lift on the matched null's frames."""
 
 
 def _find(rows, label_start: str, region: str = "all") -> dict:
@@ -251,7 +275,7 @@ def verdict(rows: list[dict]) -> dict:
     if _ok(specific["value"], specific["low"], specific["high"]):
         partial, against = specific, " beyond its matched null (camera-law noise on these frames)"
     lift = _find(rows, "C_sigma WTA accuracy minus chance, renders")
-    camera = _find(rows, "C_sigma WTA accuracy minus chance, simulated")
+    beyond = _find(rows, MATCHING)
     pearson = _find(rows, "Pearson rho after")
     sim = _find(rows, "camera baseline: simulated")
 
@@ -296,18 +320,26 @@ def verdict(rows: list[dict]) -> dict:
         f"same number of frames gives {iv(sim)}, so the raw rho alone does not separate "
         "Monte Carlo noise from sensor noise."
     )
-    if _ok(lift["value"], lift["low"]):
-        above_camera = _ok(camera["high"]) and lift["low"] > camera["high"]
-        matching = bool(lift["low"] > 0 and above_camera)
+    if _ok(beyond["value"], beyond["low"], beyond.get("null")):
+        matching = bool(mc is True and beyond["low"] > 0)
         third = (
             f" A variance-matching cost (C_sigma) picks the true disparity {iv(lift, True)} "
-            f"more often than chance, against {iv(camera, True)} on camera frames: "
+            f"more often than chance, {iv(beyond, True)} beyond its matched null "
+            f"({100 * beyond['null']:+.1f} pp): "
             + (
-                "a stereo network trained on this data can use the variance as a matching cue "
-                "that real images do not have."
+                "a stereo network trained on this data can use the Monte Carlo variance as a "
+                "matching cue that real images do not have."
                 if matching
-                else "not a matching cue beyond what a camera's noise offers."
+                else "no matching cue beyond what the same camera's noise offers"
+                + ("." if beyond["low"] <= 0 else
+                   ", as the cue is not Monte Carlo-specific.")
             )
+        )
+    elif _ok(lift["value"]):
+        matching = None
+        third = (
+            f" A variance-matching cost (C_sigma) picks the true disparity {iv(lift, True)} "
+            "more often than chance; without a matched null it is not read as a matching cue."
         )
     else:
         matching, third = None, " The intervention's lift is undefined on these frames."
@@ -328,7 +360,7 @@ def summary_lines(name: str, found: str, rows: list[dict], result: dict) -> list
         return _interval(r["value"], r["low"], r["high"])
 
     lift = _find(rows, "C_sigma WTA accuracy minus chance, renders")
-    camera = _find(rows, "C_sigma WTA accuracy minus chance, simulated")
+    beyond = _find(rows, MATCHING)
     specific = _find(rows, SPECIFIC)
     first = (
         f"audit {name} ({found}): Monte Carlo-specific cue: {result['strength']}; "
@@ -350,10 +382,11 @@ def summary_lines(name: str, found: str, rows: list[dict], result: dict) -> list
             if _ok(lift["value"], lift["low"], lift["high"])
             else "n/a"
         )
-        + " (camera frames "
+        + " (beyond its matched null "
         + (
-            f"{100 * camera['value']:+.1f} pp)"
-            if _ok(camera["value"])
+            f"{100 * beyond['value']:+.1f} pp [{100 * beyond['low']:+.1f}, "
+            f"{100 * beyond['high']:+.1f}])"
+            if _ok(beyond["value"], beyond["low"], beyond["high"])
             else "n/a)"
         ),
     ]

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..intervention.lift import LIFT_METHOD
 from ..seeding import derive_seed
 from .pipelines import (
     GAIN_MAP_SCALE,
@@ -75,8 +76,13 @@ SHARED_STREAMS_METHOD = "shared_streams"
 ``method`` of that name: its ``rho`` is the per-seed residuals' cross-view correlation at
 zero disparity (:func:`_shared_streams_row`)."""
 
-PIPELINE_METHODS = ("partial", SHARED_STREAMS_METHOD)
-"""The statistics the pipeline nulls measure: the verdict's, and the shared-streams check."""
+PIPELINE_METHODS = ("partial", SHARED_STREAMS_METHOD, LIFT_METHOD)
+"""The statistics the pipeline nulls measure: the verdict's, the shared-streams check and
+the variance-matching cost's lift (the matching-cue rule's)."""
+
+NULL_METHODS = (*CALIBRATED_METHODS, SHARED_STREAMS_METHOD, LIFT_METHOD)
+"""The statistics the cue-free designs measure as drawn: every calibrated one and both
+checks of the audit's light."""
 
 
 @dataclass(frozen=True)
@@ -112,6 +118,10 @@ class SceneFrames:
         (:func:`~stereovar.calibration.synthesis.channel_correlation`; a path tracer's is near
         0.9): the synthetic frames' channels share their noise as much, so that Eq. 1's
         estimation noise, and with it the renders' strength, is the renders'.
+    window, max_disparity : int, optional
+        The variance-matching cost's patch side and largest disparity, as the intervention
+        scans the renders (``intervention.window``; ``max_disparity`` None: the largest
+        ground truth plus ``intervention.disparity_margin``).
     """
 
     mean: dict
@@ -124,6 +134,8 @@ class SceneFrames:
     aux: dict | None = None
     encoding: dict | None = None
     channel_correlation: float = 0.0
+    window: int = 5
+    max_disparity: int | None = None
 
 
 def transform_stack(
@@ -276,6 +288,10 @@ def statistic_rows(
         if name == SHARED_STREAMS_METHOD:
             rows.append(_shared_streams_row(stacks, scene, settings))
             continue
+        if name == LIFT_METHOD:
+            rows.append(_lift_row(fields, scene, settings, seed_of(
+                settings.bootstrap.seed, label, LIFT_METHOD)))
+            continue
         result = evaluate(METHODS.get(name), aligned_set, pixels, settings=settings, draws=draws)
         rows.append({"region": "all", "method": name, **result})
     return rows
@@ -300,6 +316,19 @@ def _shared_streams_row(stacks, scene: SceneFrames, settings) -> dict:
     return {"region": "all", "method": SHARED_STREAMS_METHOD, "rho": row["rho"],
             "boot_low": row["low"], "boot_high": row["high"], "chance_se": float("nan"),
             "n_pixels": row["n_pixels"]}
+
+
+def _lift_row(fields, scene: SceneFrames, settings, seed) -> dict:
+    """The variance-matching cost's lift over chance on one view pair's Eq. 1 fields, each in
+    its own view's coordinates (:func:`stereovar.intervention.lift.wta_lift`)."""
+    from ..intervention.lift import wta_lift
+
+    b = settings.bootstrap
+    r = wta_lift(fields["left"], fields["right"], scene.ground_truth["left"], sign=scene.sign,
+                 max_disparity=scene.max_disparity, window=scene.window, tile=b.tile,
+                 reps=b.reps, seed=seed)
+    return {"region": "all", "method": LIFT_METHOD, "rho": r["value"], "boot_low": r["low"],
+            "boot_high": r["high"], "chance_se": float("nan"), "n_pixels": r["n_pixels"]}
 
 
 def measured_rows(
@@ -515,8 +544,10 @@ def scene_calibration(
             for name in chosen:
                 design = {"replicate": r, "kind": kind, "strength": strength,
                           "strength_factor": factor}
-                checks = (*CALIBRATED_METHODS, SHARED_STREAMS_METHOD) if (
-                    name == NONE and kind in NULL_KINDS) else None
+                checks = None
+                if name == NONE:  # the light's checks on the frames as drawn
+                    checks = NULL_METHODS if kind in NULL_KINDS else (
+                        *CALIBRATED_METHODS, LIFT_METHOD)
                 rows += measured_rows(
                     frames, name, scene, settings,
                     label=f"{scene.label}|{r}|{kind}|{factor:g}|{name}",

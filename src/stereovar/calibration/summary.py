@@ -34,7 +34,13 @@ false positive that takes :func:`replicates_to_show`, 73). The rules:
     the audit's shared-streams check (``shared_streams``: the per-seed residuals'
     cross-view correlation at zero disparity) has an interval above
     :data:`~stereovar.statistics.residuals.SHARED_STREAMS`, on frames whose views are
-    independent.
+    independent;
+``matching``
+    the audit's matching-cue rule (``c_sigma_lift``: the variance-matching cost's
+    winner-take-all lift over chance, :mod:`stereovar.intervention.lift`): the lift minus its
+    matched null's has an interval above 0, and the same replicate's ``partial`` fires
+    ``above_null`` (a matching cue is called only where the cue is Monte Carlo-specific, so
+    the rule's false positives are at most the verdict rule's).
 
 Cue-free designs are the matched nulls (``camera``, ``misaligned``) and the camera pipelines
 (:mod:`stereovar.calibration.pipelines`, with the 8-bit ones' encoded nulls); each rule's
@@ -54,6 +60,7 @@ from collections import defaultdict
 import numpy as np
 from scipy import stats
 
+from ..intervention.lift import LIFT_METHOD
 from ..statistics.across import combined_correlation_interval, combined_interval
 
 LEVEL = 0.05
@@ -118,7 +125,7 @@ NULL_COLUMNS = [  # margin: the equivalence margin of the row's transform and st
 transform and statistic, and the equivalence margin."""
 
 SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative", "null_shift",
-                   "shared_streams")
+                   "shared_streams", LIFT_METHOD)
 """The statistics the table reports (every calibrated one stays in the replicate rows)."""
 
 
@@ -334,7 +341,9 @@ def combined_rows(rows: list[dict]) -> list[dict]:
     for key, group in _group(rows, keys).items():
         row = dict(zip(keys, key, strict=True))
         row["scene"] = "combined"
-        row["rho"], row["boot_low"], row["boot_high"] = combined_correlation_interval(
+        combine = combined_interval if row["method"] == LIFT_METHOD else (
+            combined_correlation_interval)  # a lift is a difference of rates, not a rho
+        row["rho"], row["boot_low"], row["boot_high"] = combine(
             [g["rho"] for g in group], [g["boot_low"] for g in group],
             [g["boot_high"] for g in group],
         )
@@ -358,6 +367,9 @@ def _fires(rule: str, r: dict, margin=math.nan) -> bool | None:
     low, high = _f(r["diff_low"]), _f(r["diff_high"])
     if not (math.isfinite(low) and math.isfinite(high)):
         return None
+    if rule == "matching":
+        specific = r.get("partial_fires")
+        return None if specific is None else bool(low > 0 and specific)
     if rule == "above_null":
         return low > MIN_EFFECT
     if rule == "removed":
@@ -444,6 +456,8 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
     null_means = matched_nulls(rows)
     per_scene = with_differences(rows, null_means)
     scopes = {"scene": per_scene, "combined": combined_rows(per_scene)}
+    for scoped in scopes.values():
+        _pair_with_partial(scoped)
     table: list[dict] = []
     margins: dict = {}
 
@@ -475,7 +489,8 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             # over all of them (the level a verdict is held to on data of unknown kind)
             cue_free = [k for (k, f) in by_design if k not in ("planted", "renders")]
             pooled = [r for k in cue_free for r in by_design[(k, 0.0)]]
-            rules = ("shared",) if method == "shared_streams" else ("above_zero", "above_null")
+            rules = (RULE_OF[method],) if method in RULE_OF else ("above_zero", "above_null")
+            detects = "matching" if method == LIFT_METHOD else "above_null"
             for kind, chosen in [*((k, by_design[(k, 0.0)]) for k in cue_free),
                                  *([(ANY_NULL, pooled)] if len(cue_free) > 1 else [])]:
                 for rule in rules:
@@ -493,27 +508,28 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             curve = []
             for factor in planted:
                 chosen = by_design[("planted", factor)]
-                k, n = _count("above_null", chosen)
+                k, n = _count(detects, chosen)
                 if not n:
                     continue
                 r = rate(k, n)
                 curve.append((factor, r[0]))
-                add("power", "above_null", scope, transform, method, "planted", factor, r, n,
+                add("power", detects, scope, transform, method, "planted", factor, r, n,
                     "", "")
             smallest = detectable(curve)
             margin = math.nan
-            if math.isfinite(smallest):
+            if math.isfinite(smallest) and detects == "above_null":
                 # the mean Monte Carlo-specific rho at the detectable strength: interpolated
                 margin = _interpolated_diff(by_design, smallest)
             replicates = max((len(v) for k, v in by_design.items() if k[0] == "planted"),
                              default=0)
             margins[(scope, transform, method)] = (margin, replicates)
             if planted:
-                add("smallest_detectable", "above_null", scope, transform, method, "planted",
+                add("smallest_detectable", detects, scope, transform, method, "planted",
                     smallest, (smallest, math.nan, math.nan),
                     sum(len(v) for v in by_design.values()), "", "",
                     f"equivalence margin (mean rho minus null there) {margin:.4f}"
-                    if math.isfinite(margin) else "no planted strength reaches 80% power")
+                    if math.isfinite(margin) else "" if math.isfinite(smallest)
+                    else "no planted strength reaches 80% power")
             # removed: how often the equivalence rule calls a cue removed
             for kind, factor in [("camera", 0.0), *(("planted", f) for f in planted)]:
                 chosen = by_design.get((kind, factor), [])
@@ -565,6 +581,18 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
             }
         )
     return table, nulls
+
+
+def _pair_with_partial(rows: list[dict]) -> None:
+    """Give each ``c_sigma_lift`` row ``partial_fires``: whether the verdict rule
+    (``partial`` ``above_null``) fires on the same scene (or scenes combined), replicate,
+    design and transform, which the ``matching`` rule requires."""
+    keys = ("scene", "replicate", "kind", "strength_factor", "transform", "region")
+    fired = {tuple(r[k] for k in keys): _fires("above_null", r)
+             for r in rows if r["method"] == "partial"}
+    for r in rows:
+        if r["method"] == LIFT_METHOD:
+            r["partial_fires"] = fired.get(tuple(r[k] for k in keys))
 
 
 def _interpolated_diff(by_design, strength) -> float:
@@ -792,7 +820,12 @@ is held to; the others are the worst single design. Each is read by the upper en
 95% Wilson interval: ``at most 6% (0 of 64; not shown)``, with the replicates that fired
 and, unless the interval shows the 5% level, ``not shown`` (it straddles the level) or
 ``no`` (it lies above); the rule ``above 0`` is the audit's former Monte Carlo rule;
+``shared_streams`` and ``c_sigma_lift`` are read by their own rules (:data:`RULE_OF`);
 coverage is the lowest over the designs, pooled over scenes."""
+
+RULE_OF = {"shared_streams": "shared", LIFT_METHOD: "matching"}
+"""The rule each check of the audit's light is held to; every other statistic's is
+``above_null``."""
 
 
 def false_positive_text(row) -> str:
@@ -852,31 +885,34 @@ def compact_table(table: list[dict]) -> list[dict]:
             (int(_f(r["n"])) for r in scene
              if r["check"] == "false_positive_rate" and r["kind"] != ANY_NULL), default=0
         )
+        rule = RULE_OF.get(method, "above_null")
         out.append(
             {
                 "transform": transform,
                 "method": method,
                 "false positives above its null, every cue-free design, scenes combined":
                 _percent(worst_false_positive(table, scope="combined", transform=transform,
-                                              method=method, pooled=True)),
+                                              method=method, rule=rule, pooled=True)),
                 "false positives above its null, per scene": _percent(
                     worst_false_positive(table, scope="scene", transform=transform,
-                                         method=method, rule="above_null")
+                                         method=method, rule=rule)
                 ),
                 "false positives above its null, scenes combined": _percent(
                     worst_false_positive(table, scope="combined", transform=transform,
-                                         method=method, rule="above_null")
+                                         method=method, rule=rule)
                 ),
                 "false positives above 0, per scene": _percent(
                     worst_false_positive(table, scope="scene", transform=transform,
                                          method=method, rule="above_zero")
                 )
                 if method == "partial"
+                else "n/a" if method in RULE_OF
                 else "not a Monte Carlo test (a camera correlates too)",
                 "smallest detectable (x the renders)": f"{value:.3g}"
                 if math.isfinite(value)
                 else "none up to the strongest",
-                "equivalence margin": note.rsplit(" ", 1)[-1] if math.isfinite(value) else "n/a",
+                "equivalence margin": note.rsplit(" ", 1)[-1] if math.isfinite(value) and note
+                else "n/a",
                 "coverage of rho (lowest)": _percent(
                     _worst(scene, "coverage", "rho", pick_max=False)
                 ),

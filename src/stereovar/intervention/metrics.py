@@ -152,6 +152,7 @@ def intervention_metrics(
     margin_samples: int = 2000,
     workers: int = 1,
     regions: Sequence[str] = REGIONS,
+    bootstrap=None,
 ) -> InterventionResult:
     """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4).
 
@@ -193,14 +194,20 @@ def intervention_metrics(
         Threads for the cost-volume scans.
     regions : sequence of str, keyword-only
         Regions scored (:data:`REGIONS` by default; ``("all",)`` without a glass mask).
+    bootstrap : stereovar.statistics.bootstrap.BootstrapSettings, keyword-only, optional
+        When given, the :math:`C_\\sigma` accuracy of region ``all`` in the normal condition
+        gets ``low`` and ``high``: its 95% tile-bootstrap interval
+        (:func:`stereovar.intervention.lift.wta_lift`, shifted by the chance level), which
+        the audit's matching-cue rule reads. Every other row's are NaN.
 
     Returns
     -------
     InterventionResult
         ``rows``: ``value`` is the mean margin over the region's scored pixels pooled over
-        seeds, or the accuracy pooled over seeds (hits / scoreable pixels); ``chance`` the
-        mean chance level of an accuracy; ``n_pixels`` the scoreable pixels per seed;
-        ``reason`` why ``value`` is NaN. ``margins``: the margin sample.
+        seeds, or the accuracy pooled over seeds (hits / scoreable pixels); ``low`` and
+        ``high`` its interval where computed; ``chance`` the mean chance level of an
+        accuracy; ``n_pixels`` the scoreable pixels per seed; ``reason`` why ``value`` is
+        NaN. ``margins``: the margin sample.
     """
     n = len(left)
     if n != len(right) or n < 2:
@@ -272,9 +279,29 @@ def intervention_metrics(
                             "region": region,
                             "condition": condition,
                             "value": value if n_pix else math.nan,
+                            "low": math.nan,
+                            "high": math.nan,
                             "chance": chance,
                             "n_pixels": n_pix,
                             "reason": "" if n_pix else f"no scoreable {region} pixels",
                         }
                     )
+    if bootstrap is not None and "all" in masks:
+        _lift_interval(rows, moments_l.variance, moments_r.variance, ground_truth_left,
+                       sign=sign, max_disparity=max_disparity, window=window,
+                       bootstrap=bootstrap)
     return InterventionResult(rows, samples)
+
+
+def _lift_interval(rows, sigma_l, sigma_r, ground_truth_left, *, bootstrap, **scan) -> None:
+    """Set ``low`` and ``high`` of the normal :math:`C_\\sigma` accuracy of region ``all``:
+    the lift's tile-bootstrap interval plus its chance level."""
+    from .lift import wta_lift
+
+    lift = wta_lift(sigma_l, sigma_r, ground_truth_left, tile=bootstrap.tile,
+                    reps=bootstrap.reps, seed=bootstrap.seed, **scan)
+    for row in rows:
+        if (row["cost"], row["metric"], row["region"], row["condition"]) == (
+                "variance_cost", "wta_accuracy", "all", "normal"):
+            row["low"] = lift["low"] + lift["chance"]
+            row["high"] = lift["high"] + lift["chance"]

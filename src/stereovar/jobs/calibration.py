@@ -96,12 +96,15 @@ def calibration_scene_job(
     calibration=None,
     analysis=None,
     controls=None,
+    intervention=None,
 ) -> list[dict]:
     """One scene's calibration replicates
     (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV, and with
     ``renders`` (each view's render stores) what every transform that reads the seed mean
     ships, measured on the renders themselves
-    (:func:`stereovar.calibration.replicates.renders_shipped_rows`)."""
+    (:func:`stereovar.calibration.replicates.renders_shipped_rows`). ``intervention`` (its
+    config section) sets the variance-matching cost's window and disparities as the
+    intervention scans the renders."""
     from ..calibration.replicates import (
         CALIBRATION_COLUMNS,
         renders_shipped_rows,
@@ -114,6 +117,7 @@ def calibration_scene_job(
     settings, _ = analysis_settings(analysis, controls)
     cal = {**DEFAULTS, **dict(calibration or {})}
     scene = scene_frames(variance, ground_truth, aux)
+    scene = matching_scan(scene, intervention)
     stacks = {}
     if renders:
         import dataclasses
@@ -169,6 +173,23 @@ def calibration_scene_job(
     )
     write_tables(rows, CALIBRATION_COLUMNS, {"csv": out})
     return rows
+
+
+def matching_scan(scene, intervention=None):
+    """``scene`` with the intervention's window and largest disparity (its
+    ``max_disparity``, or the largest ground truth plus ``disparity_margin``)."""
+    import dataclasses
+
+    from ..intervention.lift import DISPARITY_MARGIN, max_disparity_of
+
+    settings = dict(intervention or {})
+    largest = settings.get("max_disparity")
+    if largest is None:
+        gt = scene.ground_truth["left"]
+        largest = max_disparity_of(gt["disparity"], gt["valid"],
+                                   settings.get("disparity_margin", DISPARITY_MARGIN))
+    return dataclasses.replace(scene, window=int(settings.get("window", 5)),
+                               max_disparity=int(largest))
 
 
 def calibration_table_job(rows, outputs: dict, *, nulls, figure=None) -> list[dict]:

@@ -17,6 +17,8 @@ INTERVENTION_COLUMNS = [
     "region",
     "condition",
     "value",
+    "low",
+    "high",
     "chance",
     "n_pixels",
     "reason",
@@ -46,6 +48,7 @@ def intervention_job(
     margin_samples=2000,
     workers=1,
     sensor=None,
+    bootstrap=None,
 ) -> list[dict]:
     """Table 3's metrics of one scene, normal against decorrelated (paper Sec. 3.4), and a
     sample of the per-pixel GT margins for the distribution figure.
@@ -57,7 +60,11 @@ def intervention_job(
     With ``sensor`` (the ``controls.sensor`` settings) the same metrics are computed again on
     N simulated Poisson-Gaussian frames per view around the seed mean
     (:class:`stereovar.controls.sensor.SensorFrames`): rows with ``source`` ``sensor``
-    beside the renders' ``render`` rows, Table 3's sensor column."""
+    beside the renders' ``render`` rows, Table 3's sensor column.
+
+    ``bootstrap`` (``analysis.bootstrap``) gives the :math:`C_\\sigma` accuracy its
+    tile-bootstrap interval (``low``, ``high``; region ``all``, normal condition), which
+    the audit's matching-cue rule reads."""
     import math
 
     from ..intervention.metrics import REGIONS, intervention_metrics
@@ -79,6 +86,8 @@ def intervention_job(
             largest,
             n_lost,
         )
+    from ..statistics.bootstrap import BootstrapSettings
+
     renders_l, renders_r = LazyRenders(left), LazyRenders(right)
     no_mask = gt.attrs.get("material_mask") == "none"
     options = {
@@ -90,6 +99,7 @@ def intervention_job(
         "workers": workers,
         # `all` always (the audit's verdict reads it), Table 3's regions with a glass mask
         "regions": ("all",) if no_mask else ("all", *REGIONS),
+        "bootstrap": None if bootstrap is None else BootstrapSettings(**bootstrap),
     }
     result = intervention_metrics(
         renders_l, renders_r, gl, margin_samples=margin_samples, **options
