@@ -18,6 +18,7 @@ from stereovar.calibration.replicates import SceneFrames, scene_calibration, sta
 from stereovar.calibration.summary import MIN_EFFECT, calibration_table
 from stereovar.calibration.synthesis import camera_law, draw_frames
 from stereovar.estimators.seeds import variance_field
+from stereovar.intervention.lift import LIFT_METHOD
 from stereovar.statistics.fields import AnalysisSettings
 
 H, W, D = 72, 112, 2.5
@@ -57,16 +58,17 @@ def test_no_pipeline_is_called_a_cue(coloured_scene):
     )
     assert info["pipeline_replicates"] == 3
     table, _ = calibration_table([{**r, "scene": "s"} for r in rows],
-                                 methods=("partial", "shared_streams"))
-    for method, rule in (("partial", "above_null"), ("shared_streams", "shared")):
+                                 methods=("partial", "shared_streams", LIFT_METHOD))
+    for method, rule in (("partial", "above_null"), ("shared_streams", "shared"),
+                         (LIFT_METHOD, "matching")):
         fired = {r["kind"]: r["value"] for r in table
                  if (r["check"], r["rule"], r["scope"], r["method"])
                  == ("false_positive_rate", rule, "scene", method)}
         assert set(PIPELINES) <= set(fired)
         assert {k: v for k, v in fired.items() if v > 0} == {}
     # the planted cue is still found (power is not given away for the pipelines)
-    power = next(r for r in table if (r["check"], r["scope"], r["strength_factor"])
-                 == ("power", "scene", 1.0))
+    power = next(r for r in table if (r["check"], r["rule"], r["scope"], r["strength_factor"])
+                 == ("power", "above_null", "scene", 1.0))
     assert power["value"] == 1.0
 
 
@@ -156,3 +158,79 @@ def test_the_shared_streams_check_fires_on_shared_noise_only(coloured_scene):
     assert row["boot_low"] > SHARED_STREAMS and row["rho"] > 0.5
     row = _shared_streams_row(apart, coloured_scene, AnalysisSettings())
     assert row["boot_low"] < SHARED_STREAMS and abs(row["rho"]) < 0.05
+
+
+@pytest.fixture(scope="module")
+def integer_scene(coloured_scene):
+    """The coloured scene with its right view the left one 2 px over, exactly (an integer
+    disparity, np.roll): corresponding pixels share their clean value to the last bit, so
+    an 8-bit encoding's sawtooth in the variance is the same in both views."""
+    left = coloured_scene.mean["left"]
+    mean = {"left": left, "right": np.roll(left, 2, axis=1)}
+    valid = np.ones((H, W), bool)
+    valid[:, -2:] = False
+    truth = {v: {"disparity": np.full((H, W), 2.0), "valid": valid} for v in mean}
+    variance = {v: 0.02 * m.mean(axis=-1) + 1e-4 for v, m in mean.items()}
+    return SceneFrames(mean, variance, truth, np.zeros((H, W), bool), 1, 8, "integer|spp8")
+
+
+def test_a_denoised_8_bit_render_at_an_integer_disparity_is_no_cue(integer_scene, monkeypatch):
+    """8-bit sRGB at 0.2 DN of noise (a denoised render as Kubric ships it), at an integer
+    disparity: each pixel's variance is fixed by its seed mean's place between two codes,
+    and that sawtooth is the same in both views. The control's quantisation term removes it:
+    no replicate fires the verdict rule or the matching-cue rule against the encoded null.
+    Without the term the same frames read far above the smallest cue called."""
+    from stereovar.controls import quantisation
+
+    def run():
+        rows, _ = scene_calibration(
+            integer_scene, transforms=["none"], settings=AnalysisSettings(), replicates=2,
+            strength_factors=[], expensive_replicates=0, pipelines=("srgb8_0.2",),
+            pipeline_replicates=3)
+        rows = [{**r, "scene": "s"} for r in rows]
+        table, _ = calibration_table(rows, methods=("partial", LIFT_METHOD))
+        return rows, table
+
+    rows, table = run()
+    for method, rule in (("partial", "above_null"), (LIFT_METHOD, "matching")):
+        fired = next(r for r in table if (r["check"], r["rule"], r["scope"], r["method"],
+                                          r["kind"])
+                     == ("false_positive_rate", rule, "scene", method, "srgb8_0.2"))
+        assert fired["n"] == 3 and fired["value"] == 0
+    monkeypatch.setattr(quantisation, "quantisation_variance", lambda mean, encoding: None)
+    rows_without, _ = run()
+
+    def specific(rows):
+        data = np.mean([r["rho"] for r in rows
+                        if (r["kind"], r["method"]) == ("srgb8_0.2", "partial")])
+        null = np.mean([r["rho"] for r in rows
+                        if (r["kind"], r["method"]) == ("camera_srgb8_0.2", "partial")])
+        return data - null
+
+    assert specific(rows_without) > 3 * MIN_EFFECT
+    assert specific(rows) < MIN_EFFECT
+
+
+def test_quantisation_variance_is_eq1_of_frames_on_two_codes():
+    """Brute force: frames of a 16-bit linear and an 8-bit sRGB encoding that take one or two
+    neighbouring codes per channel; their Eq. 1 variance (population, averaged over
+    channels) equals the variance the encoding implies at their seed mean."""
+    from stereovar.calibration.pipelines import integer_roundtrip
+    from stereovar.controls.quantisation import code_values, quantisation_variance
+
+    rng = np.random.default_rng(4)
+    for encoding in ({"bits": 8, "transfer": "srgb", "scale": 2.0},
+                     {"bits": 16, "transfer": "linear", "scale": 1.0}):
+        table = code_values(encoding["bits"], encoding["transfer"], encoding["scale"])
+        k = rng.integers(1, table.size - 2, size=(30, 40, 3))
+        upper = rng.random((8, 30, 40, 3)) < rng.random((30, 40, 3))
+        frames = np.where(upper, table[k + 1], table[k]).astype(np.float32)
+        assert np.array_equal(integer_roundtrip(frames, **encoding), frames)
+        mean, variance = variance_field(frames)
+        expected = quantisation_variance(mean, encoding)
+        # the table holds the float32 values the frames hold: only the mean's float64
+        # rounding is left
+        assert np.allclose(expected, variance, rtol=1e-6, atol=0)
+        # every frame on one code: no variance, none implied
+        flat = np.broadcast_to(table[k][None], (8, 30, 40, 3)).astype(np.float32)
+        assert np.all(quantisation_variance(variance_field(flat)[0], encoding) == 0)

@@ -10,6 +10,7 @@ interval (:func:`stereovar.statistics.rows.correlation_rows`). Nothing is render
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -276,7 +277,8 @@ def statistic_rows(
     aligned_set = aligned_fields(
         fields["left"], right, aligned["warped"], ground_truth_left=gt_left, sign=scene.sign,
         settings=settings,
-        **seed_mean_controls(means["left"], means["right"], gt_left, sign=scene.sign),
+        **seed_mean_controls(means["left"], means["right"], gt_left, sign=scene.sign,
+                             encoding=scene.encoding),
     )
     pixels = PixelSet(
         np.asarray(aligned["omega"], dtype=bool),
@@ -594,6 +596,8 @@ def pipeline_rows(scene: SceneFrames, law, settings, *, replicates: int, pipelin
     for name in pipelines:
         encoding = pipeline_encoding(name, scene.mean)
         null_kind = "camera" if encoding is None else f"camera_{name}"
+        # measured as an audit of such frames measures them: knowing their encoding
+        stored = scene if encoding is None else dataclasses.replace(scene, encoding=encoding)
         null_law = data_mean = None
         for r in range(int(replicates)):
             rng = np.random.default_rng(derive_seed("calibration-pipeline", seed, scene.label,
@@ -617,7 +621,7 @@ def pipeline_rows(scene: SceneFrames, law, settings, *, replicates: int, pipelin
                 designs_here.append((null_kind, null))
             for kind, stacks in designs_here:
                 rows += measured_rows(
-                    stacks, NONE, scene, settings,
+                    stacks, NONE, stored, settings,
                     label=f"{scene.label}|{r}|{kind}|pipeline",
                     seed=derive_seed("calibration-pipeline-transform", seed, scene.label, r,
                                      kind),

@@ -464,8 +464,9 @@ def partial_pair(
         Fixed number of knot intervals for both views (default: chosen per view; without
         ``covariates`` only).
     covariates : tuple of two tuples of numpy.ndarray (n,), keyword-only, optional
-        Each view's chromaticity (two arrays, or none) then its position :math:`(x, y)` on
-        its own sensor (:func:`stereovar.statistics.fields.control_covariates`): the
+        Each view's chromaticity (two arrays, or none), the variance its integer encoding
+        implies (one array, after the chromaticity, or none) and its position :math:`(x, y)`
+        on its own sensor (:func:`stereovar.statistics.fields.control_covariates`): the
         control then removes them too (:func:`stereovar.controls.covariates.fit_control`).
 
     Returns
@@ -512,8 +513,11 @@ def partial_pair(
 
         out = []
         for y, x, side in ((la, lma, covariates[0]), (lb, lmb, covariates[1])):
-            colour = tuple(side[:2]) if len(side) == 4 else None
-            out.append(fit_control(y, x, colour=colour, position=tuple(side[-2:])).residuals)
+            rest = side[:-2]  # chromaticity (2), then the quantisation variance, if given
+            colour = tuple(rest[:2]) if len(rest) >= 2 else None
+            quantisation = rest[2] if len(rest) == 3 else None
+            out.append(fit_control(y, x, colour=colour, position=tuple(side[-2:]),
+                                   quantisation=quantisation).residuals)
     else:
         out = [intensity_residuals(la, lma, intervals=intervals),
                intensity_residuals(lb, lmb, intervals=intervals)]

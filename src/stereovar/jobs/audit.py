@@ -142,6 +142,7 @@ def frame_residuals(variance, warped, ground_truth) -> tuple:
     from ..io.contracts import read_alignment
     from ..io.store import load_store
     from ..statistics.fields import control_covariates, seed_mean_controls
+    from .calibration import stored_encoding
 
     v = load_store(variance, "variance store")
     aligned = read_alignment(load_store(warped, "warped store"))
@@ -155,9 +156,11 @@ def frame_residuals(variance, warped, ground_truth) -> tuple:
         mean_left = means["left"]
         truth = {k: gl[k].transpose("y", "x").values for k in ("disparity", "valid")}
         sign = int(gt.attrs["disparity_sign"])
-        controls = seed_mean_controls(mean_left, means["right"], truth, sign=sign)
+        controls = seed_mean_controls(mean_left, means["right"], truth, sign=sign,
+                                      encoding=stored_encoding(v.attrs))
         mu_l, mu_w = controls["intensity"]
         covariates = control_covariates(sigma_l.shape, colour=controls["colour"],
+                                        quantisation=controls.get("quantisation"),
                                         disparity=truth["disparity"], sign=sign)
     e_left, e_right, controlled = residual_fields(sigma_l, aligned["warped"], aligned["omega"],
                                                   mu_l, mu_w, covariates)

@@ -83,6 +83,7 @@ def scene_inputs(v, gt, sensor):
     contract) and its ground truth: the left ground truth, the seed mean, the split halves
     and the sensor model."""
     from ..statistics.rows import SceneInputs
+    from .calibration import stored_encoding
 
     gl = gt.sel(view="left")
     views = ("left", "right")
@@ -100,6 +101,7 @@ def scene_inputs(v, gt, sensor):
         n_seeds=int(v.attrs.get("n_draws", v.attrs["n_seeds"])),
         sensor=sensor,
         label=f"{v.attrs['scene']}|spp{int(v.attrs['spp'])}",
+        encoding=stored_encoding(v.attrs),
     )
 
 

@@ -95,6 +95,7 @@ def aligned_fields(
     intensity: tuple | None = None,
     sensor: dict[str, Callable] | None = None,
     colour: tuple | None = None,
+    quantisation: tuple | None = None,
 ) -> AlignedFields:
     """Build :class:`AlignedFields` with the control fields this run can compute.
 
@@ -118,6 +119,10 @@ def aligned_fields(
         The left seed mean and the right one warped into the left view, per channel
         (H, W, C) (:func:`warped_colour`): the intensity control's chromaticity
         (:func:`control_covariates`).
+    quantisation : tuple of numpy.ndarray (q_left, q_warped), optional
+        The variance the frames' integer encoding implies at each view's seed mean, the
+        right view's warped into the left (:func:`seed_mean_controls`); None for float
+        frames.
     """
     from ..controls.null_warps import flipped_warp, shifted_warp
 
@@ -146,7 +151,7 @@ def aligned_fields(
             missing[name] = "the variance store has no seed mean"
     d_left = None if ground_truth_left is None else ground_truth_left["disparity"]
     extra["control_covariates"] = lambda: control_covariates(
-        np.shape(left), colour=colour, disparity=d_left, sign=sign
+        np.shape(left), colour=colour, quantisation=quantisation, disparity=d_left, sign=sign
     )
     for name in ("sensor_left", "sensor_warped", "sensor_sim_left", "sensor_sim_warped"):
         missing[name] = (
@@ -170,11 +175,18 @@ def chromaticity(mean) -> tuple[np.ndarray, np.ndarray] | None:
     return ratios[0], ratios[1]
 
 
-def control_covariates(shape, *, colour=None, disparity=None, sign: int = 1) -> tuple:
+COVARIATES_PER_VIEW = 5
+"""Fields per view of :func:`control_covariates`: two of chromaticity, the quantisation
+variance, :math:`x` and :math:`y`."""
+
+
+def control_covariates(shape, *, colour=None, quantisation=None, disparity=None,
+                       sign: int = 1) -> tuple:
     """What the intensity control reads beside :math:`\\ln\\bar\\mu`
     (:func:`stereovar.controls.covariates.fit_control`), as (H, W) fields in left-view
-    coordinates: each view's chromaticity (:func:`chromaticity`, when ``colour`` is given)
-    and each pixel's position on its own sensor,
+    coordinates: each view's chromaticity (:func:`chromaticity`, when ``colour`` is given),
+    the variance its integer encoding implies (``quantisation``, when the frames were
+    stored as integers) and each pixel's position on its own sensor,
 
     .. math:: (x_L, y), \\qquad (x_R, y) = (x_L + s\\,d_L,\\ y)
 
@@ -183,22 +195,23 @@ def control_covariates(shape, *, colour=None, disparity=None, sign: int = 1) -> 
     Returns
     -------
     tuple of numpy.ndarray
-        The left view's fields, then the right view's, in the same order: chromaticity
-        (2, when given), then :math:`x` and :math:`y`.
+        :data:`COVARIATES_PER_VIEW` fields of the left view, then the right view's in the
+        same order: the two chromaticity coordinates (1 without colour), the quantisation
+        variance (0 for float frames), :math:`x` and :math:`y`. A constant term has
+        nothing to fit and the control drops it.
     """
     h, w = (int(s) for s in shape[:2])
     y, x = np.indices((h, w), dtype=np.float64)
     x_right = x if disparity is None else x + sign * np.nan_to_num(
         np.asarray(disparity, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
-    sides = ([], [])
+    ones, zeros = np.ones((h, w)), np.zeros((h, w))
+    ratios = [(ones, ones), (ones, ones)]
     if colour is not None:
-        for side, mean in zip(sides, colour, strict=True):
-            ratios = chromaticity(mean)
-            if ratios is None:
-                sides = ([], [])
-                break
-            side.extend(ratios)
-    return (*sides[0], x, y, *sides[1], x_right, y)
+        found = [chromaticity(mean) for mean in colour]
+        if all(r is not None for r in found):
+            ratios = found
+    q = quantisation if quantisation is not None else (zeros, zeros)
+    return (*ratios[0], q[0], x, y, *ratios[1], q[1], x_right, y)
 
 
 def warped_colour(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:
@@ -215,16 +228,32 @@ def warped_colour(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.
          for c in range(mean_right.shape[-1])], axis=-1)
 
 
-def seed_mean_controls(mean_left, mean_right, ground_truth_left, *, sign: int, plan=None):
+def seed_mean_controls(mean_left, mean_right, ground_truth_left, *, sign: int, plan=None,
+                       encoding=None):
     """The intensity control's inputs from the two seed means: ``intensity``
-    (:math:`\\mu_L`, :math:`\\hat\\mu_{R\\to L}`, the RGB means) and ``colour`` (the left
-    seed mean and the right one warped, per channel), the keyword arguments of
-    :func:`aligned_fields`."""
+    (:math:`\\mu_L`, :math:`\\hat\\mu_{R\\to L}`, the RGB means), ``colour`` (the left
+    seed mean and the right one warped, per channel) and, for frames stored as integers
+    (``encoding``: ``bits``, ``transfer``, ``scale``), ``quantisation``: the variance the
+    encoding implies at each view's own seed mean
+    (:func:`stereovar.controls.quantisation.quantisation_variance`), the right view's warped
+    as its variance is. The keyword arguments of :func:`aligned_fields`."""
+    from ..controls.quantisation import quantisation_variance
+
+    plan = plan or WarpPlan(
+        np.asarray(ground_truth_left["disparity"]),
+        sign=sign,
+        valid=np.asarray(ground_truth_left["valid"]),
+    )
     colour = warped_colour(mean_right, ground_truth_left, sign=sign, plan=plan)
-    return {
+    out = {
         "intensity": (channel_mean(mean_left), colour.mean(axis=-1)),
         "colour": (np.asarray(mean_left, dtype=np.float64), colour),
     }
+    q_left = quantisation_variance(mean_left, encoding)
+    if q_left is not None:
+        q_right = quantisation_variance(mean_right, encoding)
+        out["quantisation"] = (q_left, np.where(plan.omega, plan.apply(q_right), 0.0))
+    return out
 
 
 def warped_intensity(mean_right, ground_truth_left, *, sign: int, plan=None) -> np.ndarray:

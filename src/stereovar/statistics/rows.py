@@ -84,6 +84,10 @@ class SceneInputs:
     sensor : stereovar.controls.sensor.SensorModel
     label : str
         Labels the bootstrap and sensor seeds (the scene and SPP).
+    encoding : dict, optional
+        How the renders were stored when they were integers (``bits``, ``transfer``,
+        ``scale``): the intensity control then removes the variance the encoding implies
+        (:mod:`stereovar.controls.quantisation`).
     """
 
     ground_truth_left: object = None
@@ -93,6 +97,7 @@ class SceneInputs:
     n_seeds: int = 0
     sensor: object = None
     label: str = ""
+    encoding: dict | None = None
     notes: dict = field(default_factory=dict)
     _plan: object = field(default=None, repr=False)
 
@@ -238,7 +243,7 @@ def correlation_rows(
     if inputs.mean is not None and inputs.ground_truth_left is not None:
         controls = seed_mean_controls(
             inputs.mean["left"], inputs.mean["right"], inputs.ground_truth_left,
-            sign=inputs.sign, plan=inputs.plan,
+            sign=inputs.sign, plan=inputs.plan, encoding=inputs.encoding,
         )
         if inputs.sensor is not None:
             sensor = sensor_fields(inputs)
