@@ -350,3 +350,40 @@ def test_the_results_page_shows_the_calibration_sentence():
     page = to_html_page(sections)
     assert "in at most 8% of cue-free frames per scene" in sentence and sentence in page
     assert 'id="headline"' in page and page.index(sentence) < page.index('id="claims"')
+
+
+def test_the_claims_level_rule_is_calibrated_on_the_designs():
+    """The claims table's rule for rho_all (= 0.754, against the simulated camera) on
+    replicate rows with a known answer: camera-law frames whose rho is the camera baseline's
+    never hold (explained by the control); frames whose rho is the paper's with a camera
+    baseline far below hold; the table rows count them per design and over the cue-free
+    designs together."""
+    from stereovar.calibration.claims import calibrated_claims, claim_checks
+    from stereovar.statistics.claims import EXPLAINED, HOLDS, load_claims
+
+    ids = [c["id"] for c in calibrated_claims(load_claims())]
+    assert ids == ["rho_all"]
+    rng = np.random.default_rng(0)
+    rows = []
+
+    def add(kind, factor, replicate, warp, sensor):
+        for k, scene in enumerate(("a", "b", "c")):
+            jitter = 0.01 * rng.standard_normal(2)
+            for method, rho in (("warp", warp + jitter[0]), ("sensor_sim", sensor + jitter[1])):
+                rows.append({"scene": scene, "replicate": replicate, "kind": kind,
+                             "strength_factor": factor, "transform": "none", "region": "all",
+                             "method": method, "rho": rho})
+
+    for r in range(5):
+        add("camera", 0.0, r, 0.754, 0.75)
+        add("shading", 0.0, r, 0.76, 0.74)
+        add("planted", 1.0, r, 0.754, 0.1)
+    table = claim_checks(rows)
+    by_kind = {row["kind"]: row for row in table}
+    assert by_kind["camera"]["value"] == 0 and by_kind["camera"]["n"] == 5
+    assert f"{EXPLAINED} 5" in by_kind["camera"]["note"]
+    assert by_kind["any cue-free design"]["n"] == 10
+    assert by_kind["any cue-free design"]["check"] == "false_positive_rate"
+    assert by_kind["planted"]["check"] == "power" and by_kind["planted"]["value"] == 1.0
+    assert by_kind["planted"]["note"] == f"{HOLDS} 5"
+    assert {row["rule"] for row in table} == {"claim rho_all holds"}

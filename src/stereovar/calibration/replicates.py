@@ -77,13 +77,19 @@ SHARED_STREAMS_METHOD = "shared_streams"
 ``method`` of that name: its ``rho`` is the per-seed residuals' cross-view correlation at
 zero disparity (:func:`_shared_streams_row`)."""
 
-PIPELINE_METHODS = ("partial", SHARED_STREAMS_METHOD, LIFT_METHOD)
-"""The statistics the pipeline nulls measure: the verdict's, the shared-streams check and
-the variance-matching cost's lift (the matching-cue rule's)."""
+PIPELINE_METHODS = ("partial", SHARED_STREAMS_METHOD, LIFT_METHOD, "warp", "sensor_sim")
+"""The statistics the pipeline nulls measure: the verdict's, the shared-streams check, the
+variance-matching cost's lift (the matching-cue rule's) and the claims table's level claim
+with its camera baseline."""
 
-NULL_METHODS = (*CALIBRATED_METHODS, SHARED_STREAMS_METHOD, LIFT_METHOD)
-"""The statistics the cue-free designs measure as drawn: every calibrated one and both
-checks of the audit's light."""
+CLAIM_CONTROL = "sensor_sim"
+"""The camera baseline the claims table reads a level claim against (its ``rho_all``):
+measured on the designs as drawn, so that the claims' rule is calibrated too
+(:mod:`stereovar.calibration.claims`)."""
+
+NULL_METHODS = (*CALIBRATED_METHODS, SHARED_STREAMS_METHOD, LIFT_METHOD, CLAIM_CONTROL)
+"""The statistics the cue-free designs measure as drawn: every calibrated one, both checks
+of the audit's light and the claims table's camera baseline."""
 
 
 @dataclass(frozen=True)
@@ -123,6 +129,8 @@ class SceneFrames:
         The variance-matching cost's patch side and largest disparity, as the intervention
         scans the renders (``intervention.window``; ``max_disparity`` None: the largest
         ground truth plus ``intervention.disparity_margin``).
+    sensor : stereovar.controls.sensor.SensorModel, optional
+        The run's camera (``controls.sensor``), for the ``sensor_sim`` baseline.
     """
 
     mean: dict
@@ -137,6 +145,7 @@ class SceneFrames:
     channel_correlation: float = 0.0
     window: int = 5
     max_disparity: int | None = None
+    sensor: object = None
 
 
 def transform_stack(
@@ -274,9 +283,10 @@ def statistic_rows(
         finite_right=np.isfinite(fields["right"]),
     )
     right = np.where(np.isfinite(fields["right"]), fields["right"], np.nan)
+    sensor = _sensor_fields(means, scene, label) if CLAIM_CONTROL in (methods or ()) else None
     aligned_set = aligned_fields(
         fields["left"], right, aligned["warped"], ground_truth_left=gt_left, sign=scene.sign,
-        settings=settings,
+        settings=settings, sensor=sensor,
         **seed_mean_controls(means["left"], means["right"], gt_left, sign=scene.sign,
                              encoding=scene.encoding),
     )
@@ -318,6 +328,19 @@ def _shared_streams_row(stacks, scene: SceneFrames, settings) -> dict:
     return {"region": "all", "method": SHARED_STREAMS_METHOD, "rho": row["rho"],
             "boot_low": row["low"], "boot_high": row["high"], "chance_se": float("nan"),
             "n_pixels": row["n_pixels"]}
+
+
+def _sensor_fields(means, scene: SceneFrames, label: str) -> dict:
+    """The ``sensor_sim`` baseline's fields: :math:`N` Poisson-Gaussian frames of the run's
+    camera per view around the replicate's own seed means, as the correlation rows draw them
+    around the renders' (:func:`stereovar.statistics.rows.sensor_fields`)."""
+    from ..controls.sensor import SensorModel
+    from ..statistics.rows import SceneInputs, sensor_fields
+
+    inputs = SceneInputs(ground_truth_left=scene.ground_truth["left"], sign=scene.sign,
+                         mean=means, n_seeds=scene.n_seeds,
+                         sensor=scene.sensor or SensorModel(), label=label)
+    return sensor_fields(inputs)
 
 
 def _lift_row(fields, scene: SceneFrames, settings, seed) -> dict:
@@ -549,7 +572,7 @@ def scene_calibration(
                 checks = None
                 if name == NONE:  # the light's checks on the frames as drawn
                     checks = NULL_METHODS if kind in NULL_KINDS else (
-                        *CALIBRATED_METHODS, LIFT_METHOD)
+                        *CALIBRATED_METHODS, LIFT_METHOD, CLAIM_CONTROL)
                 rows += measured_rows(
                     frames, name, scene, settings,
                     label=f"{scene.label}|{r}|{kind}|{factor:g}|{name}",

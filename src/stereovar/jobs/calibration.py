@@ -105,6 +105,8 @@ def calibration_scene_job(
     (:func:`stereovar.calibration.replicates.renders_shipped_rows`). ``intervention`` (its
     config section) sets the variance-matching cost's window and disparities as the
     intervention scans the renders."""
+    import dataclasses
+
     from ..calibration.replicates import (
         CALIBRATION_COLUMNS,
         renders_shipped_rows,
@@ -114,14 +116,12 @@ def calibration_scene_job(
     from ..transforms import get_transform
     from .correlation import analysis_settings
 
-    settings, _ = analysis_settings(analysis, controls)
+    settings, camera = analysis_settings(analysis, controls)
     cal = {**DEFAULTS, **dict(calibration or {})}
     scene = scene_frames(variance, ground_truth, aux)
-    scene = matching_scan(scene, intervention)
+    scene = dataclasses.replace(matching_scan(scene, intervention), sensor=camera)
     stacks = {}
     if renders:
-        import dataclasses
-
         import numpy as np
 
         from ..calibration.synthesis import channel_correlation
