@@ -761,6 +761,7 @@ COVERAGE_SHOWN = (
     ("partial", "rho", "intensity-controlled rho"),
     ("partial", "difference", "Monte Carlo-specific rho"),
     ("spearman", "rho", "Spearman rho"),
+    (LIFT_METHOD, "difference", "C_sigma lift beyond its matched null"),
 )
 """The 95% intervals the pages show, as (statistic, what, label) of the coverage checks."""
 
