@@ -367,7 +367,7 @@ def test_the_claims_level_rule_is_calibrated_on_the_designs():
     rows = []
 
     def add(kind, factor, replicate, warp, sensor):
-        for k, scene in enumerate(("a", "b", "c")):
+        for scene in ("a", "b", "c"):
             jitter = 0.01 * rng.standard_normal(2)
             for method, rho in (("warp", warp + jitter[0]), ("sensor_sim", sensor + jitter[1])):
                 rows.append({"scene": scene, "replicate": replicate, "kind": kind,
