@@ -387,3 +387,30 @@ def test_the_claims_level_rule_is_calibrated_on_the_designs():
     assert by_kind["planted"]["check"] == "power" and by_kind["planted"]["value"] == 1.0
     assert by_kind["planted"]["note"] == f"{HOLDS} 5"
     assert {row["rule"] for row in table} == {"claim rho_all holds"}
+
+
+@pytest.mark.parametrize("replicates,scope", [(3, "scene"), (8, "combined")])
+def test_every_page_quotes_the_margin_the_verdict_uses(replicates, scope):
+    """With fewer than MARGIN_REPLICATES replicates of the scenes combined (the denoisers'
+    few) the scenes' pooled power curve sets the margin, with enough the combined one: the
+    matched nulls the verdicts read, the compact table's margin column and the strength the
+    margin certifies all come from that one curve."""
+    from stereovar.calibration.summary import compact_table, margin_scope
+
+    rng = np.random.default_rng(3)
+    rows = []
+    for r in range(replicates):
+        for scene in ("a", "b"):
+            rows.append(replicate(scene, r, "camera", 0.0, rng.normal(0.0, 0.005), 0.01))
+            for factor, mean in ((0.5, 0.0), (1.0, 0.1), (2.0, 0.3)):
+                rows.append(replicate(scene, r, "planted", factor,
+                                      rng.normal(mean, 0.01), 0.01))
+    table, nulls = calibration_table(rows)
+    assert margin_scope(table, "none", "partial") == scope
+    (smallest,) = [t for t in table if (t["check"], t["scope"]) == ("smallest_detectable", scope)]
+    margin = float(smallest["note"].rsplit(" ", 1)[-1])
+    assert {round(n["margin"], 4) for n in nulls} == {margin}
+    assert {n["margin_strength"] for n in nulls} == {smallest["value"]}
+    (row,) = compact_table(table)
+    assert row["equivalence margin"] == smallest["note"].rsplit(" ", 1)[-1]
+    assert row["smallest detectable (x the renders)"] == f"{smallest['value']:.3g}"

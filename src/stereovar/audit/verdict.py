@@ -22,6 +22,7 @@ import numpy as np
 
 from ..calibration.summary import MIN_EFFECT
 from ..statistics.across import combined_correlation_interval, combined_interval, rows_interval
+from ..statistics.claims import t_interval
 from ..statistics.reliability import corrected_interval
 from ..statistics.residuals import SHARED_STREAMS
 
@@ -176,13 +177,17 @@ def lift_rows(intervention: list[dict], source: str = "render",
 def wta_lift(intervention: list[dict], source: str, region: str = "all") -> tuple:
     """The :math:`C_\\sigma` winner-take-all accuracy minus chance (normal condition), mean
     over frames with its 95% interval: the frames' tile-bootstrap intervals combined
-    (:func:`stereovar.statistics.across.combined_interval`); NaN bounds where a frame has
-    none."""
+    (:func:`stereovar.statistics.across.combined_interval`); where a frame has none (a
+    region other than ``all``), the Student t interval over frames, none for one frame."""
     rows = lift_rows(intervention, source, region)
     if not rows:
         return math.nan, math.nan, math.nan
-    return combined_interval([r["rho"] for r in rows], [r["boot_low"] for r in rows],
-                             [r["boot_high"] for r in rows])
+    if all(_ok(r["boot_low"], r["boot_high"]) for r in rows):
+        return combined_interval([r["rho"] for r in rows], [r["boot_low"] for r in rows],
+                                 [r["boot_high"] for r in rows])
+    # regions and conditions the intervention gives no interval: Student t over frames
+    # (none for one frame: a binomial interval over its pixels would be far too narrow)
+    return t_interval([r["rho"] for r in rows])
 
 
 SPECIFIC = "Monte Carlo-specific rho"

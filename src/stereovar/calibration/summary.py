@@ -124,9 +124,12 @@ NULL_COLUMNS = [  # margin: the equivalence margin of the row's transform and st
     "n",
     "chance_sd",
     "margin",
+    "margin_strength",
 ]
 """Columns of ``results/tables/calibration_nulls.csv``: each scene's matched null per
-transform and statistic, and the equivalence margin."""
+transform and statistic, the equivalence margin and the planted strength (a multiple of the
+renders' own) that sets it: a result inside the margin certifies that no cue as strong as
+that survives."""
 
 SUMMARY_METHODS = ("warp", "partial", "log", "spearman", "relative", "null_shift",
                    "shared_streams", LIFT_METHOD)
@@ -530,7 +533,7 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                 margin = _interpolated_diff(by_design, smallest)
             replicates = max((len(v) for k, v in by_design.items() if k[0] == "planted"),
                              default=0)
-            margins[(scope, transform, method)] = (margin, replicates)
+            margins[(scope, transform, method)] = (margin, replicates, smallest)
             if planted:
                 add("smallest_detectable", detects, scope, transform, method, "planted",
                     smallest, (smallest, math.nan, math.nan),
@@ -565,11 +568,10 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                         "0.95 +/- 0.02", _meets_coverage(r))
     def margin_of(transform, method):
         """The combined scope's margin when at least :data:`MARGIN_REPLICATES` replicates
-        set it, else the pooled scenes'."""
-        combined, n = margins.get(("combined", transform, method), (math.nan, 0))
-        if n >= MARGIN_REPLICATES:
-            return combined
-        return margins.get(("scene", transform, method), (math.nan, 0))[0]
+        set it, else the pooled scenes' (:func:`margin_scope`)."""
+        scope = margin_scope(table, transform, method)
+        margin, _, strength = margins.get((scope, transform, method), (math.nan, 0, math.nan))
+        return margin, strength if math.isfinite(margin) else math.nan
 
     nulls = []
     for (scene, transform, region_, method, kind), null in null_means.items():
@@ -585,7 +587,8 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                 "null_se": null["se"],
                 "n": null["n"],
                 "chance_sd": null["chance_sd"],
-                "margin": margin_of(transform, method),
+                **dict(zip(("margin", "margin_strength"), margin_of(transform, method),
+                           strict=True)),
             }
         )
     return table + claim_rows, nulls
@@ -874,6 +877,17 @@ def _worst(rows, check, rule, pick_max=True, **match):
     return (max if pick_max else min)(chosen, key=lambda r: _f(r["value"]))
 
 
+def margin_scope(table: list[dict], transform: str, method: str) -> str:
+    """The scope whose power curve sets a transform's equivalence margin, as
+    :func:`calibration_table` chooses it for the verdicts: ``combined`` when at least
+    :data:`MARGIN_REPLICATES` replicates of the scenes combined reach each planted strength,
+    else ``scene`` (the scenes' replicates pooled), so that every page quotes the margin the
+    verdict uses."""
+    power = _pick(table, check="power", scope="combined", transform=transform, method=method)
+    n = max((int(_f(r["n"])) for r in power), default=0)
+    return "combined" if n >= MARGIN_REPLICATES else "scene"
+
+
 def compact_table(table: list[dict]) -> list[dict]:
     """:data:`COMPACT_COLUMNS` rows of the calibration table: per transform and statistic
     the worst false-positive rate of each rule (per scene, and for the verdict rule also with
@@ -886,8 +900,8 @@ def compact_table(table: list[dict]) -> list[dict]:
     keys = list(dict.fromkeys((r["transform"], r["method"]) for r in table))
     for transform, method in keys:
         scene = _pick(table, scope="scene", transform=transform, method=method)
-        combined = _pick(table, scope="combined", transform=transform, method=method)
-        smallest = _pick(combined, check="smallest_detectable")
+        smallest = _pick(table, check="smallest_detectable", transform=transform,
+                         method=method, scope=margin_scope(table, transform, method))
         value = _f(smallest[0]["value"]) if smallest else math.nan
         note = smallest[0].get("note", "") if smallest else ""
         n = max(

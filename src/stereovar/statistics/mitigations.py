@@ -60,6 +60,7 @@ MITIGATION_COLUMNS = [
     "mc_specific_low",
     "mc_specific_high",
     "margin",
+    "margin_strength",
     "mc_cue",
     "shipped_mc_specific",
     "shipped_mc_specific_low",
@@ -208,16 +209,19 @@ def matched_difference(corr, nulls, *, transform, region, method="partial"):
     return (float(np.mean(null_values)), *combined_interval(diffs, lows, highs))
 
 
-def equivalence_margin(nulls, transform: str = "none", method="partial") -> float:
+def equivalence_margin(nulls, transform: str = "none", method="partial",
+                       column: str = "margin") -> float:
     """The margin of ``removed`` for rows measured through ``transform``: the Monte
     Carlo-specific :math:`\\rho` that the calibration detects with 80% power through that
     transform (the nulls' ``margin``). NaN when no planted strength reaches 80% power
-    through it: the instrument cannot then show that the cue is gone."""
+    through it: the instrument cannot then show that the cue is gone. ``column``
+    ``margin_strength``: the planted strength (a multiple of the renders' own) that sets it,
+    what a result inside the margin certifies is gone."""
     for r in nulls:
         if (r["transform"], r["method"]) == (transform, method) and math.isfinite(
-            _f(r.get("margin"))
+            _f(r.get(column))
         ):
-            return _f(r["margin"])
+            return _f(r[column])
     return math.nan
 
 
@@ -312,6 +316,8 @@ def mitigation_table(
             row["mc_specific"], row["mc_specific_low"], row["mc_specific_high"] = diff
             matched = run.get("calibration_transform", "none")
             row["margin"] = equivalence_margin(nulls or [], matched)
+            row["margin_strength"] = equivalence_margin(nulls or [], matched,
+                                                        column="margin_strength")
             row["mc_cue"] = mc_cue_state(diff[1], diff[2], row["margin"])
             label = matched + "|shipped"
             _, *ships = matched_difference(
@@ -328,6 +334,8 @@ def mitigation_table(
             if all(math.isfinite(x) for x in ships):
                 # what a team ships decides: the seed mean's Monte Carlo noise counts
                 row["margin"] = equivalence_margin(nulls or [], label)
+                row["margin_strength"] = equivalence_margin(nulls or [], label,
+                                                            column="margin_strength")
                 row["mc_cue"] = mc_cue_state(ships[1], ships[2], row["margin"])
             lift = (
                 wta_lift(run["intervention"], "render", region)
@@ -375,6 +383,14 @@ def _iv(row, column, unit="", digits=3) -> str:
     return text
 
 
+def _certifies(row) -> str:
+    """What a ``removed`` row's margin certifies, from the strength that set it."""
+    strength = _f(row.get("margin_strength"))
+    if not math.isfinite(strength):
+        return ""
+    return f"; no cue as strong as {strength:.2g}x the renders' own survives it"
+
+
 def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     """Plain-language lines of the mitigation table over ``region``: per mitigation its
     Monte Carlo-specific :math:`\\rho` (the intensity-controlled :math:`\\rho` minus its
@@ -390,13 +406,13 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     ...      "psnr": 30.0, "psnr_low": 29.0, "psnr_high": 31.0},
     ...     {"mitigation": "sensor_only", "region": "all", "mc_specific": 0.001,
     ...      "mc_specific_low": -0.01, "mc_specific_high": 0.012, "null_partial": 0.0,
-    ...      "margin": 0.02, "mc_cue": "removed", "psnr": 28.0, "psnr_low": 27.0,
-    ...      "psnr_high": 29.0},
+    ...      "margin": 0.02, "margin_strength": 0.25, "mc_cue": "removed", "psnr": 28.0,
+    ...      "psnr_low": 27.0, "psnr_high": 29.0},
     ... ]
     >>> print(mitigation_findings(rows)[-1])  # doctest: +NORMALIZE_WHITESPACE
     Removes the Monte Carlo-specific part (its interval inside the calibration's equivalence
     margin): sensor_only (PSNR 28.00 dB [27.00, 29.00] against 30.00 dB [29.00, 31.00] as
-    rendered).
+    rendered; no cue as strong as 0.25x the renders' own survives it).
     """
     chosen = [r for r in rows if r["region"] == region]
     base = next((r for r in chosen if r["mitigation"] == "none"), None)
@@ -430,7 +446,8 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
         lines.append(
             f"Removes the Monte Carlo-specific part{within}: "
             + ", ".join(
-                f"{r['mitigation']} (PSNR {_iv(r, 'psnr', ' dB', 2)}{against})" for r in removing
+                f"{r['mitigation']} (PSNR {_iv(r, 'psnr', ' dB', 2)}{against}"
+                + _certifies(r) + ")" for r in removing
             )
             + "."
         )
