@@ -375,6 +375,17 @@ def _partial(values, settings):
 
     covariates = values[4:]
     half = len(covariates) // 2
+    if half == 5 and np.any(np.asarray(covariates[2]) > 0):  # frames stored as integers
+        from ..controls.quantisation import FIXED_SHARE, fixed_share
+
+        share = max(fixed_share(values[0], covariates[2]),
+                    fixed_share(values[1], covariates[half + 2]))
+        if share >= FIXED_SHARE:
+            raise MissingField(
+                f"the frames' integer encoding fixes the variance at {100 * share:.0f}% of the "
+                "pixels (every frame on one code or two neighbouring ones): their Monte Carlo "
+                "part cannot be told from the quantisation of their mean"
+            )
     e_a, e_b = partial_pair(
         *values[:4], covariates=(covariates[:half], covariates[half:]) if half else None
     )
