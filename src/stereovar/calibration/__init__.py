@@ -6,5 +6,6 @@ frames, :mod:`~stereovar.calibration.pipelines` camera pipelines without a Monte
 (lens shading, gain maps, 8-bit sRGB, white balance, colour matrices) and the integer
 encodings a null passes through, :mod:`~stereovar.calibration.replicates` passes them through
 the run's transforms and statistics, and :mod:`~stereovar.calibration.summary` turns the
-replicates into false-positive rates, power curves and interval coverage.
+replicates into false-positive rates, power curves and interval coverage;
+:mod:`~stereovar.calibration.claims` decides the claims table's level rule on them too.
 """

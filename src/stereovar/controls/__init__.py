@@ -7,6 +7,9 @@
 ``covariates``
     The intensity control's colour and sensor-position terms (white balance, colour
     matrices, lens-shading correction).
+``quantisation``
+    The variance an integer encoding implies at each pixel's seed mean (8-bit PNG), the
+    control's third term.
 ``null_warps``
     Deliberately wrong alignments (the level an unrelated alignment reaches).
 

@@ -11,6 +11,9 @@ disparity.
     Streamed windowed-SAD cost-volume scans, winner-take-all disparity and hit rates.
 ``metrics``
     One scene's intervention metrics (residual, variance and image costs).
+``lift``
+    The variance-matching cost's lift over chance with its tile-bootstrap interval (the
+    audit's matching-cue rule).
 
 Importing this package imports none of its modules (nor numpy).
 """
