@@ -81,11 +81,12 @@ def claim_verdicts(rows: list[dict], claim: dict) -> dict:
 
 
 def claim_checks(rows: list[dict], claims=None) -> list[dict]:
-    """Calibration-table rows (:data:`~stereovar.calibration.summary.
-    CALIBRATION_TABLE_COLUMNS`) of every calibrated claim: how often it *holds* on each
+    """Calibration-table rows of every calibrated claim: how often it *holds* on each
     cue-free design and on all of them together (its false-positive rate, held to 5%), and on
-    the planted cue at each strength (rule ``claim <id> holds``, scope ``combined``,
-    method the claim's statistic).
+    the planted cue at each strength.
+
+    The rows have :data:`~stereovar.calibration.summary.CALIBRATION_TABLE_COLUMNS`, with rule
+    ``claim <id> holds``, scope ``combined`` and method the claim's statistic.
 
     Parameters
     ----------

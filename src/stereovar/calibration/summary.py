@@ -669,7 +669,8 @@ def _fired(row) -> str:
     return f"{round(_f(row['value']) * n)} of {n}"
 
 
-def headline(table: list[dict], *, transform: str = "none", method: str = "partial") -> str:
+def headline(table: list[dict], *, transform: str = "none", method: str = "partial",
+             shown=None) -> str:
     """The calibration in a few plain words, for the results and verdict pages: the upper
     end of the 95% Wilson interval of the verdict rule's false-positive rate over every
     cue-free design together (matched nulls and camera pipelines, :data:`ANY_NULL`) with the
@@ -755,7 +756,7 @@ def headline(table: list[dict], *, transform: str = "none", method: str = "parti
         if meets_level(worst["low"], worst["high"]) == NOT_SHOWN:
             text += f"; {replicates_to_show()} replicates with no false positive would show 5%"
         text += ")."
-    coverage = coverage_sentence(table, transform=transform)
+    coverage = coverage_sentence(table, transform=transform, shown=shown)
     return text + (f" {coverage}" if coverage else "")
 
 
@@ -764,13 +765,21 @@ COVERAGE_SHOWN = (
     ("partial", "rho", "intensity-controlled rho"),
     ("partial", "difference", "Monte Carlo-specific rho"),
     ("spearman", "rho", "Spearman rho"),
+)
+"""The 95% intervals the results page shows, as (statistic, what, label) of the coverage
+checks."""
+
+VERDICT_COVERAGE_SHOWN = (
+    *COVERAGE_SHOWN,
     (LIFT_METHOD, "difference", "C_sigma lift beyond its matched null"),
 )
-"""The 95% intervals the pages show, as (statistic, what, label) of the coverage checks."""
+"""The 95% intervals an audit's verdict page shows: the results page's and the matching-cue
+rule's."""
 
 
-def coverage_sentence(table: list[dict], *, transform: str = "none") -> str:
-    """The measured coverage of each 95% interval the pages show (:data:`COVERAGE_SHOWN`),
+def coverage_sentence(table: list[dict], *, transform: str = "none", shown=None) -> str:
+    """The measured coverage of each 95% interval a page shows (``shown``:
+    :data:`COVERAGE_SHOWN`, or :data:`VERDICT_COVERAGE_SHOWN` for a verdict page),
     per scene over the camera null and the planted cue at each strength (designs with one
     estimand and every replicate; the pipeline nulls' few replicates set their false-positive
     rates, not a coverage), as the range of the point estimates; an interval whose range
@@ -789,7 +798,7 @@ def coverage_sentence(table: list[dict], *, transform: str = "none") -> str:
     warp 66-95% (too narrow at some designs).
     """
     parts = []
-    for method, what, label in COVERAGE_SHOWN:
+    for method, what, label in shown or COVERAGE_SHOWN:
         rows = [r for r in _pick(table, check="coverage", scope="scene", transform=transform,
                                  method=method, rule=what)
                 if r["kind"] in ("camera", "planted") and math.isfinite(_f(r["value"]))]

@@ -304,9 +304,9 @@ def verdict_job(
     rows = verdict_rows(corr, iv, null_rows) + seeding_rows(residual)
     calibrated = ""
     if calibration:
-        from ..calibration.summary import headline
+        from ..calibration.summary import VERDICT_COVERAGE_SHOWN, headline
 
-        calibrated = headline(read_rows(calibration))
+        calibrated = headline(read_rows(calibration), shown=VERDICT_COVERAGE_SHOWN)
     result = verdict(rows)
     encoded = ""
     if result["matched_null"] and variance:  # what the null was drawn through (its stores)
