@@ -87,7 +87,7 @@ DEFAULTS = {
         "strengths": [0.0625, 0.125, 0.25, 1.0, 2.0],
         "pipelines": ["shading", "gain_map", "srgb8_0.2", "srgb8_0.4", "srgb8_1",
                       "white_balance", "colour_matrix", "power_law", "correlated"],
-        "pipeline_replicates": 4,
+        "pipeline_replicates": 5,
         "seed": 0,
     },
     "validation": {"n_seeds": 64, "spp": None},

@@ -12,7 +12,7 @@ DEFAULTS = {
         "shading", "gain_map", "srgb8_0.2", "srgb8_0.4", "srgb8_1", "white_balance",
         "colour_matrix", "power_law", "correlated",
     ],
-    "pipeline_replicates": 4,
+    "pipeline_replicates": 5,
     "seed": 0,
 }
 """The ``calibration`` config section's defaults (``config.schema.yaml`` states them)."""
