@@ -306,9 +306,20 @@ def test_the_gate_fails_closed_on_a_summary_it_cannot_read(tmp_path, monkeypatch
 # -- 4. Ctrl-C --------------------------------------------------------------------------------
 
 
-def test_ctrl_c_is_said_as_an_interruption_with_status_130(tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("host", ["python", "its own handler"])
+def test_ctrl_c_is_said_as_an_interruption_with_status_130(tmp_path, monkeypatch, capsys, host,
+                                                           request):
     """Snakemake (a stand-in) reports its running jobs failed as it stops on SIGINT; the
-    command says the run was interrupted and exits 130."""
+    command says the run was interrupted and exits 130, also in a process whose SIGINT
+    handler is not Python's (a host that embeds the command, or a library run before it in
+    the same process), and gives that handler back."""
+    import signal
+
+    previous = signal.getsignal(signal.SIGINT)
+    request.addfinalizer(lambda: signal.signal(signal.SIGINT, previous))
+    if host != "python":
+        signal.signal(signal.SIGINT, lambda *_: None)
+    mine = signal.getsignal(signal.SIGINT)
     monkeypatch.chdir(tmp_path)
     config = write_audit(tmp_path)
     script = (
@@ -334,6 +345,7 @@ def test_ctrl_c_is_said_as_an_interruption_with_status_130(tmp_path, monkeypatch
     assert f"stereovar: error: {monitor.INTERRUPTED}" in err.splitlines()
     assert "failed" not in err and "c.log" not in err  # stopped, not failed
     assert err.splitlines()[-1].startswith("log: logs/audit/t/")
+    assert signal.getsignal(signal.SIGINT) is mine
 
 
 # -- 5. control characters, stale summaries ---------------------------------------------------

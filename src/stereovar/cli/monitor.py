@@ -123,6 +123,18 @@ def raised_error(lines, where=".") -> str | None:
     return f"{kind}: {message}"
 
 
+def _default_sigint():
+    """Make Ctrl-C raise :class:`KeyboardInterrupt` while a run goes on, whatever handler
+    the process had (a host that embeds the command, a library that set its own), and
+    return that handler to restore; None off the main thread, where no handler can be set."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 class _Run:
     """One Snakemake run of a command, with the logger plugin ``stereovar``.
 
@@ -210,6 +222,7 @@ class _Run:
         os.close(handle)
         shown = sys.stdout if is_dry_run(cmd[1:]) else sys.stderr
         env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONIOENCODING": "utf-8"}
+        previous = _default_sigint()
         try:
             with open(self.log, "a", encoding="utf-8") as out:
                 proc = subprocess.Popen(
@@ -220,20 +233,24 @@ class _Run:
                     stderr=subprocess.STDOUT,
                     pass_fds=() if write is None else (write,),
                 )
-            if write is not None:
-                os.close(write)
-                write = None
-            try:
-                record = record_run(self.root / STATE_DIR, proc.pid, self.command)
-            except OSError:  # the record only names the process: the run goes on without it
-                record = None
-            try:
+            record = None
+            try:  # a Ctrl-C from here on, however early, stops the run as an interruption
+                if write is not None:
+                    os.close(write)
+                    write = None
+                try:
+                    record = record_run(self.root / STATE_DIR, proc.pid, self.command)
+                except OSError:  # the record only names the process: the run goes on
+                    record = None
                 if self.verbose:
                     self._tee(proc.stdout)
                 else:
                     self._show(read, shown)
             except KeyboardInterrupt:  # Snakemake got it too: let it stop, keep what it says
                 self.interrupted = True
+                if write is not None:  # so that its lines end when Snakemake does
+                    os.close(write)
+                    write = None
                 if self.verbose:
                     self._tee(proc.stdout, show=False)
                 else:  # its stage lines would say its jobs failed: the interruption says why
@@ -253,6 +270,10 @@ class _Run:
                 if fd is not None:
                     os.close(fd)
             Path(summary).unlink(missing_ok=True)
+            if previous is not None:
+                import signal
+
+                signal.signal(signal.SIGINT, previous)
         self.log_error = self.log_error or self.summary.get("log_error")
         return INTERRUPTED_STATUS if self.interrupted and rc else rc
 
