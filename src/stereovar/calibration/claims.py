@@ -96,7 +96,7 @@ def claim_checks(rows: list[dict], claims=None) -> list[dict]:
         The claims file (default: the paper's).
     """
     from ..statistics.claims import HOLDS, load_claims
-    from .summary import ANY_NULL, LEVEL, _meets_rate, rate
+    from .summary import ANY_NULL, LEVEL, meets_level, rate
 
     claims = claims or load_claims()
     out = []
@@ -123,7 +123,7 @@ def claim_checks(rows: list[dict], claims=None) -> list[dict]:
                 "strength_factor": factor,
                 "value": r[0], "low": r[1], "high": r[2], "n": len(found),
                 "target": f"<= {LEVEL:g}" if wrong else "",
-                "meets_target": _meets_rate(r) if wrong else "",
+                "meets_target": meets_level(r[1], r[2]) if wrong else "",
                 "note": "; ".join(f"{v} {found.count(v)}" for v in sorted(set(found))),
             })
     return out

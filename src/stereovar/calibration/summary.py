@@ -37,8 +37,8 @@ false positive that takes :func:`replicates_to_show`, 73). The rules:
     independent;
 ``claim <id> holds``
     a level claim of the claims table on :math:`\\rho` against the ``sensor_sim`` camera
-    baseline holds on the replicate's scenes (:mod:`stereovar.calibration.claims`; scenes
-    combined, as the table combines them);
+    baseline holds on the replicate's scenes (:mod:`stereovar.calibration.claims`, whose rows
+    the calibration table job adds; scenes combined, as the table combines them);
 ``matching``
     the audit's matching-cue rule (``c_sigma_lift``: the variance-matching cost's
     winner-take-all lift over chance, :mod:`stereovar.intervention.lift`): the lift minus its
@@ -455,10 +455,6 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
     nulls : list of dict
         :data:`NULL_COLUMNS`.
     """
-    from .claims import claim_checks
-
-    claim_rows = claim_checks([r for r in rows if r["region"] == region]) if (
-        region == "all" and "warp" in methods) else []
     rows = [r for r in rows if r["region"] == region and r["method"] in methods]
     for r in rows:
         for k in ("rho", "boot_low", "boot_high", "strength_factor"):
@@ -591,7 +587,7 @@ def calibration_table(rows: list[dict], *, methods=SUMMARY_METHODS, region="all"
                            strict=True)),
             }
         )
-    return table + claim_rows, nulls
+    return table, nulls
 
 
 def _pair_with_partial(rows: list[dict]) -> None:

@@ -196,7 +196,9 @@ def calibration_table_job(rows, outputs: dict, *, nulls, figure=None) -> list[di
     """``results/tables/calibration.csv`` (every check), ``calibration.md`` (one row per
     transform and statistic, :func:`stereovar.calibration.summary.compact_table`), the
     matched nulls and the figure from every scene's replicates
-    (:func:`stereovar.calibration.summary.calibration_table`)."""
+    (:func:`stereovar.calibration.summary.calibration_table`, and the claims table's level
+    rule decided on them, :func:`stereovar.calibration.claims.claim_checks`)."""
+    from ..calibration.claims import claim_checks
     from ..calibration.summary import (
         CALIBRATION_TABLE_COLUMNS,
         COMPACT_COLUMNS,
@@ -209,6 +211,7 @@ def calibration_table_job(rows, outputs: dict, *, nulls, figure=None) -> list[di
 
     replicates = [r for path in rows for r in read_rows(path)]
     table, null_rows = calibration_table(replicates)
+    table += claim_checks([r for r in replicates if r["region"] == "all"])
     sentence = headline(table)
     write_tables(table, CALIBRATION_TABLE_COLUMNS, {"csv": outputs["csv"]})
     write_tables(
