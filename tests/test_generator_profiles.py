@@ -127,10 +127,12 @@ def test_generator_rows_carry_the_profile_and_every_column():
     assert math.isnan(rows[0]["psnr"]) and text["PSNR"] == "n/a"
 
 
-def _generator_run(tmp_path, name, transform, rng, cycles):
+def _generator_run(tmp_path, name, transform, rng, cycles, *, chain=None, shipped=None):
     """One profile's inputs of the generator job, as CSV files: two scenes' correlation and
     mitigation rows, and 16 calibration replicates per scene through the profile's matched
-    transform (cue-free camera and misaligned nulls, a planted cue)."""
+    transform (cue-free camera and misaligned nulls, a planted cue). With ``chain``, the
+    replicates also pass through it, and ``shipped`` (method to rho) gives each scene's
+    rows of what ships (kind ``renders``)."""
     from stereovar.calibration.replicates import CALIBRATION_COLUMNS
     from stereovar.io.tables import write_tables
 
@@ -146,7 +148,7 @@ def _generator_run(tmp_path, name, transform, rng, cycles):
                       for q, v in (("residual_rho_zero", 0.0), ("psnr", 25.0))]
         replicates = []
         for r in range(16):
-            for t in dict.fromkeys(["none", transform]):
+            for t in dict.fromkeys(["none", transform, *([chain] if chain else [])]):
                 for kind, factor, mean in (("camera", 0.0, 0.0), ("misaligned", 0.0, 0.0),
                                            ("planted", 1.0, 0.3)):
                     rho = float(rng.normal(mean, 0.02))
@@ -156,6 +158,13 @@ def _generator_run(tmp_path, name, transform, rng, cycles):
                         "method": "partial", "rho": rho, "boot_low": rho - 0.04,
                         "boot_high": rho + 0.04, "chance_se": math.nan, "n_pixels": 1000,
                     })
+        for method, rho in (shipped or {}).items():
+            replicates.append({
+                "scene": scene, "replicate": 0, "kind": "renders", "strength": math.nan,
+                "strength_factor": math.nan, "transform": chain, "region": "all",
+                "method": method, "rho": rho, "boot_low": rho - 0.04, "boot_high": rho + 0.04,
+                "chance_se": math.nan, "n_pixels": 1000,
+            })
         for key, rows, columns in (
             ("correlation", corr, list(corr[0])),
             ("scene_rows", scene_rows, list(scene_rows[0])),
@@ -166,7 +175,7 @@ def _generator_run(tmp_path, name, transform, rng, cycles):
             write_tables(rows, columns, {"csv": str(path)})
             paths[key].append(str(path))
     return {"profile": name, "spp": 64, "generator_spp": 128, "scale": 0.5, "cycles": cycles,
-            "calibration_transform": transform, **paths}
+            "calibration_transform": transform, "output_transform": chain, **paths}
 
 
 def test_the_generator_job_keeps_its_verdicts_calibration_and_quotes_its_upper_bound(
@@ -201,3 +210,35 @@ def test_the_generator_job_keeps_its_verdicts_calibration_and_quotes_its_upper_b
         assert upper > 0.05  # 16 replicates cannot show the 5% level
         assert f"{run['profile']} at most {math.ceil(100 * upper)}%" in caption
     assert "not shown" in caption and "generators_calibration.csv" in caption
+
+
+def test_the_generator_table_gives_what_ships_beside_the_float_verdict(tmp_path):
+    """Each profile's row carries the verdict on what it ships, against the nulls drawn
+    through the same chain (denoiser, then PNG): a cue of 0.3 over nulls at 0 remains with
+    its interval; an output whose codes fix the variance at 97% of pixels reads "not
+    testable" with that share, never "removed"; a float profile ships its EXR."""
+    from stereovar.io.tables import read_rows
+    from stereovar.jobs.generators import generators_table_job
+
+    rng = np.random.default_rng(12)
+    runs = [
+        _generator_run(tmp_path, "paper", "none", rng, {}),
+        _generator_run(tmp_path, "kubric", "denoise", rng, {"denoise": True},
+                       chain="denoise+png8_filmic", shipped={"partial": 0.3,
+                                                             "quantised_share": 0.2}),
+        _generator_run(tmp_path, "blenderproc", "denoise", rng, {"denoise": True},
+                       chain="denoise+png8_filmic",
+                       shipped={"partial": math.nan, "quantised_share": 0.97}),
+    ]
+    outputs = {fmt: str(tmp_path / f"generators.{fmt}") for fmt in ("csv", "md")}
+    generators_table_job(runs, outputs)
+    rows = {r["profile"]: r for r in read_rows(outputs["csv"]) if r["region"] == "all"}
+    kubric = rows["kubric"]
+    assert kubric["output"] == "8-bit PNG, Filmic" and kubric["shipped_mc_cue"] == "remains"
+    assert 0.2 < kubric["shipped_mc_specific_low"] < 0.3 < kubric["shipped_mc_specific_high"]
+    assert abs(kubric["shipped_null_partial"]) < 0.05
+    assert rows["blenderproc"]["shipped_mc_cue"] == "not testable"
+    assert rows["blenderproc"]["quantised_share"] == pytest.approx(0.97)
+    assert rows["paper"]["output"] == "float (EXR)" and rows["paper"]["shipped_mc_cue"] == "n/a"
+    text = (tmp_path / "generators.md").read_text()
+    assert "undefined: the codes fix the variance at 97% of pixels" in text

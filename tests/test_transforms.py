@@ -56,7 +56,10 @@ def mc_renders(n, shape=(48, 40), seed=0):
 
 
 def test_registry_names_and_reads():
-    assert set(TRANSFORMS.names()) == {"denoise", "denoise_sensor", "equalise", "sensor_only"}
+    assert set(TRANSFORMS.names()) == {"denoise", "denoise_sensor", "equalise", "sensor_only",
+                                       "png8_filmic", "png16_filmic", "png8_agx"}
+    assert get_transform("png16_filmic").encoding["bits"] == 16
+    assert get_transform("denoise").encoding is None
     equalise = get_transform("equalise")
     assert equalise.reads == ("seed_mean", "seed_var")
     assert equalise.missing({"seed_mean"}) == ["seed_var"]

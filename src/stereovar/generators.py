@@ -28,6 +28,7 @@ from pathlib import Path
 from .errors import ConfigError
 
 __all__ = [
+    "OUTPUTS",
     "PAPER",
     "PROFILES",
     "GeneratorProfile",
@@ -43,6 +44,32 @@ PAPER = "paper"
 """The row of the paper's own settings: Cycles with ``render.cycles`` at its defaults
 (independent seeds per view, no adaptive sampling, no denoiser), the renders of source
 ``cycles`` itself."""
+
+OUTPUTS = {
+    "kubric": "png8_filmic",
+    "blenderproc": "png8_filmic",
+    "infinigen": "png8_agx",
+}
+"""What each generator ships its images as: the store transform
+(:mod:`stereovar.transforms.output`) from its float render to the PNG a team trains on.
+
+``kubric`` (google-research/kubric @ 0ee21e2): ``kubric/renderer/blender.py`` L292-294 renders
+each frame with ``write_still`` to ``frame_%04d.png``, and L354 keeps that PNG as ``rgba``
+("the contrast-normalized PNG instead of the EXR"); L368 starts from Blender's factory
+settings and no line sets ``view_transform`` or ``color_depth``, so Blender's defaults
+apply: PNG at 8 bits through the Filmic view transform of the Blender it builds
+(``docker/Blender.Dockerfile`` L48, Blender 2.93).
+
+``blenderproc`` (DLR-RM/BlenderProc @ a80f75d): ``blenderproc/python/utility/DefaultConfig.py``
+L26-27 ``file_format = "PNG"``, ``color_depth = 8`` and L44 ``view_transform = "Filmic"``,
+set by ``Initializer.py`` L167 (``set_output_format``) at ``bproc.init()``
+(``RendererUtility.py`` L732-766); ``color_depth=16`` is its option (``png16_filmic``).
+
+``infinigen`` (princeton-vl/infinigen @ 01c39c7): ``infinigen/core/rendering/render.py``
+L160-177 writes the image through a PNG file output (RGB, Blender's default 8 bits) and an
+OpenEXR one; no line sets ``view_transform``, so Blender 4.2's default (``pyproject.toml`` L27
+``bpy==4.2.0``), AgX, makes the PNG. Its EXR is the float render, the profile's float row.
+"""
 
 PRESET_FOLDER = ("workflow", "presets", "generators")
 """Where the profiles sit, under the workflow's root

@@ -55,9 +55,8 @@ rule generator_calibration:
     output:
         layout.generator_calibration_rows("{profile}", "{scene}", "{spp}"),
     params:
-        transforms=lambda wc: list(
-            dict.fromkeys(["none", profile_matched_transform(GENERATOR_ROWS[wc.profile].cycles)])
-        ),
+        transforms=lambda wc: generator_calibration_transforms(GENERATOR_ROWS[wc.profile]),
+        outputs=lambda wc: generator_outputs(GENERATOR_ROWS[wc.profile]),
         options={},
         calibration={**config["calibration"], "pipelines": []},
         analysis=config["analysis"],

@@ -13,6 +13,11 @@ renders = {
     for view in ("left", "right")
     if f"renders_{view}" in snakemake.input.keys()
 }
+output_renders = {
+    view: list(snakemake.input[f"output_{view}"])
+    for view in ("left", "right")
+    if f"output_{view}" in snakemake.input.keys()
+}
 run_job(
     snakemake.log[0],
     calibration_scene_job,
@@ -21,5 +26,6 @@ run_job(
     out=snakemake.output[0],
     aux=aux or None,
     renders=renders or None,
+    output_renders=output_renders or None,
     **dict(snakemake.params.items()),
 )

@@ -72,6 +72,11 @@ CALIBRATION_COLUMNS = [
 ``null_kind``: the design whose replicates are the row's matched null (``camera``, or the
 camera law through an 8-bit pipeline's encoding, ``camera_srgb8_<q>``)."""
 
+QUANTISED_SHARE = "quantised_share"
+"""The ``method`` of a shipped output's row whose ``rho`` is the share of valid pixels whose
+Eq. 1 variance the output's integer encoding fixes
+(:func:`stereovar.controls.quantisation.fixed_share`, the larger of the two views)."""
+
 SHARED_STREAMS_METHOD = "shared_streams"
 """The audit's shared-streams check, measured on the cue-free designs as the calibration's
 ``method`` of that name: its ``rho`` is the per-seed residuals' cross-view correlation at
@@ -156,6 +161,9 @@ def transform_stack(
     variance over all :math:`N` (:func:`stereovar.jobs.mitigations.seed_moments`'s
     definition), the view's auxiliary passes when given, and its own random seed.
 
+    A chain ``a+b`` (:func:`stereovar.transforms.transform_chain`) applies each link to
+    the previous link's :math:`N` outputs, as a store transform of a store transform would.
+
     Returns
     -------
     numpy.ndarray (N, H, W, C), float32
@@ -163,8 +171,15 @@ def transform_stack(
     """
     if name == NONE:
         return frames
-    from ..transforms import TransformInputs, get_transform
+    from ..transforms import CHAIN, TransformInputs, get_transform
 
+    if CHAIN in name:
+        *links, last = name.split(CHAIN)
+        for link in links:
+            frames = transform_stack(link, frames, view=view, seed=derive_seed(seed, link),
+                                     aux=aux, options=(options or {}).get(link))
+        return transform_stack(last, frames, view=view, seed=derive_seed(seed, last), aux=aux,
+                               options=(options or {}).get(last), first_only=first_only)
     t = get_transform(name)
     stack = np.asarray(frames, dtype=np.float64)
     mean = stack.mean(axis=0)
@@ -191,9 +206,19 @@ def reads_seed_mean(name: str) -> bool:
     over its :math:`N` outputs cannot see the Monte Carlo noise left in the seed mean."""
     if name == NONE:
         return False
-    from ..transforms import get_transform
+    from ..transforms import transform_chain
 
-    return bool({"seed_mean", "seed_var"} & set(get_transform(name).reads))
+    return any({"seed_mean", "seed_var"} & set(t.reads) for t in transform_chain(name))
+
+
+def output_encoding_of(name: str) -> dict | None:
+    """The integer encoding the last link of transform ``name`` writes (a generator's PNG,
+    :mod:`stereovar.transforms.output`), or None for a float output."""
+    if name == NONE:
+        return None
+    from ..transforms import transform_chain
+
+    return transform_chain(name)[-1].encoding
 
 
 def seed_groups(n: int, size: int = 2) -> list[np.ndarray]:
@@ -367,6 +392,9 @@ def measured_rows(
     paths = [] if shipped_only else [(name, transform_stack)]
     if reads_seed_mean(name) and seed_groups(scene.n_seeds):
         paths.append((name + SHIPPED, shipped_stack))
+    encoding = output_encoding_of(name)
+    if encoding:  # the statistics read the transform's integer output as an audit would
+        scene = dataclasses.replace(scene, encoding=encoding)
     rows = []
     for label_name, apply in paths:
         stacks = {
@@ -411,6 +439,56 @@ def renders_shipped_rows(renders: dict, scene: SceneFrames, *, transforms, setti
                     "strength_factor": float("nan")},
             shipped_only=True,
         )
+    return rows
+
+
+def renders_output_rows(renders: dict, scene: SceneFrames, *, outputs: dict, settings,
+                        seed: int = 0) -> list[dict]:
+    """What a generator ships, measured on its own renders (``kind`` ``renders``), and the
+    share of pixels whose variance its encoding fixes (method :data:`QUANTISED_SHARE`).
+
+    Parameters
+    ----------
+    renders : dict
+        View to the generator's renders (N, H, W, C), its own denoiser already applied.
+    outputs : dict
+        Label to the transform its renders pass through before they ship (its PNG writer,
+        :mod:`stereovar.transforms.output`). The label is the chain its matched null passes
+        through (``denoise+png8_filmic``: the null is drawn at the raw renders' level, so it
+        also passes the denoiser the renderer ran), and the rows carry it, so that
+        :func:`stereovar.statistics.mitigations.matched_difference` pairs them with that
+        null.
+    """
+    from ..controls.quantisation import fixed_share, quantisation_variance
+    from ..estimators.seeds import variance_field
+
+    design = {"replicate": 0, "kind": "renders", "strength": float("nan"),
+              "strength_factor": float("nan"), "null_kind": "camera"}
+    rows = []
+    for label, ship in outputs.items():
+        encoding = output_encoding_of(ship)
+        shipped = dataclasses.replace(scene, encoding=encoding) if encoding else scene
+        stacks = {
+            view: transform_stack(ship, renders[view], view=view,
+                                  seed=derive_seed("calibration-output", seed, label, view))
+            for view in ("left", "right")
+        }
+        for row in statistic_rows(stacks, shipped, settings, f"{scene.label}|output|{label}"):
+            rows.append({**design, "transform": label, "region": row["region"],
+                         "method": row["method"], "rho": row["rho"],
+                         "boot_low": row["boot_low"], "boot_high": row["boot_high"],
+                         "chance_se": row["chance_se"], "n_pixels": row["n_pixels"]})
+        if encoding:
+            shares = []
+            for view, stack in stacks.items():
+                mean, variance = variance_field(np.asarray(stack))
+                q = quantisation_variance(mean, encoding)
+                valid = np.asarray(scene.ground_truth[view]["valid"], dtype=bool)
+                shares.append(fixed_share(variance[valid], q[valid]))
+            rows.append({**design, "transform": label, "region": "all",
+                         "method": QUANTISED_SHARE, "rho": max(shares),
+                         "boot_low": float("nan"), "boot_high": float("nan"),
+                         "chance_se": float("nan"), "n_pixels": int(valid.sum())})
     return rows
 
 

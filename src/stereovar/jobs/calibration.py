@@ -97,6 +97,8 @@ def calibration_scene_job(
     analysis=None,
     controls=None,
     intervention=None,
+    outputs=None,
+    output_renders=None,
 ) -> list[dict]:
     """One scene's calibration replicates
     (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV, and with
@@ -104,16 +106,21 @@ def calibration_scene_job(
     ships, measured on the renders themselves
     (:func:`stereovar.calibration.replicates.renders_shipped_rows`). ``intervention`` (its
     config section) sets the variance-matching cost's window and disparities as the
-    intervention scans the renders."""
+    intervention scans the renders. ``outputs`` (chain label to the writer a generator's
+    renders pass through) with ``output_renders`` (each view's render stores of that
+    generator) adds what the generator ships, measured on its renders
+    (:func:`stereovar.calibration.replicates.renders_output_rows`); each label must be one of
+    ``transforms``, so that its matched null is drawn through the same chain."""
     import dataclasses
 
     from ..calibration.replicates import (
         CALIBRATION_COLUMNS,
+        renders_output_rows,
         renders_shipped_rows,
         scene_calibration,
     )
     from ..io.tables import write_tables
-    from ..transforms import get_transform
+    from ..transforms import transform_chain
     from .correlation import analysis_settings
 
     settings, camera = analysis_settings(analysis, controls)
@@ -122,20 +129,20 @@ def calibration_scene_job(
     scene = dataclasses.replace(matching_scan(scene, intervention), sensor=camera)
     stacks = {}
     if renders:
-        import numpy as np
-
         from ..calibration.synthesis import channel_correlation
-        from .common import view_stack
 
         for view, paths in renders.items():
-            stack, seeds, _, _ = view_stack(paths)
-            stacks[view] = stack[np.argsort(seeds, kind="stable")]
+            stacks[view] = _sorted_stack(paths)
         # the renders' channels share their noise: the synthetic frames' do as much
         scene = dataclasses.replace(scene, channel_correlation=channel_correlation(
             stacks["left"], scene.ground_truth["left"]["valid"]))
     expensive = frozenset(
-        t for t in transforms if t != "none" and get_transform(t).expensive
+        t for t in transforms if t != "none" and any(x.expensive for x in transform_chain(t))
     )
+    outputs = dict(outputs or {})
+    unmatched = sorted(set(outputs) - set(transforms))
+    if unmatched:
+        raise ValueError(f"outputs {unmatched} have no matched null among {list(transforms)}")
     rows, info = scene_calibration(
         scene,
         transforms=list(transforms),
@@ -153,6 +160,11 @@ def calibration_scene_job(
         rows += renders_shipped_rows(
             stacks, scene, transforms=transforms, settings=settings, options=options,
             seed=int(cal["seed"]),
+        )
+    if outputs and output_renders:
+        rows += renders_output_rows(
+            {view: _sorted_stack(paths) for view, paths in output_renders.items()}, scene,
+            outputs=outputs, settings=settings, seed=int(cal["seed"]),
         )
     name = scene.label.split("|")[0]
     for row in rows:
@@ -173,6 +185,16 @@ def calibration_scene_job(
     )
     write_tables(rows, CALIBRATION_COLUMNS, {"csv": out})
     return rows
+
+
+def _sorted_stack(paths):
+    """One view's renders (N, H, W, C) from its render stores, in seed order."""
+    import numpy as np
+
+    from .common import view_stack
+
+    stack, seeds, _, _ = view_stack(paths)
+    return stack[np.argsort(seeds, kind="stable")]
 
 
 def matching_scan(scene, intervention=None):

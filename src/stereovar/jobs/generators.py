@@ -11,6 +11,29 @@ def profile_matched_transform(cycles: dict) -> str:
     return "denoise" if (cycles or {}).get("denoise") else "none"
 
 
+def profile_output_chain(name: str, cycles: dict) -> str | None:
+    """The chain a profile's shipped matched null passes through: its matched transform
+    (:func:`profile_matched_transform`), then the writer it ships through
+    (:data:`stereovar.generators.OUTPUTS`); None for a profile that ships floats.
+
+    Examples
+    --------
+    >>> profile_output_chain("kubric", {"denoise": True})
+    'denoise+png8_filmic'
+    >>> profile_output_chain("infinigen", {"denoise": False})
+    'png8_agx'
+    >>> profile_output_chain("paper", {}) is None
+    True
+    """
+    from ..generators import OUTPUTS
+
+    ship = OUTPUTS.get(name)
+    if ship is None:
+        return None
+    matched = profile_matched_transform(cycles)
+    return ship if matched == "none" else f"{matched}+{ship}"
+
+
 def generators_table_job(
     runs: list[dict], outputs: dict, *, figure=None, calibration=None
 ) -> list[dict]:
@@ -47,6 +70,7 @@ def generators_table_job(
         GENERATOR_COLUMNS,
         compact_table,
         generator_rows,
+        shipped_columns,
     )
     from ..statistics.mitigations import mitigation_table
 
@@ -77,12 +101,16 @@ def generators_table_job(
             "scene_rows": [r for path in run["scene_rows"] for r in read_rows(path)],
         }
         measured = mitigation_table([entry], nulls)
-        rows += generator_rows(
-            profile,
-            measured,
-            generator_spp=int(run["generator_spp"]),
-            matched=run["calibration_transform"],
-        )
+        shipped = shipped_columns(replicates, nulls, run.get("output_transform"))
+        rows += [
+            {**r, **(shipped if r["region"] == "all" else {"output": shipped["output"]})}
+            for r in generator_rows(
+                profile,
+                measured,
+                generator_spp=int(run["generator_spp"]),
+                matched=run["calibration_transform"],
+            )
+        ]
     write_tables(rows, GENERATOR_COLUMNS, {"csv": outputs["csv"]})
     if calibration is not None:
         write_tables(checks, ["profile", *CALIBRATION_TABLE_COLUMNS], {"csv": calibration})
@@ -109,7 +137,11 @@ def generators_table_job(
             "these scenes (SPP scaled to the budget where it is above it). The Monte "
             "Carlo-specific rho is the intensity-controlled rho minus the same statistic on "
             "the profile's matched null (its value beside it), with its 95% interval and "
-            "verdict; the residual coupling is the correlation of the views' standardised "
+            "verdict. As shipped: the same on the generator's own output (its renders "
+            "through Blender's view transform and PNG, read back as an audit reads them), "
+            "against a null drawn through the same denoiser and PNG; undefined where the "
+            "codes fix the variance at 90% of the pixels or more. The residual coupling is "
+            "the correlation of the views' standardised "
             "residuals at zero disparity (about 0 for independent seeds); PSNR of one render "
             f"against the converged reference. {false_positives} Every column and region: "
             "generators.csv; every calibration check: generators_calibration.csv"
@@ -120,7 +152,8 @@ def generators_table_job(
             continue
         log.info(
             "%-12s spp %d (x%.4g) adaptive %s, denoiser %s, seeds %s: Monte Carlo-specific "
-            "%.3f [%.3f, %.3f] (null %.3f) %s, residual coupling %.3f [%.3f, %.3f], "
+            "%.3f [%.3f, %.3f] (null %.3f) %s; as shipped (%s) %.3f [%.3f, %.3f] (null "
+            "%.3f) %s, codes fix %.0f%% of pixels; residual coupling %.3f [%.3f, %.3f], "
             "PSNR %.1f dB",
             row["profile"],
             row["spp"],
@@ -133,6 +166,13 @@ def generators_table_job(
             row["mc_specific_high"],
             row["null_partial"],
             row["mc_cue"],
+            row["output"],
+            row["shipped_mc_specific"],
+            row["shipped_mc_specific_low"],
+            row["shipped_mc_specific_high"],
+            row["shipped_null_partial"],
+            row["shipped_mc_cue"],
+            100 * row["quantised_share"],
             row["residual_rho_zero"],
             row["residual_rho_zero_low"],
             row["residual_rho_zero_high"],

@@ -157,6 +157,13 @@ def transform_job(
             "transform_aux": ",".join(sorted(extra)) or "none",
             "transform_seconds": float(elapsed),
             "transform_megapixels": float(len(wanted) * height * width / 1e6),
+            # an output written as integers says so, as an imported PNG does, so that the
+            # intensity control's quantisation term and the matched null read its encoding
+            **(
+                {"bit_depth": t.encoding["bits"], "transfer": t.encoding["transfer"],
+                 "full_scale": t.encoding["scale"], "file_format": "PNG"}
+                if t.encoding else {}
+            ),
         },
     )
     ds = ds.assign_coords(transform_seed=("seed", np.asarray(rng_seeds, dtype=np.int64)))

@@ -11,12 +11,23 @@ measured against the profile's own matched nulls:
   :math:`(I^{(n)} - \\bar I)/\\hat\\sigma` pixel by pixel at zero disparity, the coupling a
   shared seed makes (about 0 for independent seeds);
 - ``psnr``: one render against the converged reference (the paper row's renders, split in
-  half), the mean over scenes with a Student t interval.
+  half), the mean over scenes with a Student t interval;
+- ``shipped_*``: the same Monte Carlo-specific :math:`\rho` on what the generator ships
+  (``output``, :data:`stereovar.generators.OUTPUTS`: its renders through Blender's view
+  transform and an 8-bit PNG, read back as an audit reads it), against a matched null drawn
+  through the same chain (camera-law noise, the generator's denoiser where it runs, then the
+  same PNG), with its own margin and verdict (``shipped_mc_cue``). Where the PNG's codes fix
+  the variance at :data:`~stereovar.controls.quantisation.FIXED_SHARE` of the pixels or more
+  (``quantised_share``), the intensity-controlled :math:`\rho` is undefined and the verdict
+  reads :data:`NOT_TESTABLE`: the Monte Carlo part of the variance cannot be told from the
+  rounding of the mean.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from .mitigations import _f, _iv
 
@@ -48,8 +59,28 @@ GENERATOR_COLUMNS = [
     "psnr_low",
     "psnr_high",
     "matched_null",
+    "output",
+    "shipped_partial",
+    "shipped_null_partial",
+    "shipped_mc_specific",
+    "shipped_mc_specific_low",
+    "shipped_mc_specific_high",
+    "shipped_margin",
+    "shipped_margin_strength",
+    "shipped_mc_cue",
+    "quantised_share",
 ]
 """Columns of ``results/tables/generators.csv``."""
+
+NOT_TESTABLE = "not testable"
+"""The verdict on a shipped output whose integer codes fix the variance at most pixels."""
+
+OUTPUT_TEXT = {
+    "png8_filmic": "8-bit PNG, Filmic",
+    "png16_filmic": "16-bit PNG, Filmic",
+    "png8_agx": "8-bit PNG, AgX",
+}
+"""How the tables name each output (:mod:`stereovar.transforms.output`)."""
 
 COMPACT_COLUMNS = [
     "profile",
@@ -60,6 +91,9 @@ COMPACT_COLUMNS = [
     "Monte Carlo-specific rho",
     "matched null",
     "verdict",
+    "as shipped",
+    "Monte Carlo-specific rho as shipped",
+    "verdict as shipped",
     "coupling at d = 0",
     "probe",
     "PSNR",
@@ -110,6 +144,58 @@ def generator_rows(profile, rows: list[dict], *, generator_spp: int, matched: st
     return out
 
 
+def shipped_columns(replicates: list[dict], nulls: list[dict], chain: str | None) -> dict:
+    """A profile's ``shipped_*`` columns and ``quantised_share`` (all pixels) from its
+    calibration rows: the ``renders`` rows through ``chain``
+    (:func:`stereovar.calibration.replicates.renders_output_rows`) against the nulls through
+    the same chain (:func:`~stereovar.statistics.mitigations.matched_difference`).
+
+    Examples
+    --------
+    A shipped output that keeps no testable variance:
+
+    >>> rows = [{"scene": "s", "kind": "renders", "transform": "png8_agx", "region": "all",
+    ...          "method": m, "rho": r, "boot_low": float("nan"), "boot_high": float("nan")}
+    ...         for m, r in (("partial", float("nan")), ("quantised_share", 0.95))]
+    >>> out = shipped_columns(rows, [], "png8_agx")
+    >>> out["output"], out["shipped_mc_cue"], out["quantised_share"]
+    ('8-bit PNG, AgX', 'not testable', 0.95)
+    """
+    from ..calibration.replicates import QUANTISED_SHARE
+    from ..controls.quantisation import FIXED_SHARE
+    from ..transforms import CHAIN
+    from .mitigations import equivalence_margin, matched_difference, mc_cue_state
+
+    nan = math.nan
+    out = {c: nan for c in GENERATOR_COLUMNS if c.startswith("shipped_")}
+    out.update(output="float (EXR)", shipped_mc_cue="n/a", quantised_share=nan)
+    if not chain:
+        return out
+    ship = chain.split(CHAIN)[-1]
+    mine = [r for r in replicates if r["kind"] == "renders" and r["transform"] == chain
+            and r["region"] == "all"]
+    partial = [_f(r["rho"]) for r in mine if r["method"] == "partial"]
+    shares = [_f(r["rho"]) for r in mine if r["method"] == QUANTISED_SHARE]
+    null, *diff = matched_difference(mine, nulls, transform=chain, region="all")
+    margin = equivalence_margin(nulls, chain)
+    finite = [x for x in partial if math.isfinite(x)]
+    out.update(
+        output=OUTPUT_TEXT.get(ship, ship),
+        shipped_partial=float(np.mean(finite)) if finite else nan,
+        shipped_null_partial=null,
+        shipped_mc_specific=diff[0],
+        shipped_mc_specific_low=diff[1],
+        shipped_mc_specific_high=diff[2],
+        shipped_margin=margin,
+        shipped_margin_strength=equivalence_margin(nulls, chain, column="margin_strength"),
+        shipped_mc_cue=mc_cue_state(diff[1], diff[2], margin),
+        quantised_share=float(np.mean(shares)) if shares else nan,
+    )
+    if partial and not finite and shares and max(shares) >= FIXED_SHARE:
+        out["shipped_mc_cue"] = NOT_TESTABLE
+    return out
+
+
 def _spp_text(row: dict) -> str:
     spp, own = int(_f(row["spp"])), int(_f(row["generator_spp"]))
     if spp == own:
@@ -148,9 +234,22 @@ def compact_table(rows: list[dict], region: str = "all") -> list[dict]:
                 "Monte Carlo-specific rho": _iv(r, "mc_specific"),
                 "matched null": f"{null:.3f}" if math.isfinite(null) else "n/a",
                 "verdict": r["mc_cue"],
+                "as shipped": r.get("output", "float (EXR)"),
+                "Monte Carlo-specific rho as shipped": _shipped_text(r),
+                "verdict as shipped": r.get("shipped_mc_cue", "n/a"),
                 "coupling at d = 0": _iv(r, "residual_rho_zero"),
                 "probe": r["probe"],
                 "PSNR": _iv(r, "psnr", " dB", 1),
             }
         )
     return out
+
+
+def _shipped_text(row: dict) -> str:
+    """The shipped difference beside its null, or why there is none."""
+    if row.get("shipped_mc_cue") == NOT_TESTABLE:
+        share = _f(row.get("quantised_share"))
+        return f"undefined: the codes fix the variance at {100 * share:.0f}% of pixels"
+    if not math.isfinite(_f(row.get("shipped_mc_specific"))):
+        return "n/a"
+    return f"{_iv(row, 'shipped_mc_specific')} (null {_f(row['shipped_null_partial']):.3f})"

@@ -101,6 +101,10 @@ class Transform:
         Whether one image costs far more than the statistics on it (the denoisers): the
         calibration passes fewer replicates through it
         (:mod:`stereovar.calibration.replicates`).
+    encoding : dict, optional
+        The integer encoding its output is read back from (``bits``, ``transfer``, ``scale``:
+        :func:`stereovar.transforms.output.output_encoding`), for the intensity control's
+        quantisation term; None for a float output.
     """
 
     name: str
@@ -110,6 +114,7 @@ class Transform:
     optional_reads: tuple[str, ...] = ()
     random: bool = False
     expensive: bool = False
+    encoding: dict | None = None
 
     def __post_init__(self):
         known = {f.name for f in fields(TransformInputs)}

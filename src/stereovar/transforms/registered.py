@@ -6,8 +6,11 @@ Importing this module imports the camera model (numpy) but not pyoidn, which
 
 from __future__ import annotations
 
+from functools import partial
+
 from .base import Transform
 from .denoise import apply_denoise
+from .output import apply_view_png, output_encoding
 from .sensor import apply_denoise_sensor, apply_equalise, apply_sensor_only
 
 DENOISE = Transform(
@@ -37,4 +40,22 @@ SENSOR_ONLY = Transform(
     apply=apply_sensor_only,
     reads=("seed_mean",),
     random=True,
+)
+PNG8_FILMIC = Transform(
+    name="png8_filmic",
+    description="Blender's Filmic view transform and 8-bit PNG, as Kubric and BlenderProc write",
+    apply=partial(apply_view_png, view_transform="Filmic", bits=8),
+    encoding=output_encoding(8),
+)
+PNG16_FILMIC = Transform(
+    name="png16_filmic",
+    description="Blender's Filmic view transform and 16-bit PNG (BlenderProc's color_depth 16)",
+    apply=partial(apply_view_png, view_transform="Filmic", bits=16),
+    encoding=output_encoding(16),
+)
+PNG8_AGX = Transform(
+    name="png8_agx",
+    description="Blender's AgX view transform and 8-bit PNG, as Infinigen writes its PNG",
+    apply=partial(apply_view_png, view_transform="AgX", bits=8),
+    encoding=output_encoding(8),
 )

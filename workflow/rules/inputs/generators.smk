@@ -5,8 +5,9 @@
 # at the budget (generators.spp), its render stores and the matched null's inputs.
 from stereovar.errors import ConfigError
 from stereovar.generators import PAPER, PROFILES, generator_profiles
-from stereovar.jobs.generators import profile_matched_transform
+from stereovar.jobs.generators import profile_matched_transform, profile_output_chain
 from stereovar.renderers.cycles.settings import cycles_options
+from stereovar.transforms import CHAIN
 
 GENERATORS = config["generators"]
 GENERATOR_SPP = int(GENERATORS["spp"])
@@ -41,7 +42,28 @@ def generator_calibration_inputs(wildcards):
     if matched == "denoise":
         for view in VIEWS:
             inputs[f"aux_{view}"] = layout.aux_store("mitsuba", wildcards.scene, view)
+    if profile_output_chain(profile.name, profile.cycles):
+        # the profile's own renders, measured as it ships them
+        stores = seed_stores(
+            run_config(layout.generator_source(profile.name)), wildcards.scene, wildcards.spp
+        )
+        for view in VIEWS:
+            inputs[f"output_{view}"] = stores[view]
     return inputs
+
+
+def generator_calibration_transforms(profile):
+    """The transforms a profile's matched nulls pass through: ``none``, its matched
+    transform and the chain of what it ships (:func:`profile_output_chain`)."""
+    chain = profile_output_chain(profile.name, profile.cycles)
+    names = ["none", profile_matched_transform(profile.cycles), *([chain] if chain else [])]
+    return list(dict.fromkeys(names))
+
+
+def generator_outputs(profile):
+    """The profile's shipped chain to the writer its renders pass through."""
+    chain = profile_output_chain(profile.name, profile.cycles)
+    return {chain: chain.split(CHAIN)[-1]} if chain else {}
 
 
 def generator_table_params():
@@ -57,6 +79,7 @@ def generator_table_params():
                 "scale": p.scale,
                 "cycles": p.cycles,
                 "calibration_transform": profile_matched_transform(p.cycles),
+                "output_transform": profile_output_chain(name, p.cycles),
                 "correlation": [
                     layout.correlation_rows(source, "seeds", s, GENERATOR_SPP)
                     for s in GENERATOR_SCENES
