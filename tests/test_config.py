@@ -102,6 +102,7 @@ DEFAULTS = {
         "profiles": ["kubric", "blenderproc", "infinigen"],
         "scenes": None,
         "spp": 64,
+        "denoised_replicates": 4,
     },
     "probe": {
         "conditions": ["none", "sensor_only"],

@@ -58,7 +58,11 @@ rule generator_calibration:
         transforms=lambda wc: generator_calibration_transforms(GENERATOR_ROWS[wc.profile]),
         outputs=lambda wc: generator_outputs(GENERATOR_ROWS[wc.profile]),
         options={},
-        calibration={**config["calibration"], "pipelines": []},
+        calibration={
+            **config["calibration"],
+            "pipelines": [],
+            "denoised_replicates": GENERATORS["denoised_replicates"],
+        },
         analysis=config["analysis"],
         controls=config["controls"],
         intervention=config["intervention"],

@@ -383,13 +383,33 @@ def _lift_row(fields, scene: SceneFrames, settings, seed) -> dict:
 
 def measured_rows(
     frames, name, scene, settings, *, label, seed, options=None, design=None, shipped_only=False,
-    methods=None,
+    methods=None, cache=None,
 ):
     """:data:`CALIBRATION_COLUMNS` rows (but ``scene``) of one view pair of frame stacks
     through transform ``name``: as the transform job applies it (unless ``shipped_only``),
     and, for a transform that reads the seed mean, also on what it ships
-    (:func:`shipped_stack`, labelled ``name`` + :data:`SHIPPED`)."""
-    paths = [] if shipped_only else [(name, transform_stack)]
+    (:func:`shipped_stack`, labelled ``name`` + :data:`SHIPPED`).
+
+    ``cache`` (a dict kept over the transforms of one set of frames) holds each transform's
+    outputs per view, so that a chain ``a+b`` applies only ``b`` to the outputs ``a`` already
+    gave (the denoiser runs once for a generator's denoised and shipped nulls)."""
+
+    def through(name, frames, *, view, seed, aux=None, options=None):
+        if cache is None:
+            return transform_stack(name, frames, view=view, seed=seed, aux=aux, options=options)
+        from ..transforms import CHAIN
+
+        if (name, view) not in cache:
+            prefix, _, last = name.rpartition(CHAIN)
+            if prefix and (prefix, view) in cache:
+                cache[name, view] = transform_stack(last, cache[prefix, view], view=view,
+                                                    seed=derive_seed(seed, last), aux=aux)
+            else:
+                cache[name, view] = transform_stack(name, frames, view=view, seed=seed,
+                                                    aux=aux, options=options)
+        return cache[name, view]
+
+    paths = [] if shipped_only else [(name, through)]
     if reads_seed_mean(name) and seed_groups(scene.n_seeds):
         paths.append((name + SHIPPED, shipped_stack))
     encoding = output_encoding_of(name)
@@ -578,7 +598,7 @@ def scene_calibration(
         a transform sees those from :data:`TRANSFORM_MIN_FACTOR` up.
     expensive_replicates : int
         Replicates of the transforms in ``expensive`` (the denoisers), which see the nulls
-        and the planted cue at factor 1 only.
+        and the planted cue from :data:`TRANSFORM_MIN_FACTOR` up, as the cheap ones do.
     options : dict, optional
         Transform name to its keyword options (the run's camera).
     seed : int
@@ -620,9 +640,10 @@ def scene_calibration(
             noise_var = camera_residual_variance(scene, law, rng)
             render_s = max(render_strength(scene, settings, noise_var), min_strength)
         for kind, strength, factor in designs(strength_factors, render_s):
-            cheap_only = r >= expensive_replicates or not (
-                kind in NULL_KINDS or (kind == "planted" and factor == 1.0)
-            )
+            # the denoisers see the nulls and the planted series from TRANSFORM_MIN_FACTOR,
+            # so that their own power curve sets their margin
+            cheap_only = r >= expensive_replicates
+            cache = {}
             chosen = [
                 t
                 for t in transforms
@@ -656,7 +677,7 @@ def scene_calibration(
                     label=f"{scene.label}|{r}|{kind}|{factor:g}|{name}",
                     seed=derive_seed("calibration-transform", seed, scene.label, r, kind,
                                      factor, name),
-                    options=options.get(name), design=design, methods=checks,
+                    options=options.get(name), design=design, methods=checks, cache=cache,
                 )
     rows += pipeline_rows(scene, law, settings, replicates=int(pipeline_replicates),
                           pipelines=pipelines, seed=seed)
