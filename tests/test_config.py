@@ -97,6 +97,12 @@ DEFAULTS = {
         "reference_spp": 128,
         "aux_spp": 16,
         "seed": 0,
+        "dose_response": {
+            "transforms": ["sensor_only"],
+            "gains": [100, 30],
+            "multiples": [1, 2, 4, 8, 16, 32, 64],
+            "replicates": 2,
+        },
     },
     "generators": {
         "profiles": ["kubric", "blenderproc", "infinigen"],

@@ -343,6 +343,18 @@ def calibration_rows(source: str, estimator: str, scene: str, spp) -> str:
     return f"{run_prefix(source, estimator)}/calibration/{scene}/spp{spp}.csv"
 
 
+def dose_response_rows(source: str, scene: str, spp) -> str:
+    """One scene's dose-response rows (what a seed-mean mitigation ships over its budget and
+    the camera, predicted and measured): ``results/{source}/seeds/dose_response/{scene}/
+    spp{spp}.csv``."""
+    return f"{run_prefix(source, 'seeds')}/dose_response/{scene}/spp{spp}.csv"
+
+
+def dose_response_tables() -> list[str]:
+    """The dose-response table: ``results/tables/dose_response.{csv,md,tex,html}``."""
+    return table_paths("dose_response")
+
+
 def generator_source(profile: str) -> str:
     """The source key of a generator profile's renders (:mod:`stereovar.generators`):
     ``cycles`` for the paper's own settings, else ``cycles/{profile}``."""

@@ -154,6 +154,61 @@ rule mitigations_table:
         "../scripts/mitigations_table.py"
 
 
+rule dose_response_scene:
+    wildcard_constraints:
+        renderer=SOURCE_NAMES,
+    input:
+        unpack(dose_response_inputs),
+    output:
+        layout.dose_response_rows("{renderer}", "{scene}", "{spp}"),
+    params:
+        transforms=DOSE["transforms"],
+        cameras=DOSE["cameras"],
+        multiples=DOSE["multiples"],
+        replicates=DOSE["replicates"],
+        analysis=config["analysis"],
+        controls=config["controls"],
+        seed=MITIGATIONS["seed"],
+    log:
+        "logs/{renderer}/seeds/dose_response/{scene}/spp{spp}.log",
+    benchmark:
+        "benchmarks/{renderer}/seeds/dose_response/{scene}/spp{spp}.tsv"
+    threads: 1
+    resources:
+        **analysis_resources(images=4 * N_SEEDS + 8, n_reads=2 * N_SEEDS),
+    conda:
+        ENV
+    script:
+        "../scripts/dose_response_scene.py"
+
+
+rule dose_response_table:
+    input:
+        rows=[layout.dose_response_rows(MITIGATION_SOURCE, s, MAIN_SPP) for s in SCENES],
+        nulls=layout.calibration_nulls(MITIGATION_SOURCE),
+    output:
+        csv=DOSE_TABLES[0],
+        md=DOSE_TABLES[1],
+        tex=DOSE_TABLES[2],
+        html=report(
+            DOSE_TABLES[3],
+            caption="../report/dose_response.rst",
+            category="Tables",
+            labels={"table": "dose_response"},
+        ),
+    params:
+        spp=MAIN_SPP,
+    log:
+        f"logs/{MITIGATION_SOURCE}/tables/dose_response.log",
+    benchmark:
+        f"benchmarks/{MITIGATION_SOURCE}/tables/dose_response.tsv"
+    localrule: True
+    conda:
+        ENV
+    script:
+        "../scripts/dose_response_table.py"
+
+
 rule mitigations:
     input:
         mitigation_targets(),

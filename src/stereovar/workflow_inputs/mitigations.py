@@ -69,3 +69,47 @@ def image_cost(run, n_seeds: int, aux_spp: int) -> dict:
         if reads_aux([run.transform], run.source):
             aux = aux_spp
     return {"render_spp": render_spp, "aux_spp": aux}
+
+
+def dose_response_plan(config: dict, runs) -> dict:
+    """What the dose-response measures (``mitigations.dose_response``): its ``transforms``,
+    the ``cameras`` (the run's ``controls.sensor`` first, then one per extra gain at the same
+    read noise), the budget ``multiples`` and the ``rendered`` ones (1: the run's renders;
+    K: a ``spp_xK`` row's renders), for the mitigation rows ``runs``
+    (:func:`stereovar.mitigations.mitigation_runs`).
+
+    Raises
+    ------
+    stereovar.errors.ConfigError
+        A transform is not among the mitigation rows, or does not read the seed mean (one
+        line naming ``mitigations.dose_response.transforms``).
+    """
+    from ..errors import ConfigError
+
+    dose = dict(config["mitigations"].get("dose_response") or {})
+    names = {r.transform for r in runs if r.mitigation.kind == "transform"}
+    transforms = list(dose.get("transforms", []))
+    for name in transforms:
+        reads = set(get_transform(name).reads) if name in names else set()
+        if not {"seed_mean", "seed_var"} & reads:
+            raise ConfigError(
+                f"config key 'mitigations.dose_response.transforms': {name!r} is not a "
+                "mitigation row that ships the seed mean; use some of "
+                + ", ".join(sorted(n for n in names
+                                   if {"seed_mean", "seed_var"} & set(get_transform(n).reads)))
+                + " (each also in mitigations.names)"
+            )
+    sensor = config["controls"]["sensor"]
+    cameras = [{"gain": float(sensor["gain"]), "read_noise": float(sensor["read_noise"])}]
+    for gain in dose.get("gains", []):
+        if float(gain) != cameras[0]["gain"]:
+            cameras.append({"gain": float(gain), "read_noise": float(sensor["read_noise"])})
+    multiples = sorted({int(m) for m in dose.get("multiples", [1])})
+    factors = {1} | {r.mitigation.spp_factor for r in runs if r.mitigation.kind == "spp"}
+    return {
+        "transforms": transforms if runs else [],
+        "cameras": cameras,
+        "multiples": multiples,
+        "rendered": sorted(factors & set(multiples)),
+        "replicates": int(dose.get("replicates", 2)),
+    }

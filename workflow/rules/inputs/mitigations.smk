@@ -19,6 +19,11 @@ MITIGATION_HEADLINE = layout.mitigation_headline_tables(MITIGATION_SOURCE)
 MITIGATION_FIGURE = layout.mitigation_figure(MITIGATION_SOURCE)
 REFERENCE_SPP = MITIGATIONS["reference_spp"]
 AUX_SPP = MITIGATIONS["aux_spp"]
+# What a seed-mean mitigation ships over its budget and the camera (the run's own renders;
+# an audit has none at other budgets)
+with exit_with_one_line():
+    DOSE = mitigation_inputs.dose_response_plan(config, [] if AUDIT else MITIGATION_RUNS)
+DOSE_TABLES = layout.dose_response_tables()
 
 
 
@@ -122,9 +127,28 @@ def mitigation_table_params():
     ]
 
 
+def dose_response_inputs(wildcards):
+    """One scene's seeds variance store at the run's SPP, its ground truth and each view's
+    render stores at every budget the run rendered (``renders_{multiple}_{view}``)."""
+    inputs = {
+        "variance": layout.variance_store(wildcards.renderer, "seeds", wildcards.scene, MAIN_SPP),
+        "ground_truth": ground_truth_input(wildcards),
+    }
+    for m in DOSE["rendered"]:
+        stores = seed_stores(run_config(wildcards.renderer), wildcards.scene, m * MAIN_SPP)
+        inputs.update({f"renders_{m}_{view}": paths for view, paths in stores.items()})
+    return inputs
+
+
+def dose_response_targets():
+    """The dose-response table (nothing without ``mitigations.dose_response.transforms``)."""
+    return DOSE_TABLES if DOSE["transforms"] else []
+
+
 def mitigation_targets():
     """`snakemake mitigations`: the mitigation table and its trade-off figure, the run's or
-    the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty)."""
+    the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty),
+    and the dose-response table."""
     if not MITIGATION_RUNS:
         return []
-    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, MITIGATION_FIGURE]
+    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, MITIGATION_FIGURE, *dose_response_targets()]
