@@ -127,7 +127,7 @@ def dose_table(rows: list[dict], nulls: list[dict] | None = None, *, spp: int) -
             diffs = [d for d in diffs if math.isfinite(d[0])]
             if not diffs:
                 continue
-            value, low, high = combined_interval(*zip(*diffs))
+            value, low, high = combined_interval(*zip(*diffs, strict=True))
             mse = float(np.nanmean(mses))
             out.append({
                 "transform": transform, "gain": gain, "read_noise": read_noise,
