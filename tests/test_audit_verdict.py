@@ -206,6 +206,31 @@ def test_what_to_do_comes_from_the_measured_mitigation_table():
         findings[-1])
 
 
+def test_where_no_mitigation_removes_it_the_advice_names_a_budget_or_the_probe():
+    """No mitigation removes the cue at the audit's budget: the advice is the dose-response's
+    budget and camera where one removes it, else the probe of the team's own network, never
+    a dead end."""
+    from stereovar.statistics.dose_response import dose_findings
+
+    none = ["none: ...", "No mitigation removes the Monte Carlo-specific part."]
+    row = {"transform": "sensor_only", "gain": 30.0, "read_noise": 2.0, "multiple": 4,
+           "shipped_spp": 256, "render_cost": 8.0, "mc_specific": 0.03,
+           "mc_specific_low": 0.01, "mc_specific_high": 0.05, "psnr": 18.3, "margin": 0.1,
+           "margin_strength": 0.5}
+    removing = dose_findings([{**row, "kind": "predicted", "mc_cue": "removed"}])
+    opening = decision(verdict_result(True), {"shared": False}, [], none, dose=removing)
+    advice = opening["sentences"][-1]
+    assert "To remove it: sensor_only with a camera of gain 30" in advice
+    assert "256 SPP per image" in advice and "audit.probe" not in advice
+    stays = dose_findings([{**row, "kind": "predicted", "mc_specific": 0.3,
+                            "mc_specific_low": 0.25, "mc_specific_high": 0.35,
+                            "mc_cue": "remains"}])
+    advice = decision(verdict_result(True), {"shared": False}, [], none, dose=stays)[
+        "sentences"][-1]
+    assert "no budget up to 256 SPP per image removes it" in advice
+    assert "set audit.probe: true with your own network" in advice
+
+
 # -- every import warning reaches the page ---------------------------------------------------
 
 

@@ -350,8 +350,11 @@ def dose_response_rows(source: str, scene: str, spp) -> str:
     return f"{run_prefix(source, 'seeds')}/dose_response/{scene}/spp{spp}.csv"
 
 
-def dose_response_tables() -> list[str]:
-    """The dose-response table: ``results/tables/dose_response.{csv,md,tex,html}``."""
+def dose_response_tables(source: str | None = None) -> list[str]:
+    """The dose-response table: ``results/tables/dose_response.{csv,md,tex,html}``, or an
+    audit's under ``results/audit/{name}/tables``."""
+    if source is not None and is_audit(source):
+        return table_paths("dose_response", f"{RESULTS}/{source}/tables")
     return table_paths("dose_response")
 
 

@@ -632,7 +632,8 @@ LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#80
 
 
 def decision(
-    result: dict, seeding: dict, flags: list[dict], mitigations: list[str], rows=()
+    result: dict, seeding: dict, flags: list[dict], mitigations: list[str], rows=(), *,
+    dose=(),
 ) -> dict:
     """The page's opening: a traffic light and two or three sentences (what was found, how
     sure, what to do).
@@ -655,6 +656,11 @@ def decision(
     rows : list of dict
         :func:`verdict_rows`: the numbers the sentences quote, each with its interval and
         its control.
+    dose : list of str
+        :func:`stereovar.statistics.dose_response.dose_findings` of the audit's
+        dose-response (empty without ``sensor_only`` in ``audit.mitigations``): where no
+        mitigation removes the cue, the budget and camera that do, or else the probe of the
+        team's own network as the next step.
 
     Returns
     -------
@@ -720,18 +726,26 @@ def decision(
             else "; no check raised a flag."
         )
     )
-    if mitigations:
-        do = (
-            "Measured on these renders (audit.mitigations): " + mitigations[-1]
-            if not mitigations[-1].startswith("No mitigation")
-            else "None of the mitigations measured on these renders removes the Monte "
-            "Carlo-specific part; see the Mitigations section."
-        )
+    removing = [line for line in dose if ": removed from" in line]
+    if mitigations and not mitigations[-1].startswith("No mitigation"):
+        do = "Measured on these renders (audit.mitigations): " + mitigations[-1]
+    elif mitigations:
+        do = ("None of the mitigations measured on these renders removes the Monte "
+              "Carlo-specific part at their own budget; see the Mitigations section. ")
+        if removing:
+            do += "To remove it: " + removing[0]
+        else:
+            do += (
+                (dose[0] + " " if dose else "")
+                + "No budget or camera measured removes it, so the next step is to test "
+                "whether your network uses it: set audit.probe: true with your own network "
+                "(docs: probe_own_model) and run the audit again."
+            )
     elif red or mc is True:
         do = (
             "Before training a stereo network on them, measure which mitigation removes the "
-            "cue and at what image quality: set audit.mitigations: [denoise, denoise_sensor, "
-            "equalise, sensor_only] and run the audit again."
+            "cue and at what budget, camera and image quality: set audit.mitigations: "
+            "[denoise, denoise_sensor, equalise, sensor_only] and run the audit again."
         )
     else:
         do = "Nothing needs mitigating for this cue before training."

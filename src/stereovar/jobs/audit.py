@@ -239,6 +239,7 @@ def verdict_job(
     imports=(),
     mitigations=None,
     mitigation_figure=None,
+    dose=None,
     probe=None,
     probe_figure=None,
     calibration=None,
@@ -260,6 +261,8 @@ def verdict_job(
     (``seeding``: :func:`seeding_job`), the teasers and, with ``mitigations`` (the audit's
     mitigation table), which mitigation removes the Monte Carlo-specific part and at what
     cost (:func:`stereovar.statistics.mitigations.mitigation_findings`), and its figure; with
+    ``dose`` (the audit's dose-response table), the budget and camera at which ``sensor_only``
+    removes it (:func:`stereovar.statistics.dose_response.dose_findings`); with
     ``probe`` (``audit.probe: true``), the learned probe's verdict paragraph and figure; with
     ``calibration`` and ``nulls`` (the audit's calibration table and matched nulls,
     :mod:`stereovar.calibration`), the Monte Carlo-specific row the verdict rests on, the
@@ -324,7 +327,12 @@ def verdict_job(
         from ..statistics.mitigations import mitigation_findings
 
         findings = mitigation_findings(read_rows(mitigations))
-    opening = decision(result, shared, flags, findings, rows)
+    budgets = []
+    if dose:  # what sensor_only ships over the budget and the camera, on these frames
+        from ..statistics.dose_response import dose_findings
+
+        budgets = dose_findings(read_rows(dose))
+    opening = decision(result, shared, flags, findings, rows, dose=budgets)
     lines = summary_lines(name, found, rows, result)
     lines.insert(0, f"{opening['light'].upper()}: {opening['headline']}")
     lines.append(f"  seeding: {shared['text']}")

@@ -19,11 +19,11 @@ MITIGATION_HEADLINE = layout.mitigation_headline_tables(MITIGATION_SOURCE)
 MITIGATION_FIGURE = layout.mitigation_figure(MITIGATION_SOURCE)
 REFERENCE_SPP = MITIGATIONS["reference_spp"]
 AUX_SPP = MITIGATIONS["aux_spp"]
-# What a seed-mean mitigation ships over its budget and the camera (the run's own renders;
-# an audit has none at other budgets)
+# What a seed-mean mitigation ships over its budget and the camera (an audit predicts from
+# its own frames and measures at its own budget only)
 with exit_with_one_line():
-    DOSE = mitigation_inputs.dose_response_plan(config, [] if AUDIT else MITIGATION_RUNS)
-DOSE_TABLES = layout.dose_response_tables()
+    DOSE = mitigation_inputs.dose_response_plan(config, MITIGATION_RUNS)
+DOSE_TABLES = layout.dose_response_tables(MITIGATION_SOURCE)
 
 
 
