@@ -98,7 +98,7 @@ DEFAULTS = {
         "aux_spp": 16,
         "seed": 0,
         "dose_response": {
-            "transforms": ["sensor_only"],
+            "transforms": None,
             "gains": [100, 30],
             "multiples": [1, 2, 4, 8, 16, 32, 64],
             "replicates": 2,

@@ -146,6 +146,11 @@ def test_the_plan_refuses_a_transform_that_ships_no_seed_mean():
     assert plan["cameras"] == [{"gain": 1000.0, "read_noise": 2.0},
                                {"gain": 30.0, "read_noise": 2.0}]
     assert plan["rendered"] == [1, 4]
+    config["mitigations"]["dose_response"]["transforms"] = None  # the default
+    assert dose_response_plan(config, runs)["transforms"] == ["sensor_only"]
+    without = mitigation_runs({**config, "mitigations": {**config["mitigations"],
+                                                          "names": ["denoise"]}})
+    assert dose_response_plan(config, without)["transforms"] == []
     config["mitigations"]["dose_response"]["transforms"] = ["denoise"]
     with pytest.raises(ConfigError, match=r"dose_response.transforms.*'denoise'.*sensor_only"):
         dose_response_plan(config, runs)

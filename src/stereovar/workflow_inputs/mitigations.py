@@ -71,8 +71,13 @@ def image_cost(run, n_seeds: int, aux_spp: int) -> dict:
     return {"render_spp": render_spp, "aux_spp": aux}
 
 
+DOSE_DEFAULT = "sensor_only"
+"""The transform the dose-response measures by default, where it is a mitigation row."""
+
+
 def dose_response_plan(config: dict, runs) -> dict:
-    """What the dose-response measures (``mitigations.dose_response``): its ``transforms``,
+    """What the dose-response measures (``mitigations.dose_response``): its ``transforms``
+    (null: :data:`DOSE_DEFAULT` where it is a row),
     the ``cameras`` (the run's ``controls.sensor`` first, then one per extra gain at the same
     read noise), the budget ``multiples`` and the ``rendered`` ones (1: the run's renders;
     K: a ``spp_xK`` row's renders), for the mitigation rows ``runs``
@@ -88,7 +93,9 @@ def dose_response_plan(config: dict, runs) -> dict:
 
     dose = dict(config["mitigations"].get("dose_response") or {})
     names = {r.transform for r in runs if r.mitigation.kind == "transform"}
-    transforms = list(dose.get("transforms", []))
+    transforms = dose.get("transforms")
+    if transforms is None:  # the default: sensor_only where it is a mitigation row
+        transforms = [DOSE_DEFAULT] if DOSE_DEFAULT in names else []
     for name in transforms:
         reads = set(get_transform(name).reads) if name in names else set()
         if not {"seed_mean", "seed_var"} & reads:
