@@ -36,6 +36,7 @@ scene.render.resolution_percentage = 100
 scene.cycles.samples = 8
 scene.cycles.device = "CPU"
 scene.camera.data.lens = {LENS_MM}
+scene.cycles.use_denoising = True  # the snippet keeps the render before the denoiser too
 sys.argv = ["render_seeds.py", "--", sys.argv[1], "2", "{BASELINE_M}"]
 runpy.run_path({str(SNIPPET)!r}, run_name="__main__")
 """
@@ -67,3 +68,11 @@ def test_the_docs_blender_snippet_writes_an_audit_that_imports(tmp_path, monkeyp
     assert cube.mean() > 0.3
     assert (np.abs(z[cube] - distance) < math.sqrt(3)).all()  # on the cube's bounding sphere
     np.testing.assert_allclose(d[cube], focal * BASELINE_M / z[cube], rtol=1e-6)
+    # the render before the denoiser, audited by audit_noisy.yaml
+    noisy = yaml.safe_load((out / "audit_noisy.yaml").read_text())["audit"]
+    assert noisy["channels"] == {"render": "ViewLayer.Noisy Image"}
+    assert import_audit(noisy).discovery.summary() == "1 frame × 2 views × 2 seeds"
+    before = stores("cube_noisy", "frame")["left"]["radiance"].values[0]
+    np.testing.assert_array_equal(
+        before, read_image(out / "L" / "seed_000.exr", channel="ViewLayer.Noisy Image"))
+    assert np.abs(before - first).max() > 0  # the denoiser changed it

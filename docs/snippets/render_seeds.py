@@ -11,7 +11,9 @@ the scene), then ``stereovar audit OUT/audit.yaml``. The scene's camera is the l
 right view is the same camera moved BASELINE_M along its own x axis (to the image's right:
 x_R = x_L - d, the conventional rig). Each render is a 32-bit float multilayer EXR holding the
 render (ViewLayer.Combined) and Blender's planar depth (ViewLayer.Depth.Z), which the audit
-picks by name.
+picks by name. Where the scene's Cycles denoiser is on, each EXR also keeps the render
+before it (ViewLayer.Noisy Image), and OUT/audit_noisy.yaml audits that, so the audit can
+measure the cue before and after the denoiser.
 """
 
 import re
@@ -31,6 +33,9 @@ scene.render.engine = "CYCLES"
 scene.cycles.use_animated_seed = False  # the seed below is the only one
 scene.render.use_multiview = False
 bpy.context.view_layer.use_pass_z = True  # planar depth, the audit's ground truth
+DENOISED = bool(scene.cycles.use_denoising)
+if DENOISED:  # keep the render before the denoiser too: ViewLayer.Noisy Image
+    bpy.context.view_layer.cycles.denoising_store_passes = True
 image = scene.render.image_settings
 if hasattr(image, "media_type"):  # Blender 5: multilayer EXR is a media type
     image.media_type = "MULTI_LAYER_IMAGE"
@@ -64,9 +69,8 @@ else:
     fit = lens.sensor_fit
     sensor = lens.sensor_width if fit == "HORIZONTAL" else lens.sensor_height
 focal_px = lens.lens / sensor * (width if fit == "HORIZONTAL" else height)
-(OUT / "audit.yaml").write_text(
-    "audit:\n"
-    f"  name: {re.sub(r'[^A-Za-z0-9_-]', '_', OUT.name)}\n"
+name = re.sub(r"[^A-Za-z0-9_-]", "_", OUT.name)
+audit = (
     f"  renders: {OUT}/{{view}}/seed_{{seed}}.exr\n"
     "  views: {left: L, right: R}\n"
     f"  depth: {OUT}/{{view}}/seed_000.exr\n"
@@ -75,4 +79,11 @@ focal_px = lens.lens / sensor * (width if fit == "HORIZONTAL" else height)
     "  convention: conventional\n"
     f"  spp: {scene.cycles.samples}\n"
 )
-print(f"wrote {2 * N_SEEDS} renders and {OUT / 'audit.yaml'}")
+(OUT / "audit.yaml").write_text(f"audit:\n  name: {name}\n" + audit)
+if DENOISED:
+    (OUT / "audit_noisy.yaml").write_text(
+        f"audit:\n  name: {name}_noisy\n" + audit
+        + "  channels: {render: ViewLayer.Noisy Image}\n"
+    )
+print(f"wrote {2 * N_SEEDS} renders and {OUT / 'audit.yaml'}"
+      + (f" and {OUT / 'audit_noisy.yaml'}" if DENOISED else ""))
