@@ -1,4 +1,4 @@
-"""The documentation's Blender snippet (``docs/snippets/render_seeds.py``) renders N seeds per
+"""The documentation's Blender snippet (``workflow/snippets/render_seeds.py``) renders N seeds per
 view with Cycles and writes what ``stereovar audit`` reads.
 
 Files: written by Blender itself (the ``bpy`` module of the ``cycles`` extra) running the
@@ -21,7 +21,7 @@ from stereovar.io.images import read_image
 
 from .audit_formats import stores
 
-SNIPPET = Path(__file__).parents[1] / "docs" / "snippets" / "render_seeds.py"
+SNIPPET = Path(__file__).parents[1] / "workflow" / "snippets" / "render_seeds.py"
 WIDTH, HEIGHT, LENS_MM, SENSOR_MM, BASELINE_M = 64, 48, 120.0, 36.0, 0.2
 CAMERA = (7.3589, -6.9258, 4.9583)
 """Where Blender's factory scene puts its camera (the cube, 2 m wide, sits at the origin)."""

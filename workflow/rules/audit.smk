@@ -118,7 +118,7 @@ rule audit_verdict:
         imports=lambda wc: [layout.import_record(wc.name, s) for s in SCENES],
         # audit.mitigations: the mitigation table and its figure
         mitigations=mitigation_targets()[:1],
-        mitigation_figure=[p for p in mitigation_targets() if p.endswith(".png")],
+        mitigation_figure=mitigation_targets()[-1:],
         # the dose-response of sensor_only when audit.mitigations measures it
         dose=dose_response_targets()[:1],
         # audit.probe: the learned probe's verdict and figure

@@ -581,6 +581,7 @@ def scene_calibration(
     min_strength: float = 0.05,
     pipelines=(),
     pipeline_replicates: int = 0,
+    methods=None,
 ) -> tuple[list[dict], dict]:
     """Every replicate of one scene.
 
@@ -609,6 +610,9 @@ def scene_calibration(
         Pipeline nulls (:data:`~stereovar.calibration.pipelines.PIPELINES`) drawn
         ``pipeline_replicates`` times each (:func:`pipeline_rows`).
     pipeline_replicates : int
+    methods : sequence of str, optional
+        The statistics every design measures (default: the light's checks through ``none``,
+        :data:`CALIBRATED_METHODS` through the transforms).
 
     Returns
     -------
@@ -668,8 +672,8 @@ def scene_calibration(
             for name in chosen:
                 design = {"replicate": r, "kind": kind, "strength": strength,
                           "strength_factor": factor}
-                checks = None
-                if name == NONE:  # the light's checks on the frames as drawn
+                checks = methods
+                if name == NONE and methods is None:  # the light's checks as drawn
                     checks = NULL_METHODS if kind in NULL_KINDS else (
                         *CALIBRATED_METHODS, LIFT_METHOD, CLAIM_CONTROL)
                 rows += measured_rows(

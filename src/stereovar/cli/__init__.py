@@ -7,6 +7,7 @@ Commands are grouped with argparse subparsers, one module per group:
 - :mod:`~stereovar.cli.scenes` -- ``scenes generate`` and ``scenes validate``;
 - :mod:`~stereovar.cli.audit` -- ``audit`` and ``export``;
 - :mod:`~stereovar.cli.probe` -- ``probe``;
+- :mod:`~stereovar.cli.sample` -- ``sample``: a re-render plan for one render per view;
 - :mod:`~stereovar.cli.completion` -- ``completion``: the shell's tab completion;
 - :mod:`~stereovar.cli.snakemake` -- what they share: the folder they work in, the
   workflow's folder and config, and running Snakemake;
@@ -41,6 +42,7 @@ from .audit import _register_audit
 from .completion import _register_completion
 from .monitor import _Run as _Run
 from .probe import _register_probe
+from .sample import _register_sample
 from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR
 from .snakemake import PROG, _workflow, check_cores, say
@@ -82,6 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     _register_scenes(subparsers)
     _register_audit(subparsers)
     _register_probe(subparsers)
+    _register_sample(subparsers)
     _register_completion(subparsers)
     return parser
 

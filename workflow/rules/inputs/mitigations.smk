@@ -148,7 +148,7 @@ def dose_response_targets():
 def mitigation_targets():
     """`snakemake mitigations`: the mitigation table and its trade-off figure, the run's or
     the audit's (nothing when ``mitigations.names``, or ``audit.mitigations``, is empty),
-    and the dose-response table."""
+    and the dose-response table; the table's CSV first and the figure last."""
     if not MITIGATION_RUNS:
         return []
-    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, MITIGATION_FIGURE, *dose_response_targets()]
+    return [*MITIGATION_TABLES, *MITIGATION_HEADLINE, *dose_response_targets(), MITIGATION_FIGURE]
