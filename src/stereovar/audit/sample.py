@@ -276,7 +276,7 @@ def write_plan(result: dict, settings: dict, out, *, blend: str | None = None,
 
     from ..io.store import write_file
 
-    out = Path(out)
+    out = Path(out).resolve()  # the commands and the audit run from anywhere
     out.mkdir(parents=True, exist_ok=True)
     baseline = settings.get("baseline_m")
     if baseline is None:
@@ -285,7 +285,8 @@ def write_plan(result: dict, settings: dict, out, *, blend: str | None = None,
     renders = out / "renders"
     commands = []
     for frame in result["chosen"]:
-        scene = (blend.format(frame=frame) if blend else f"SCENE_OF_{frame}.blend")
+        scene = (str(Path(blend.format(frame=frame)).resolve()) if blend
+                 else f"SCENE_OF_{frame}.blend")
         commands.append({
             "frame": frame, "blend": scene,
             "command": shlex.join(["blender", "-b", scene, "-P", str(out / SNIPPET), "--",
@@ -344,8 +345,8 @@ def plan_page(record: dict) -> str:
         f"frames again with {record['seeds_per_view']} seeds per view. Audited together, "
         f"they detect a cue of {record['strength']:g}x the reference strength (the default "
         f"scenes' renders' own) with {100 * record['power']:.0f}% power "
-        f"({100 * record['power_asked']:.0f}% asked; {record['frames_needed']} frames "
-        "needed).\n\n"
+        f"({100 * record['power_asked']:.0f}% asked; {record['frames_needed']} "
+        f"frame{'s' * (record['frames_needed'] != 1)} needed).\n\n"
         "The power curve at N = 2, measured by the calibration on the data set's frames "
         f"{', '.join(record['power_curve_n2']['frames'])}: the Monte Carlo-specific "
         "difference of one frame, its standard error and the share of single frames whose "
