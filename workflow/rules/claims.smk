@@ -143,6 +143,8 @@ rule results_page:
         # the mitigation table and its figure, when mitigations.names asks for them
         mitigations=mitigation_targets()[:1],
         mitigation_figure=mitigation_targets()[-1:],
+        # what removes it: the dose-response's budget and camera
+        dose=dose_response_targets()[:1],
         # the probe's verdict and figure, once `snakemake probe` has made them
         probe=probe_if_run()[-1:],
         probe_figure=probe_if_run()[-2:-1],

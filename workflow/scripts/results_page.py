@@ -12,6 +12,7 @@ run_job(
     tables=list(snakemake.input.tables),
     mitigations=(list(snakemake.input.mitigations) or [None])[0],
     mitigation_figure=(list(snakemake.input.mitigation_figure) or [None])[0],
+    dose=(list(snakemake.input.dose) or [None])[0],
     probe=(list(snakemake.input.probe) or [None])[0],
     probe_figure=(list(snakemake.input.probe_figure) or [None])[0],
     generators=list(snakemake.input.generators),

@@ -304,6 +304,7 @@ def results_page_job(
     report=None,
     mitigations=None,
     mitigation_figure=None,
+    dose=None,
     probe=None,
     probe_figure=None,
     generators=None,
@@ -317,7 +318,8 @@ def results_page_job(
     interval and controls; the claims table (``claims``, its CSV) by claim name; every figure
     of ``figures`` embedded with its caption (``captions``: figure name and ``claims`` to the
     report's caption, its Jinja already filled); with ``mitigations`` (the mitigation
-    table's CSV) and ``probe`` (the probe's verdict JSON) and ``generators`` (the generator
+    table's CSV, with ``dose``, the dose-response table's, the budget and camera that
+    remove the cue) and ``probe`` (the probe's verdict JSON) and ``generators`` (the generator
     table's files) their sections and figures; links to every table of ``tables`` relative
     to the page, to ``report`` (Snakemake's report) when it exists, and to the
     documentation (:func:`stereovar.links.docs_page`); with ``calibration`` (the
@@ -347,10 +349,13 @@ def results_page_job(
 
     mitigation_section = None
     if mitigations:
+        from ..statistics.dose_response import dose_findings
+
         mitigation_section = {
             "rows": read_rows(mitigations),
             "figure": _page_figure(mitigation_figure, captions) if mitigation_figure else None,
             "tables": section_tables("mitigations"),
+            "dose": dose_findings(read_rows(dose)) if dose else [],
         }
     probe_section = None
     if probe:

@@ -639,7 +639,9 @@ def page_sections(
             "rows": table,
             "columns": columns,
             "labels": MITIGATION_COLUMNS,
-            "summary": findings[n_rows:] if rows else findings,
+            "summary": (findings[n_rows:] if rows else findings) + [
+                f"What removes it (dose-response, dose_response.md): {line}"
+                for line in mitigations.get("dose") or []],
             "figure": mitigations.get("figure"),
             "tables": _labelled(mitigations.get("tables") or []),
         }
