@@ -117,8 +117,9 @@ def test_the_removal_budget_is_the_smallest_predicted_removed_with_its_measureme
     assert b["predicted"]["multiple"] == 4 and b["measured_there"]["mc_cue"] == "remains"
     assert b["verified"] is None
     (line,) = dose_findings(table)
-    assert "removed from 256 SPP per image (8x the render time" in line
-    assert "the prediction is too optimistic here" in line
+    assert "predicted removed from 256 SPP per image (8x the render time" in line
+    assert "but measured 0.090 [0.070, 0.110] there, remains: the prediction is optimistic" \
+        in line
 
 
 def test_no_budget_that_removes_it_is_said_with_the_numbers():

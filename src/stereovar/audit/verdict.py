@@ -726,7 +726,10 @@ def decision(
             else "; no check raised a flag."
         )
     )
-    removing = [line for line in dose if ": removed from" in line]
+    # a budget and camera measured to remove it first, else one predicted (its line says so)
+    removing = ([line for line in dose if ": removed from" in line]
+                or [line for line in dose if ": predicted removed from" in line
+                    and "but measured" not in line])
     if mitigations and not mitigations[-1].startswith("No mitigation"):
         do = "Measured on these renders (audit.mitigations): " + mitigations[-1]
     elif mitigations:

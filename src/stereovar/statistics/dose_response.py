@@ -200,15 +200,20 @@ def dose_findings(table: list[dict]) -> list[str]:
                          f"{_iv(verified)}")
             out.append(text + ".")
             continue
-        text = (f"{head}: removed from {first['shipped_spp']} SPP per image "
-                f"({first['render_cost']:g}x the render time of one render, PSNR "
-                f"{first['psnr']:.1f} dB), predicted {_iv(first)}")
-        if there is not None:
-            text += f" and measured {_iv(there)} there"
-            if there["mc_cue"] != "removed":
-                text += f" ({there['mc_cue']}: the prediction is too optimistic here)"
+        cost = (f"{first['shipped_spp']} SPP per image ({first['render_cost']:g}x the render "
+                f"time of one render, PSNR {first['psnr']:.1f} dB)")
+        if there is not None and there["mc_cue"] == "removed":
+            text = (f"{head}: removed from {cost}, predicted {_iv(first)} and measured "
+                    f"{_iv(there)} there")
+        elif there is not None:
+            text = (f"{head}: predicted removed from {cost} ({_iv(first)}), but measured "
+                    f"{_iv(there)} there, {there['mc_cue']}: the prediction is optimistic")
         else:
-            text += " (not rendered at that budget: render spp_xK to verify)"
+            text = (f"{head}: predicted removed from {cost} ({_iv(first)}), not rendered at "
+                    "that budget (render spp_xK to verify)")
+        if verified is not None and verified is not there:
+            text += (f"; measured removed at {verified['shipped_spp']} SPP per image: "
+                     f"{_iv(verified)}")
         if math.isfinite(_f(first.get("margin"))):
             text += (f" (margin {first['margin']:.2g}: no cue as strong as "
                      f"{_f(first['margin_strength']):.2g}x the renders' own survives)")
