@@ -52,7 +52,7 @@ DOSE_TABLE_COLUMNS = [
 COMPACT_COLUMNS = [
     "mitigation",
     "camera gain (e- per unit)",
-    "SPP per image",
+    "budget per image",
     "render time",
     "Monte Carlo-specific rho, predicted",
     "measured",
@@ -104,6 +104,7 @@ def dose_table(rows: list[dict], nulls: list[dict] | None = None, *, spp: int) -
     >>> row["kind"], round(row["mc_specific"], 3), row["mc_cue"], row["render_cost"], row["psnr"]
     ('predicted', 0.2, 'remains', 2.0, 20.0)
     """
+    from ..calibration.dose_response import GROUP
     from ..calibration.replicates import SHIPPED
     from .across import combined_interval
 
@@ -132,7 +133,7 @@ def dose_table(rows: list[dict], nulls: list[dict] | None = None, *, spp: int) -
             out.append({
                 "transform": transform, "gain": gain, "read_noise": read_noise,
                 "multiple": multiple, "shipped_spp": shipped,
-                "render_cost": shipped / float(spp) if spp else math.nan, "kind": label,
+                "render_cost": float(multiple * GROUP), "kind": label,
                 "n_scenes": len(diffs), "mc_specific": value, "mc_specific_low": low,
                 "mc_specific_high": high, "null_partial": float(np.mean(nulls_mean)),
                 "margin": margin, "margin_strength": strength,
@@ -167,6 +168,23 @@ def removal_budgets(table: list[dict]) -> list[dict]:
     return out
 
 
+def budget_text(row: dict) -> str:
+    """The samples behind one shipped image: its SPP, or where the renders' SPP is not
+    given (an audit without ``audit.spp``) the number of renders.
+
+    Examples
+    --------
+    >>> budget_text({"shipped_spp": 256, "render_cost": 8.0})
+    '256 SPP per image'
+    >>> budget_text({"shipped_spp": 0, "render_cost": 8.0})
+    '8 renders per image'
+    """
+    spp = int(_f(row["shipped_spp"])) if math.isfinite(_f(row["shipped_spp"])) else 0
+    if spp > 0:
+        return f"{spp} SPP per image"
+    return f"{_f(row['render_cost']):g} renders per image"
+
+
 def _iv(row: dict) -> str:
     return (f"{row['mc_specific']:.3f} [{row['mc_specific_low']:.3f}, "
             f"{row['mc_specific_high']:.3f}]")
@@ -192,16 +210,15 @@ def dose_findings(table: list[dict]) -> list[str]:
         first, there, verified = b["predicted"], b["measured_there"], b["verified"]
         if first is None:
             last = b["largest"]
-            text = f"{head}: no budget up to {last['shipped_spp']} SPP per image removes it"
+            text = f"{head}: no budget up to {budget_text(last)} removes it"
             text += (f" (predicted {_iv(last)} there, {last['mc_cue']}; "
                      f"{last['render_cost']:g}x the render time)")
             if verified is not None:
-                text += (f"; measured removed at {verified['shipped_spp']} SPP: "
-                         f"{_iv(verified)}")
+                text += f"; measured removed at {budget_text(verified)}: {_iv(verified)}"
             out.append(text + ".")
             continue
-        cost = (f"{first['shipped_spp']} SPP per image ({first['render_cost']:g}x the render "
-                f"time of one render, PSNR {first['psnr']:.1f} dB)")
+        cost = (f"{budget_text(first)} ({first['render_cost']:g}x the render time of one "
+                f"render, PSNR {first['psnr']:.1f} dB)")
         if there is not None and there["mc_cue"] == "removed":
             text = (f"{head}: removed from {cost}, predicted {_iv(first)} and measured "
                     f"{_iv(there)} there")
@@ -212,8 +229,7 @@ def dose_findings(table: list[dict]) -> list[str]:
             text = (f"{head}: predicted removed from {cost} ({_iv(first)}), not rendered at "
                     "that budget (render spp_xK to verify)")
         if verified is not None and verified is not there:
-            text += (f"; measured removed at {verified['shipped_spp']} SPP per image: "
-                     f"{_iv(verified)}")
+            text += f"; measured removed at {budget_text(verified)}: {_iv(verified)}"
         if math.isfinite(_f(first.get("margin"))):
             text += (f" (margin {first['margin']:.2g}: no cue as strong as "
                      f"{_f(first['margin_strength']):.2g}x the renders' own survives)")
@@ -234,7 +250,7 @@ def compact_table(table: list[dict]) -> list[dict]:
         out.append({
             "mitigation": r["transform"],
             "camera gain (e- per unit)": f"{r['gain']:g}",
-            "SPP per image": str(r["shipped_spp"]),
+            "budget per image": budget_text(r).removesuffix(" per image"),
             "render time": f"{r['render_cost']:g}x",
             "Monte Carlo-specific rho, predicted": _iv(r),
             "measured": _iv(m) if m else "not rendered",
