@@ -341,6 +341,10 @@ def verdict_job(
     lines += [f"  flag: {f['text']}" for f in flags]
     if findings:
         lines.append(f"mitigations: {findings[-1]}")
+    if budgets and findings and findings[-1].startswith("No mitigation"):
+        lines.append(f"what removes it: {opening['sentences'][-1].split('To remove it: ')[-1]}"
+                     if "To remove it: " in opening["sentences"][-1] else
+                     f"what removes it: {budgets[0]}")
     for line in lines:
         log.info("%s", line)
     table = as_table(rows)
