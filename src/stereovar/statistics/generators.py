@@ -11,16 +11,17 @@ measured against the profile's own matched nulls:
   :math:`(I^{(n)} - \\bar I)/\\hat\\sigma` pixel by pixel at zero disparity, the coupling a
   shared seed makes (about 0 for independent seeds);
 - ``psnr``: one render against the converged reference (the paper row's renders, split in
-  half), the mean over scenes with a Student t interval;
-- ``shipped_*``: the same Monte Carlo-specific :math:`\rho` on what the generator ships
-  (``output``, :data:`stereovar.generators.OUTPUTS`: its renders through Blender's view
-  transform and an 8-bit PNG, read back as an audit reads it), against a matched null drawn
-  through the same chain (camera-law noise, the generator's denoiser where it runs, then the
-  same PNG), with its own margin and verdict (``shipped_mc_cue``). Where the PNG's codes fix
-  the variance at :data:`~stereovar.controls.quantisation.FIXED_SHARE` of the pixels or more
-  (``quantised_share``), the intensity-controlled :math:`\rho` is undefined and the verdict
-  reads :data:`NOT_TESTABLE`: the Monte Carlo part of the variance cannot be told from the
-  rounding of the mean.
+  half), the mean over scenes with a Student t interval.
+
+What the generator ships (``output``, :data:`stereovar.generators.OUTPUTS`: its renders
+through Blender's view transform and an 8-bit PNG, read back as an audit reads it) has the
+same Monte Carlo-specific :math:`\\rho` in ``shipped_mc_specific``, against a matched null
+drawn through the same chain (camera-law noise, the generator's denoiser where it runs, then
+the same PNG), with its own margin and verdict (``shipped_mc_cue``). Where the PNG's codes
+fix the variance at :data:`~stereovar.controls.quantisation.FIXED_SHARE` of the pixels or
+more (``quantised_share``), the intensity-controlled :math:`\\rho` is undefined and the
+verdict reads :data:`NOT_TESTABLE`: the Monte Carlo part of the variance cannot be told from
+the rounding of the mean.
 """
 
 from __future__ import annotations
@@ -145,7 +146,7 @@ def generator_rows(profile, rows: list[dict], *, generator_spp: int, matched: st
 
 
 def shipped_columns(replicates: list[dict], nulls: list[dict], chain: str | None) -> dict:
-    """A profile's ``shipped_*`` columns and ``quantised_share`` (all pixels) from its
+    """A profile's shipped columns and ``quantised_share`` (all pixels) from its
     calibration rows: the ``renders`` rows through ``chain``
     (:func:`stereovar.calibration.replicates.renders_output_rows`) against the nulls through
     the same chain (:func:`~stereovar.statistics.mitigations.matched_difference`).
