@@ -155,3 +155,42 @@ def test_the_plan_refuses_a_transform_that_ships_no_seed_mean():
     config["mitigations"]["dose_response"]["transforms"] = ["denoise"]
     with pytest.raises(ConfigError, match=r"dose_response.transforms.*'denoise'.*sensor_only"):
         dose_response_plan(config, runs)
+
+
+def test_the_table_job_writes_every_format_with_the_budget_in_its_caption(tmp_path):
+    """The table job reads every scene's rows and the calibration's nulls (the margin of what
+    sensor_only ships) and says in its caption which budget and camera remove the cue."""
+    from stereovar.calibration.dose_response import DOSE_COLUMNS
+    from stereovar.io.tables import read_rows, write_tables
+    from stereovar.jobs.dose_response import dose_response_table_job
+
+    rng = np.random.default_rng(3)
+    rows = []
+    for scene in ("a", "b"):
+        for m, value in ((1, 0.3), (4, 0.01)):
+            for kind in ("predicted", "null"):
+                for r in range(2):
+                    rho = (value if kind == "predicted" else 0.0) + float(rng.normal(0, 0.002))
+                    rows.append({"scene": scene, "transform": "sensor_only", "gain": 30.0,
+                                 "read_noise": 2.0, "multiple": m, "shipped_spp": 64 * m,
+                                 "kind": kind, "replicate": r, "rho": rho,
+                                 "boot_low": rho - 0.01, "boot_high": rho + 0.01,
+                                 "chance_se": 0.005, "mse": 0.01})
+    paths = []
+    for scene in ("a", "b"):
+        path = tmp_path / f"{scene}.csv"
+        write_tables([r for r in rows if r["scene"] == scene], DOSE_COLUMNS, {"csv": str(path)})
+        paths.append(str(path))
+    nulls = tmp_path / "nulls.csv"
+    write_tables([{"scene": "a", "transform": "sensor_only|shipped", "region": "all",
+                   "method": "partial", "null_rho": 0.0, "null_se": 0.001, "margin": 0.1,
+                   "margin_strength": 0.5}], ["scene", "transform", "region", "method",
+                                              "null_rho", "null_se", "margin",
+                                              "margin_strength"], {"csv": str(nulls)})
+    outputs = {fmt: str(tmp_path / f"dose.{fmt}") for fmt in ("csv", "md", "tex", "html")}
+    table = dose_response_table_job(paths, outputs, nulls=str(nulls), spp=32)
+    assert [(r["multiple"], r["mc_cue"]) for r in table] == [(1, "remains"), (4, "removed")]
+    assert len(read_rows(outputs["csv"])) == 2
+    text = (tmp_path / "dose.md").read_text()
+    assert "predicted removed from 256 SPP per image (8x the render time" in text
+    assert "margin 0.1: no cue as strong as 0.5x the renders' own survives" in text
