@@ -61,6 +61,29 @@ def verdict_summary():
 
 
 @pytest.fixture(scope="session")
+def textured_pair():
+    """A function of ``(height, width, disparity, seed)``: a grey textured clean image (its
+    log a smooth Gaussian field, mean about 0.3) whose right view is the left moved
+    ``disparity`` pixels to the right (bilinear), with a uniform ground truth: ``(mean,
+    truth)``, each a dict by view, as :class:`stereovar.calibration.replicates.SceneFrames`
+    takes them."""
+    import numpy as np
+    from scipy.ndimage import gaussian_filter, shift
+
+    def make(height, width, disparity, seed):
+        rng = np.random.default_rng(seed)
+        texture = gaussian_filter(rng.normal(0.0, 1.0, (height, width)), 1.5)
+        left = np.repeat((0.3 * np.exp(texture / texture.std() - 1.0))[..., None], 3, axis=-1)
+        right = np.stack([shift(left[..., c], (0, disparity), order=1, mode="nearest")
+                          for c in range(3)], axis=-1)
+        truth = {v: {"disparity": np.full((height, width), float(disparity)),
+                     "valid": np.ones((height, width), bool)} for v in ("left", "right")}
+        return {"left": left, "right": right}, truth
+
+    return make
+
+
+@pytest.fixture(scope="session")
 def tiny_run(tmp_path_factory):
     """A copy of the workflow with the tiny config of ``tests/test_workflow.py``, run once to
     completion (``snakemake -j2 all``) and shared by every module that reads such a run;

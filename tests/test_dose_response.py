@@ -19,25 +19,23 @@ from stereovar.statistics.fields import AnalysisSettings
 H, W, D = 64, 96, 2.0
 
 
-def _scene(cue: float) -> SceneFrames:
-    """A textured grey scene, right view the left 2 px over, whose Monte Carlo variance is
-    2.5 times a camera law times exp(cue * z) with z one smooth pattern both views share at
-    the disparity (the cross-view cue; 0: none)."""
-    rng = np.random.default_rng(5)
-    texture = gaussian_filter(rng.normal(0.0, 1.0, (H, W)), 1.5)
-    mu = 0.3 * np.exp(texture / texture.std() - 1.0)
-    left = np.repeat(mu[..., None], 3, axis=-1)
-    right = np.stack([shift(left[..., c], (0, D), order=1, mode="nearest") for c in range(3)],
-                     axis=-1)
+@pytest.fixture(scope="module")
+def dose_scene(textured_pair):
+    """A function of the cue: the textured pair, right view the left 2 px over, whose Monte
+    Carlo variance is 2.5 times a camera law times exp(cue * z) with z one smooth pattern both
+    views share at the disparity (the cross-view cue; 0: none)."""
+    mean, truth = textured_pair(H, W, D, 5)
+    rng = np.random.default_rng(6)
     pattern = gaussian_filter(rng.normal(0.0, 1.0, (H, W)), 2.0)
     pattern /= pattern.std()
     z = {"left": pattern, "right": shift(pattern, (0, D), order=1, mode="nearest")}
-    mean = {"left": left, "right": right}
-    variance = {v: 2.5 * (m.mean(axis=-1) / 1000.0 + 4e-6) * np.exp(cue * z[v])
-                for v, m in mean.items()}
-    truth = {v: {"disparity": np.full((H, W), D), "valid": np.ones((H, W), bool)}
-             for v in mean}
-    return SceneFrames(mean, variance, truth, np.zeros((H, W), bool), 1, 8, "dose|spp32")
+
+    def make(cue: float) -> SceneFrames:
+        variance = {v: 2.5 * (m.mean(axis=-1) / 1000.0 + 4e-6) * np.exp(cue * z[v])
+                    for v, m in mean.items()}
+        return SceneFrames(mean, variance, truth, np.zeros((H, W), bool), 1, 8, "dose|spp32")
+
+    return make
 
 
 def _by_point(rows):
@@ -46,8 +44,8 @@ def _by_point(rows):
 
 
 @pytest.fixture(scope="module")
-def cue_points():
-    rows = dose_rows(_scene(1.0), transform="sensor_only", settings=AnalysisSettings(),
+def cue_points(dose_scene):
+    rows = dose_rows(dose_scene(1.0), transform="sensor_only", settings=AnalysisSettings(),
                      cameras=[{"gain": 1000.0, "read_noise": 2.0},
                               {"gain": 10.0, "read_noise": 2.0}],
                      multiples=(1, 16), replicates=2)
@@ -69,10 +67,10 @@ def test_a_shared_variance_pattern_reads_in_what_ships_and_fades_with_the_budget
     assert far["render_cost"] == 32.0
 
 
-def test_without_a_cue_what_ships_reads_its_null():
+def test_without_a_cue_what_ships_reads_its_null(dose_scene):
     """No shared pattern: the Monte Carlo variance is a camera law, and the predicted
     difference from the null covers 0 (no false cue from the path itself)."""
-    rows = dose_rows(_scene(0.0), transform="sensor_only", settings=AnalysisSettings(),
+    rows = dose_rows(dose_scene(0.0), transform="sensor_only", settings=AnalysisSettings(),
                      cameras=[{"gain": 1000.0, "read_noise": 2.0}], multiples=(1,),
                      replicates=2)
     (row,) = _by_point(rows).values()
@@ -80,10 +78,10 @@ def test_without_a_cue_what_ships_reads_its_null():
     assert abs(row["mc_specific"]) < 0.05
 
 
-def test_renders_at_a_budget_are_measured_against_the_same_null():
+def test_renders_at_a_budget_are_measured_against_the_same_null(dose_scene):
     """Frames given at a multiple are measured as ``renders`` beside the prediction, and
     the table gives them as ``measured`` with the null of that budget and camera."""
-    scene = _scene(1.0)
+    scene = dose_scene(1.0)
     rng = np.random.default_rng(9)
     renders = {v: np.stack([m + rng.normal(0.0, 1.0, m.shape) * np.sqrt(scene.variance[v])
                             [..., None] for _ in range(8)]).astype(np.float32)

@@ -89,17 +89,9 @@ def test_a_chain_applies_each_link_to_the_previous_links_outputs():
 
 
 @pytest.fixture(scope="module")
-def textured_scene():
+def textured_scene(textured_pair):
     """A grey textured scene whose right view is the left 2.5 px further right."""
-    rng = np.random.default_rng(11)
-    texture = gaussian_filter(rng.normal(0.0, 1.0, (H, W)), 1.5)
-    mu = 0.3 * np.exp(texture / texture.std() - 1.0)
-    left = np.repeat(mu[..., None], 3, axis=-1)
-    right = np.stack([shift(left[..., c], (0, D), order=1, mode="nearest") for c in range(3)],
-                     axis=-1)
-    mean = {"left": left, "right": right}
-    truth = {v: {"disparity": np.full((H, W), D), "valid": np.ones((H, W), bool)}
-             for v in mean}
+    mean, truth = textured_pair(H, W, D, 11)
     variance = {v: 0.01 * m.mean(axis=-1) for v, m in mean.items()}
     return SceneFrames(mean, variance, truth, np.zeros((H, W), bool), 1, 8, "texture|spp8")
 
