@@ -55,6 +55,29 @@ def test_filmic_puts_middle_grey_at_half_and_compresses_highlights():
     assert (standard[above] == 255).all() and filmic[above].min() < 245
 
 
+def test_what_the_current_scene_is_set_to_changes_nothing():
+    """Other code may leave Blender's current scene writing multilayer EXR at another
+    exposure; the PNG is written by a scene of its own."""
+    import bpy
+
+    scene = bpy.context.scene
+    settings = scene.render.image_settings
+    before = (getattr(settings, "media_type", None), settings.file_format,
+              scene.view_settings.exposure)
+    try:
+        if hasattr(settings, "media_type"):
+            settings.media_type = "MULTI_LAYER_IMAGE"
+        settings.file_format = "OPEN_EXR_MULTILAYER"
+        scene.view_settings.exposure = 3.0
+        grey = view_png_codes(np.full((2, 2, 3), 0.18, np.float32), view_transform="Filmic")
+        assert abs(int(grey[0, 0, 0]) - 128) <= 1
+        assert settings.file_format == "OPEN_EXR_MULTILAYER"
+    finally:
+        if before[0] is not None:
+            settings.media_type = before[0]
+        settings.file_format, scene.view_settings.exposure = before[1], before[2]
+
+
 def test_the_shipped_image_is_read_back_as_an_audit_reads_its_png():
     """The transform's output is the sRGB decoding of the PNG's codes over full scale; a
     non-finite render value stays NaN."""

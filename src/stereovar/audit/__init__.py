@@ -15,5 +15,6 @@ audit a workflow run (its discovery, config and targets, which ``stereovar audit
 formats; ``synthetic`` writes stereo renders with a known cross-view variance correlation as
 files (the test data and the examples); ``generators`` reads the generators' own ground
 truth by meaning (Kubric's depth TIFF and ``metadata.json``, Infinigen's frame folders and
-``camview`` files).
+``camview`` files); ``sample`` plans which frames of a one-render data set to render
+again with two seeds for a stated power.
 """

@@ -7,5 +7,7 @@ frames, :mod:`~stereovar.calibration.pipelines` camera pipelines without a Monte
 encodings a null passes through, :mod:`~stereovar.calibration.replicates` passes them through
 the run's transforms and statistics, and :mod:`~stereovar.calibration.summary` turns the
 replicates into false-positive rates, power curves and interval coverage;
-:mod:`~stereovar.calibration.claims` decides the claims table's level rule on them too.
+:mod:`~stereovar.calibration.claims` decides the claims table's level rule on them too;
+:mod:`~stereovar.calibration.dose_response` predicts what a seed-mean mitigation ships over
+its budget and the camera, and measures it on renders.
 """

@@ -45,6 +45,8 @@ interval, and the tables built from the per-scene rows.
     The mitigation table: cue, controls and image-quality cost per mitigation.
 ``utility``
     Image-quality cost of a mitigation against a converged reference.
+``dose_response``
+    What a seed-mean mitigation ships over its budget and the camera, and what removes it.
 ``generators``
     The generator table: each generator profile's cue against its own matched null.
 ``claims``

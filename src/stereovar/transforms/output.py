@@ -70,6 +70,16 @@ def _blender_image(height: int, width: int):
 
 
 @lru_cache(maxsize=1)
+def _scene():
+    """A scene of its own whose colour management and image settings write the PNG, so that
+    what other code set on Blender's current scene (a multilayer EXR output, say) changes
+    nothing here."""
+    import bpy
+
+    return bpy.data.scenes.new("stereovar_output")
+
+
+@lru_cache(maxsize=1)
 def _folder() -> tempfile.TemporaryDirectory:
     """Where Blender writes each PNG before it is read back; removed when the process ends."""
     return tempfile.TemporaryDirectory(prefix="stereovar-png-")
@@ -93,7 +103,6 @@ def view_png_codes(image, *, view_transform: str, bits: int = 8) -> np.ndarray:
     numpy.ndarray (H, W, 3), uint8 or uint16
         The PNG's RGB codes, top row first.
     """
-    import bpy
     import cv2
 
     if view_transform not in VIEW_TRANSFORMS:
@@ -103,7 +112,7 @@ def view_png_codes(image, *, view_transform: str, bits: int = 8) -> np.ndarray:
     output_encoding(bits)
     image = np.asarray(image, dtype=np.float32)
     h, w = image.shape[:2]
-    scene = bpy.context.scene
+    scene = _scene()
     view = scene.view_settings
     view.view_transform = view_transform
     view.look = "None"
@@ -111,6 +120,8 @@ def view_png_codes(image, *, view_transform: str, bits: int = 8) -> np.ndarray:
     view.gamma = 1.0
     scene.display_settings.display_device = "sRGB"
     settings = scene.render.image_settings
+    if hasattr(settings, "media_type"):  # Blender 5: a still image, not a multilayer one
+        settings.media_type = "IMAGE"
     settings.file_format = "PNG"
     settings.color_mode = "RGB"
     settings.color_depth = str(int(bits))
