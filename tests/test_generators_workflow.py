@@ -25,7 +25,7 @@ def test_the_generators_target_end_to_end(tmp_path):
     config = copy.deepcopy(TINY)
     config["scenes"] = ["scene_000"]
     config["render"].update({"n_seeds": 4, "seeds_per_job": 4})
-    config["generators"] = {"scenes": ["scene_000"], "spp": 8}
+    config["generators"] = {"scenes": ["scene_000"], "spp": 8, "denoised_replicates": 1}
     root = copy_workflow(tmp_path / "wf", config)
     before = sorted(p.relative_to(root) for p in root.rglob("*") if ".snakemake" not in p.parts)
     dry = snakemake(root, "-n", "generators")
