@@ -128,3 +128,22 @@ def test_a_cue_below_what_n2_shows_is_refused_with_the_strength_that_can(tmp_pat
     with pytest.raises(AuditError, match="matches no file"):
         sample.single_render_frames(settings)
     assert np.isfinite(achieved)
+
+
+@pytest.mark.parametrize(
+    ("audit", "message"),
+    [
+        (None, "no such config file"),
+        ({"name": "x"}, "has no audit: section with renders"),
+        ({"renders": "d/{frame}_{view}.exr"}, "has no baseline_m"),
+        ({"renders": "d/{frame}_{view}.exr", "baseline_m": 0.1}, "matches no file"),
+    ],
+)
+def test_bad_input_is_one_line_before_any_work(tmp_path, monkeypatch, capsys, audit, message):
+    monkeypatch.chdir(tmp_path)
+    if audit is not None:
+        (tmp_path / "audit.yaml").write_text(yaml.safe_dump({"audit": audit}))
+    assert main(["sample", "audit.yaml"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith("stereovar: error:") and message in line
+    assert not (tmp_path / "sample_plan").exists()

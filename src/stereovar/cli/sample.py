@@ -24,6 +24,9 @@ def _cmd_sample(args: argparse.Namespace) -> int:
     if not isinstance(settings, dict) or "renders" not in settings:
         raise StereovarError(f"{path} has no audit: section with renders; see stereovar "
                              "init --example for one")
+    if settings.get("baseline_m") is None:  # before any work: the commands need the rig
+        raise StereovarError(f"{path}: the audit: section has no baseline_m; give the rig's "
+                             "baseline (metres) so the plan renders the same rig")
     if "root" not in settings:
         settings = {**settings, "root": str(path.resolve().parent)}
     result = plan(settings, strength=args.strength, power=args.power,
