@@ -110,7 +110,10 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
     probe = {"train_seeds": 2, "test_frames": 1, "conditions": ["none", "sensor_only", "denoise"],
              "planted": [], "architectures": ["mccnn"],
              "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24}}
-    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe}))
+    # one replicate of each design through the denoiser: its rows run at half the cost
+    calibration = {"denoised_replicates": 1}
+    (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe,
+                                                     "calibration": calibration}))
     proc = subprocess.run(
         [sys.executable, "-m", "stereovar.cli", "audit", "audit.yaml"],
         cwd=root, capture_output=True, text=True,

@@ -9,7 +9,7 @@ from stereovar.estimators.seeds import variance_field
 
 from .test_ground_truth import REPO
 
-RIG = {"width": 160, "height": 90, "baseline_m": 0.026, "convention": "paper"}
+RIG = {"width": 128, "height": 72, "baseline_m": 0.026, "convention": "paper"}
 N = 8
 
 
