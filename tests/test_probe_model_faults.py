@@ -8,8 +8,10 @@ pixel from the inputs the model was given.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
+import re
 
 import numpy as np
 import pytest
@@ -20,18 +22,27 @@ from torch import nn  # noqa: E402
 from stereovar.cli import main  # noqa: E402
 from stereovar.errors import StereovarError  # noqa: E402
 from stereovar.probe.scoring import SUMS, tile_sums  # noqa: E402
+from stereovar.probe.user_loading import ModelError, load_user_model  # noqa: E402
 from stereovar.probe.user_model import (  # noqa: E402
     MODEL_INPUTS,
-    ModelError,
     ModelSettings,
     frame_law,
-    load_user_model,
     model_image,
     model_pairs,
-    model_rows,
 )
+from stereovar.probe.user_summary import model_rows  # noqa: E402
 
-from .test_probe_user_model import D0, TRUTH, H, W, frame  # noqa: E402
+from .test_probe_user_model import (  # noqa: E402
+    D0,
+    STEP,
+    TRUTH,
+    CleanNet,
+    H,
+    NearlyConstant,
+    W,
+    frame,
+    truth,
+)
 from .test_probe_user_model import rows_of as scored_rows  # noqa: E402
 
 SETTINGS = ModelSettings(test_frames=2, tile=8, reps=50, batch=8)
@@ -261,15 +272,15 @@ def test_tile_sums_score_non_finite_predictions_at_the_bound_when_asked():
 # ------------------------------------------------------------------------------------------
 
 
-def run_job(monkeypatch, model, frames):
+def run_job(monkeypatch, model, frames, *, truth_left=TRUTH, outputs=None):
     from stereovar.jobs import probe_model
 
-    data = {f"f{i}": (f[0], f[1], TRUTH, SIGN) for i, f in enumerate(frames)}
+    data = {f"f{i}": (f[0], f[1], truth_left, SIGN) for i, f in enumerate(frames)}
     monkeypatch.setattr(probe_model, "frame_data", lambda stores, scene: data[scene])
     settings = {"test_frames": SETTINGS.test_frames, "batch": 8, "reps": 50, "tile": 8}
     return probe_model.probe_model_job(
         {},
-        {},
+        outputs or {},
         scenes=list(data),
         factory="nets:build",
         weights="w.pt",
@@ -278,8 +289,13 @@ def run_job(monkeypatch, model, frames):
     )
 
 
-def warnings_of(caplog) -> list:
-    return [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+def warnings_of(caplog, about: str = "") -> list:
+    """The warning lines logged (those holding ``about``)."""
+    return [
+        r.getMessage()
+        for r in caplog.records
+        if r.levelno == logging.WARNING and about in r.getMessage()
+    ]
 
 
 def test_non_finite_predictions_are_warned_in_one_line_with_their_share(
@@ -287,7 +303,7 @@ def test_non_finite_predictions_are_warned_in_one_line_with_their_share(
 ):
     caplog.set_level(logging.INFO, logger="stereovar")
     record = run_job(monkeypatch, NanOnTheRightHalf(), frames)
-    (line,) = warnings_of(caplog)
+    (line,) = warnings_of(caplog, "NaN or Inf")
     share = (W / 2) / (W - D0)
     assert line.startswith("warning: the model returned NaN or Inf disparity") and "\n" not in line
     assert ", ".join(f"{k} {100 * share:.1f} %" for k in MODEL_INPUTS) in line
@@ -298,13 +314,64 @@ def test_non_finite_predictions_are_warned_in_one_line_with_their_share(
 def test_a_model_with_finite_disparity_gets_no_such_warning(monkeypatch, caplog, frames):
     caplog.set_level(logging.INFO, logger="stereovar")
     record = run_job(monkeypatch, Constant(D0), frames[:1])
-    assert warnings_of(caplog) == []
+    assert warnings_of(caplog, "NaN") == [] and warnings_of(caplog) != []  # (not testable)
     assert all(r["nonfinite_share"] == 0 for r in record["rows"])
 
 
 def test_the_low_accuracy_warning_prints_one_percent_sign(monkeypatch, caplog, frames):
     caplog.set_level(logging.INFO, logger="stereovar")
     run_job(monkeypatch, Constant(D0 + 3), frames[:1])  # every prediction 3 px off: a miss
-    (line,) = warnings_of(caplog)
+    (line,) = warnings_of(caplog, "under 5")
     assert "accuracy on the renders is under 5 %:" in line and "%%" not in line
     assert line.startswith("warning: ") and "\n" not in line
+
+
+# ------------------------------------------------------------------------------------------
+# a network the probe cannot test: warned, stored, and read as not testable
+# ------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def step_frames():
+    rng = np.random.default_rng(6)
+    return [frame(rng, texture=0.15, strength=1.0, step=STEP) for _ in range(2)]
+
+
+def test_a_nearly_constant_network_is_warned_stored_and_read_as_not_testable(
+    monkeypatch, caplog, step_frames, tmp_path
+):
+    caplog.set_level(logging.INFO, logger="stereovar")
+    outputs = {"json": tmp_path / "probe_model.json", "md": tmp_path / "probe_model.md"}
+    record = run_job(
+        monkeypatch, NearlyConstant(), step_frames, truth_left=truth(STEP), outputs=outputs
+    )
+    (line,) = warnings_of(caplog)
+    assert line.startswith("warning: the probe cannot test this network: the network's output "
+                           "does not respond to its input") and "\n" not in line
+    assert record["testable"] is False and record["checks"]["responds"] is False
+    assert record["warnings"] == [line.removeprefix("warning: ")]
+    assert record["reading"].startswith("not testable: ")
+    assert "no use of the Monte Carlo cue detected" not in record["reading"]
+    stored = json.loads(outputs["json"].read_text())
+    assert stored["testable"] is False and stored["reading"] == record["reading"]
+    rows = {r["row"]: r for r in stored["rows"]}
+    assert {"constant", "over_constant"} <= set(rows)
+    page = outputs["md"].read_text()
+    for row in ("constant", "over_constant"):
+        assert re.search(rf"^\| {row} +\|", page, re.M), page
+    assert "testable no: the network's output does not respond" in page
+    # the printed lines: every input beside the best constant
+    header, *inputs = record["lines"]
+    assert "best constant" in header and [s.split()[0] for s in inputs] == list(MODEL_INPUTS)
+    c = rows["constant"]
+    assert all(s.endswith(f"{100 * c['accuracy']:.1f} % {c['epe']:8.3f}") for s in inputs)
+
+
+def test_a_network_that_matches_gets_no_warning(monkeypatch, caplog, step_frames):
+    caplog.set_level(logging.INFO, logger="stereovar")
+    net = CleanNet(candidates=D0 + STEP + 3).eval()
+    record = run_job(monkeypatch, net, step_frames, truth_left=truth(STEP))
+    assert warnings_of(caplog) == []
+    assert record["testable"] is True and record["warnings"] == []
+    assert record["checks"]["mean_change_px"] == pytest.approx(2.0, abs=0.1)
+    assert not record["reading"].startswith("not testable")

@@ -19,39 +19,52 @@ from torch.nn import functional as F  # noqa: E402
 
 from stereovar.calibration.synthesis import smooth_field  # noqa: E402
 from stereovar.errors import StereovarError  # noqa: E402
+from stereovar.probe.user_checks import shift_response  # noqa: E402
+from stereovar.probe.user_checks import testability as checks_of  # noqa: E402
+from stereovar.probe.user_loading import ModelError, load_user_model  # noqa: E402
 from stereovar.probe.user_model import (  # noqa: E402
-    ModelError,
     ModelSettings,
     frame_law,
-    load_user_model,
     model_image,
-    model_reading,
-    model_rows,
     predict_user,
     score_frame,
 )
+from stereovar.probe.user_summary import model_reading, model_rows  # noqa: E402
 
 H, W, D, D0, N = 32, 48, 6, 2, 4
 SETTINGS = ModelSettings(test_frames=N, tile=8, reps=400, batch=8)
 
 
-def frame(rng, *, strength=2.5, texture=0.0):
-    """N renders per view (sign -1: right pixel at x - D0) around a mean that varies only with
-    the row (plus an optional weak texture carried by D0), with noise of standard deviation
-    0.04 exp(strength z / 2), z a smooth pattern also carried by D0."""
-    rows = np.linspace(0.12, 0.4, H)[:, None] * np.ones((H, W + D0))
-    base = rows + texture * smooth_field((H, W + D0), rng, scale=2.0)
-    z = smooth_field((H, W + D0), rng, scale=2.0)
-    # left pixel x sees the fields at x; its match, right pixel x - D0, sees them there too
-    mean_l, mean_r = base[:, :W], base[:, D0:]
+def truth(step=0):
+    """The left view's ground truth: D0 in the top half of the rows, D0 + step below."""
+    d = np.full((H, W), float(D0))
+    d[H // 2 :] += step
+    return {"disparity": d, "valid": np.ones((H, W), bool)}
+
+
+def frame(rng, *, strength=2.5, texture=0.0, step=0):
+    """N renders per view (sign -1: right pixel at x - d, d of ``truth(step)``) around a mean
+    that varies only with the row (plus an optional weak texture carried by d), with noise of
+    standard deviation 0.04 exp(strength z / 2), z a smooth pattern also carried by d."""
+    span = W + D0 + step
+    rows = np.linspace(0.12, 0.4, H)[:, None] * np.ones((H, span))
+    base = rows + texture * smooth_field((H, span), rng, scale=2.0)
+    z = smooth_field((H, span), rng, scale=2.0)
+    # left pixel x sees the fields at x; its match, right pixel x - d, sees them there too
+    shifts = truth(step)["disparity"][:, 0].astype(int)
+
+    def right_of(field):
+        return np.stack([field[y, s : s + W] for y, s in enumerate(shifts)])
+
+    mean_l, mean_r = base[:, :W], right_of(base)
     sd_l = 0.04 * np.exp(strength * z[:, :W] / 2)
-    sd_r = 0.04 * np.exp(strength * z[:, D0:] / 2)
+    sd_r = 0.04 * np.exp(strength * right_of(z) / 2)
     left = mean_l[..., None] + sd_l[..., None] * rng.standard_normal((N, H, W, 3))
     right = mean_r[..., None] + sd_r[..., None] * rng.standard_normal((N, H, W, 3))
     return left, right, np.repeat(mean_r[..., None], 3, axis=2)
 
 
-TRUTH = {"disparity": np.full((H, W), float(D0)), "valid": np.ones((H, W), bool)}
+TRUTH = truth()
 
 
 class EnergyNet(nn.Module):
@@ -86,11 +99,12 @@ class EnergyNet(nn.Module):
 
 
 class CleanNet(nn.Module):
-    """Reads only the smoothed image: SAD of Gaussian-blurred grey over 9x9 windows, WTA;
-    returns (B, H, W)."""
+    """Reads only the smoothed image: SAD of Gaussian-blurred grey over 9x9 windows, WTA over
+    disparities 0 to ``candidates - 1``; returns (B, H, W)."""
 
-    def __init__(self):
+    def __init__(self, candidates=D):
         super().__init__()
+        self.candidates = candidates
         x = torch.arange(-6, 7, dtype=torch.float32)
         k = torch.exp(-(x**2) / (2 * 2.0**2))
         self.register_buffer("kernel", (k / k.sum())[None, None, None])
@@ -105,7 +119,7 @@ class CleanNet(nn.Module):
         cost = torch.cat(
             [
                 (bl - F.pad(br, (d, 0, 0, 0), mode="replicate")[..., : br.shape[-1]]).abs()
-                for d in range(D)
+                for d in range(self.candidates)
             ],
             1,
         )
@@ -134,7 +148,7 @@ def train_energy(frames, steps=120, seed=0):
     return net.eval()
 
 
-def rows_of(net, frames, *, sign=-1, settings=SETTINGS):
+def rows_of(net, frames, *, sign=-1, settings=SETTINGS, truth_left=TRUTH):
     """The scored rows of ``net`` on ``frames`` (left, right, _), frame ``i`` named ``f{i}``."""
     rows = []
     for i, (left, right, _) in enumerate(frames):
@@ -142,7 +156,7 @@ def rows_of(net, frames, *, sign=-1, settings=SETTINGS):
             net,
             left,
             right,
-            TRUTH,
+            truth_left,
             scene=f"f{i}",
             sign=sign,
             law=frame_law(left),
@@ -151,8 +165,15 @@ def rows_of(net, frames, *, sign=-1, settings=SETTINGS):
     return rows
 
 
-def table_of(net, frames, *, sign=-1):
-    return {r["row"]: r for r in model_rows(rows_of(net, frames, sign=sign), reps=SETTINGS.reps)}
+def table_of(net, frames, *, sign=-1, truth_left=TRUTH):
+    return checked_table(net, frames, sign=sign, truth_left=truth_left)[0]
+
+
+def checked_table(net, frames, *, sign=-1, truth_left=TRUTH):
+    """The table of ``net`` on ``frames`` by row, and its checks (testability)."""
+    rows = rows_of(net, frames, sign=sign, truth_left=truth_left)
+    table = model_rows(rows, reps=SETTINGS.reps)
+    return {r["row"]: r for r in table}, checks_of(table, shift_response(rows))
 
 
 @pytest.fixture(scope="module")
@@ -175,18 +196,169 @@ def test_a_network_trained_on_the_cue_drops_under_the_mc_shuffle_only(cue_frames
     assert model_reading(table.values()).startswith("the model uses the Monte Carlo cue")
 
 
+STEP = 2  # frames of two disparities, D0 and D0 + STEP: no constant answers both
+
+
 @pytest.mark.parametrize("sign", [-1, 1])
 def test_a_network_that_reads_the_clean_image_shows_no_drop(sign):
+    """It matches (it follows the 2-px move of its right view, in either sign, and beats the
+    best constant), and the shuffle costs it nothing: a trustworthy no use."""
     rng = np.random.default_rng(2)
-    frames = [frame(rng, texture=0.15, strength=1.0) for _ in range(3)]
+    frames = [frame(rng, texture=0.15, strength=1.0, step=STEP) for _ in range(3)]
     if sign == 1:  # mirrored frames: the right pixel is at x + d
         frames = [(f[0][:, :, ::-1], f[1][:, :, ::-1], f[2]) for f in frames]
-    table = table_of(CleanNet().eval(), frames, sign=sign)
+    net = CleanNet(candidates=D0 + STEP + 3).eval()  # the moved disparities stay in range
+    table, checks = checked_table(net, frames, sign=sign, truth_left=truth(STEP))
     diff = table["mc_minus_camera"]
-    assert table["normal"]["accuracy"] > 0.9
+    assert table["normal"]["accuracy"] > 0.8
     assert diff["accuracy_low"] < 0 < diff["accuracy_high"]
     assert abs(diff["accuracy"]) < 0.03
-    assert model_reading(table.values()).startswith("no use of the Monte Carlo cue")
+    assert checks["responds"] and checks["beats_constant"] and checks["testable"]
+    assert checks["mean_change_px"] == pytest.approx(checks["shift_px"], abs=0.1)
+    assert table["over_constant"]["accuracy_low"] > 0.1
+    assert model_reading(table.values(), checks).startswith("no use of the Monte Carlo cue")
+
+
+# ------------------------------------------------------------------------------------------
+# networks the probe cannot test: their "no use" would mean nothing
+# ------------------------------------------------------------------------------------------
+
+
+class NearlyConstant(nn.Module):
+    """The issue's network: random weights whose output is ``value`` px plus at most a
+    thousandth of a pixel that depends on the input."""
+
+    def __init__(self, value=D0 + STEP + 0.4):
+        super().__init__()
+        self.value = float(value)
+        self.conv = nn.Conv2d(6, 1, 3, padding=1)
+        weights = np.random.default_rng(0).normal(0, 0.5, (1, 6, 3, 3))
+        self.conv.weight.data = torch.from_numpy(weights).float()
+
+    def forward(self, left, right):
+        return self.value + 1e-3 * torch.tanh(self.conv(torch.cat([left, right], 1)))
+
+
+class RowOracle(nn.Module):
+    """The ground truth of truth(STEP), whatever the views: right, but blind to them."""
+
+    def forward(self, left, right):
+        d = torch.full_like(left[:, :1], float(D0))
+        d[..., left.shape[-2] // 2 :, :] += STEP
+        return d
+
+
+class Garbage(nn.Module):
+    """Follows its input, but not to a match: 3 + 3 tanh of a random filter of L - R."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = nn.Conv2d(3, 1, 3, padding=1)
+        weights = np.random.default_rng(1).normal(0, 30.0, (1, 3, 3, 3))
+        self.conv.weight.data = torch.from_numpy(weights).float()
+
+    def forward(self, left, right):
+        return 3 + 3 * torch.tanh(self.conv(left - right))
+
+
+@pytest.fixture(scope="module")
+def step_frames():
+    rng = np.random.default_rng(4)
+    return [frame(rng, texture=0.15, strength=1.0, step=STEP) for _ in range(2)]
+
+
+def test_a_nearly_constant_network_is_not_testable_and_never_reads_no_use(step_frames):
+    table, checks = checked_table(NearlyConstant(), step_frames, truth_left=truth(STEP))
+    # it hits the lower half only (|4.4 - 4| < 1), as many pixels as the constant at most
+    half = (W - D0 - STEP) / ((W - D0) + (W - D0 - STEP))
+    assert table["normal"]["accuracy"] == pytest.approx(half, abs=1e-12)
+    assert table["constant"]["accuracy"] == pytest.approx(1 - half, abs=1e-12)
+    assert checks["mean_abs_change_px"] < 1e-3 and checks["responds"] is False
+    assert checks["beats_constant"] is False and checks["testable"] is False
+    plain = model_reading(table.values())  # without the checks it would read no use
+    assert plain.startswith("no use of the Monte Carlo cue detected")
+    reading = model_reading(table.values(), checks)
+    assert reading.startswith("not testable: the network's output does not respond to its input")
+    assert "no better than a constant disparity" in reading
+    assert "no use of the Monte Carlo cue detected" not in reading and "\n" not in reading
+
+
+def test_a_network_blind_to_its_views_is_not_testable_even_when_right(step_frames):
+    table, checks = checked_table(RowOracle(), step_frames, truth_left=truth(STEP))
+    assert table["normal"]["accuracy"] == 1.0 and table["normal"]["epe"] == 0.0
+    assert checks["beats_constant"] and checks["mean_abs_change_px"] == 0.0
+    assert not checks["testable"] and "does not respond" in checks["problem"]
+    assert "no better" not in checks["problem"]
+    assert model_reading(table.values(), checks).startswith("not testable: ")
+
+
+def test_a_network_that_follows_its_input_but_does_not_match_is_not_testable(step_frames):
+    table, checks = checked_table(Garbage(), step_frames, truth_left=truth(STEP))
+    assert checks["responds"] and checks["mean_abs_change_px"] > 0.5
+    assert not checks["beats_constant"] and not checks["testable"]
+    assert checks["problem"].startswith("the network is no better than a constant disparity")
+    assert model_reading(table.values(), checks).startswith("not testable: ")
+
+
+# ------------------------------------------------------------------------------------------
+# the best constant, counted by brute force
+# ------------------------------------------------------------------------------------------
+
+GRID = np.arange(-2.0, 12.0, 0.25)
+"""Candidate constants: on a 0.5-px lattice of disparities, the best of each measure lies on
+this grid (a median is a lattice value; a window of hits is open, (c - 1, c + 1))."""
+
+
+def brute_force(d):
+    """The most hits (|c - d| < 1) and the least summed |c - d| of any constant on GRID."""
+    d = np.asarray(d, dtype=np.float64)[:, None]
+    return int((np.abs(GRID - d) < 1).sum(0).max()), float(np.abs(GRID - d).sum(0).min())
+
+
+def lattice_truth(rng, low, high):
+    """Disparities on a 0.5-px lattice in [low, high], a fifth of the pixels not valid."""
+    d = rng.integers(2 * low, 2 * high + 1, (H, W)) / 2.0
+    return {"disparity": d, "valid": rng.random((H, W)) > 0.2}
+
+
+def test_best_constants_match_a_grid_search():
+    from stereovar.probe.user_checks import best_constants
+
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        d = rng.integers(0, 21, rng.integers(1, 40)) / 2.0
+        c_acc, c_epe = best_constants(d)
+        hits, error = brute_force(d)
+        assert (np.abs(c_acc - d) < 1).sum() == hits
+        assert np.abs(c_epe - d).sum() == pytest.approx(error, abs=1e-9)
+
+
+def test_the_constant_row_is_the_best_constant_of_each_frame(step_frames):
+    """Two frames of known, different disparities: the constant row is, pooled over the
+    frames, the most hits and the least error any constant of each frame gets on the scored
+    pixels (valid, the match x - d inside the image), counted here by grid search."""
+    rng = np.random.default_rng(8)
+    truths = [lattice_truth(rng, 1, 4), lattice_truth(rng, 3, 9)]
+    rows, hits, errors, pixels = [], 0, 0.0, 0
+    for i, ((left, right, _), t) in enumerate(zip(step_frames, truths, strict=True)):
+        rows += score_frame(
+            NearlyConstant(), left, right, t, scene=f"f{i}", sign=-1, law=frame_law(left),
+            settings=SETTINGS,
+        )
+        scored = t["valid"] & (np.arange(W)[None, :] >= t["disparity"])  # x - d >= 0
+        best_hits, best_error = brute_force(t["disparity"][scored])
+        hits, errors, pixels = hits + best_hits, errors + best_error, pixels + scored.sum()
+    table = {r["row"]: r for r in model_rows(rows, reps=50)}
+    constant = table["constant"]
+    assert constant["n_pixels"] == SETTINGS.test_frames * pixels == table["normal"]["n_pixels"]
+    assert constant["accuracy"] == pytest.approx(hits / pixels, abs=1e-12)
+    assert constant["epe"] == pytest.approx(errors / pixels, abs=1e-12)
+    assert constant["accuracy_low"] <= constant["accuracy"] <= constant["accuracy_high"]
+    gain = table["over_constant"]
+    assert gain["accuracy"] == pytest.approx(
+        table["normal"]["accuracy"] - constant["accuracy"], abs=1e-12
+    )
+    assert gain["epe"] == pytest.approx(constant["epe"] - table["normal"]["epe"], abs=1e-12)
 
 
 def test_intervals_resample_tiles_within_frames():
@@ -269,8 +441,8 @@ def test_load_user_model_reads_a_state_dict_or_a_checkpoint(user_package):
     [
         ("h5_user_nets:build", "missing.pt", "weights file"),
         ("h5_user_nets.build", None, "is not package.module:factory"),
-        ("h5_no_such_module:build", None, "does not import (ModuleNotFoundError"),
-        ("h5_bad_nets:build", None, "does not import (ModuleNotFoundError"),
+        ("h5_no_such_module:build", None, "found neither in the current folder"),
+        ("h5_bad_nets:build", None, "install the package it imports (not_a_module_anywhere)"),
         ("h5_user_nets:missing", None, "has no attribute 'missing'"),
         ("h5_user_nets:broken", None, "raised RuntimeError: no checkpoint configured"),
         ("h5_user_nets:flat", "pickle", "does not load with torch.load(weights_only=True)"),
@@ -304,3 +476,67 @@ def test_wrong_output_shape_names_the_expected_shape(user_package):
     message = str(info.value)
     assert "(2, 4, 5)" in message and "(2, 1, 4, 6) or (2, 4, 6)" in message
     assert "\n" not in message
+
+
+# ------------------------------------------------------------------------------------------
+# --model nets:build: the current folder is searched
+# ------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def here(tmp_path, monkeypatch):
+    """A folder holding h5_here_nets.py and w.pt, made the current one, with no entry of the
+    import path pointing at it (as for the installed ``stereovar`` script)."""
+    import os
+    import sys
+
+    (tmp_path / "h5_here_nets.py").write_text(MODULE)
+    torch.save({"w": torch.full((1,), 3.0)}, tmp_path / "w.pt")
+    monkeypatch.chdir(tmp_path)
+    kept = [p for p in sys.path if p and os.path.abspath(p) != str(tmp_path)]
+    monkeypatch.setattr(sys, "path", kept)  # restored after the test
+    monkeypatch.delitem(sys.modules, "h5_here_nets", raising=False)
+    yield tmp_path
+    sys.modules.pop("h5_here_nets", None)
+
+
+def test_a_module_in_the_current_folder_is_found(here):
+    import importlib.util
+    import sys
+
+    assert importlib.util.find_spec("h5_here_nets") is None  # not importable before
+    model = load_user_model("h5_here_nets:build", "w.pt")
+    assert float(model.w.detach()) == 3.0
+    assert sys.path[0] == str(here)
+
+
+def test_a_module_found_nowhere_names_the_current_folder_and_the_fixes(here):
+    with pytest.raises(ModelError) as info:
+        load_user_model("h5_elsewhere.nets:build", "w.pt")
+    message = str(info.value)
+    assert "\n" not in message
+    assert f"h5_elsewhere is found neither in the current folder {here}" in message
+    assert "run stereovar from the folder that holds h5_elsewhere/nets.py" in message
+    assert "(h5_elsewhere/nets.py:factory)" in message and "PYTHONPATH" in message
+
+
+def test_stereovar_probe_loads_the_model_from_the_current_folder(here, monkeypatch, capsys):
+    """`stereovar probe --model h5_here_nets:build` gets past loading the model (stopped
+    just after it, before any workflow)."""
+    from stereovar.cli import main, probe
+
+    loaded = []
+    original = load_user_model
+
+    def spy(*args, **kwargs):
+        loaded.append(original(*args, **kwargs))
+        return loaded[-1]
+
+    def stop():
+        raise StereovarError("stopped after loading")
+
+    monkeypatch.setattr("stereovar.probe.user_loading.load_user_model", spy)
+    monkeypatch.setattr(probe, "_project_root", stop)
+    assert main(["probe", "--model", "h5_here_nets:build", "--weights", "w.pt"]) != 0
+    assert "stopped after loading" in capsys.readouterr().err
+    assert len(loaded) == 1 and float(loaded[0].w.detach()) == 3.0

@@ -27,7 +27,7 @@ def _cmd_probe(args: argparse.Namespace) -> int:
     for option, value in (("--test-frames", args.test_frames), ("--batch", args.batch)):
         if value < 1:
             raise StereovarError(f"{option} must be >= 1, got {value}")
-    from ..probe.user_model import check_weights_file
+    from ..probe.user_loading import check_weights_file, load_user_model
 
     weights = check_weights_file(args.weights)  # missing, a folder, a named pipe: one line
     files = []
@@ -37,7 +37,6 @@ def _cmd_probe(args: argparse.Namespace) -> int:
         files.append(args.config)
     from ..jobs.probe_model import frames_manifest, probe_model_job, read_manifest
     from ..layout import audit_source, probe_model_tables
-    from ..probe.user_model import load_user_model
 
     model = load_user_model(args.model, weights, device=args.device)  # its errors first
     root = _project_root()
@@ -66,7 +65,7 @@ def _cmd_probe(args: argparse.Namespace) -> int:
             stores, outputs, scenes=scenes, factory=args.model, weights=weights,
             device=args.device, settings=settings, source=source, model=model,
         )
-    say(f"{record['reading']}\ntable: {paths[1]}", sys.stdout)
+    say("\n".join([*record["lines"], record["reading"], f"table: {paths[1]}"]), sys.stdout)
     return 0
 
 
@@ -78,13 +77,16 @@ def _register_probe(subparsers) -> None:
         "audit's frames (CONFIG with an audit: section) or of the run's scenes (their renders "
         "are made if missing): its accuracy and EPE drop when the right view's Monte Carlo "
         "residual is shuffled, against the drop under the same shuffle of camera-law noise, "
-        "with intervals, and a one-line reading. The model maps (left, right) sRGB images "
+        "with intervals, beside the best constant disparity's accuracy and EPE, and a one-line "
+        "reading (not testable where the network's output does not follow a 2-px move of its "
+        "right view or is no better than the constant). The model maps (left, right) sRGB images "
         "(B, 3, H, W) in [0, 1] to disparity (B, 1, H, W) or (B, H, W), right pixel at x - d "
         "(docs: Probing your own network).",
     )
     probe.add_argument(
         "--model", required=True, metavar="MODULE:FACTORY",
-        help="package.module:factory (or path/to/file.py:factory) building the model",
+        help="package.module:factory (or path/to/file.py:factory) building the model; the "
+        "current folder is searched first (nets:build finds ./nets.py)",
     )
     probe.add_argument(
         "--weights", required=True, metavar="FILE",

@@ -18,8 +18,11 @@ TABLE_CAPTION = (
     "camera_shuffled); mc_minus_camera: their difference, the part only the residual's "
     "cross-view alignment explains; nonfinite_share: share of the scored pixels where the "
     "model's disparity is NaN or Inf, each a miss at an end-point error of the frame's largest "
-    "disparity (at least 1 px), and its rise under each shuffle. Intervals: percentile, tile "
-    "bootstrap stratified by frame"
+    "disparity (at least 1 px), and its rise under each shuffle; constant: the best constant "
+    "answers of each frame (the accuracy of the centre of the densest 2-px window of ground "
+    "truth, the EPE of its median), the same for every input; over_constant: the network's "
+    "gain over them on the renders (accuracy normal - constant, EPE constant - normal). "
+    "Intervals: percentile, tile bootstrap stratified by frame"
 )
 
 
@@ -54,27 +57,28 @@ def probe_model_job(
 ) -> dict:
     """Run the user's model (``factory`` with ``weights``, or an already loaded ``model``) on
     the four inputs of every frame in ``scenes``, write the table to ``outputs`` (paths by
-    format, :func:`stereovar.io.tables.write_tables`; a ``json`` key gets the rows and the
-    reading) and return ``{"rows": ..., "reading": ...}``.
+    format, :func:`stereovar.io.tables.write_tables`; a ``json`` key gets the record) and
+    return the record: ``model``, ``weights``, ``reading``, ``rows``, ``lines`` (accuracy
+    and EPE of every input beside the best constant's,
+    :func:`~stereovar.probe.user_summary.model_lines`), ``checks``
+    (:func:`~stereovar.probe.user_checks.testability`), ``testable`` and ``warnings``.
 
     ``settings`` are :class:`~stereovar.probe.user_model.ModelSettings` fields. One
     ``warning:`` line each when the model returned NaN or Inf at any scored pixel (the share
-    of each input, :func:`~stereovar.probe.user_model.nonfinite_warning`) and when its
-    accuracy on the ``normal`` input is under 5 %."""
+    of each input, :func:`~stereovar.probe.user_summary.nonfinite_warning`), when its
+    accuracy on the ``normal`` input is under 5 % and when it is not testable (its output does
+    not respond to its input or it is no better than a constant disparity,
+    :func:`~stereovar.probe.user_checks.testability_warning`); the reading then says *not
+    testable* instead of *no use*."""
     import torch
 
     from ..io.store import write_file
     from ..io.tables import write_tables
     from ..probe.experiment import check_renders
-    from ..probe.user_model import (
-        ModelSettings,
-        frame_law,
-        load_user_model,
-        model_reading,
-        model_rows,
-        nonfinite_warning,
-        score_frame,
-    )
+    from ..probe.user_checks import shift_response, testability, testability_warning
+    from ..probe.user_loading import load_user_model
+    from ..probe.user_model import ModelSettings, frame_law, score_frame
+    from ..probe.user_summary import model_lines, model_reading, model_rows, nonfinite_warning
 
     if threads:
         torch.set_num_threads(int(threads))
@@ -108,16 +112,17 @@ def probe_model_job(
             sum(r["hits"] for r in normal) / n if n else float("nan"),
         )
     table = model_rows(rows, reps=config.reps, seed=config.seed, level=config.level)
-    reading = model_reading(table)
-    nonfinite = nonfinite_warning(table)
-    if nonfinite:
-        log.warning("warning: %s", nonfinite)
+    checks = testability(table, shift_response(rows))
+    reading = model_reading(table, checks)
+    warnings = [nonfinite_warning(table)]
     if np.nanmedian([r["accuracy"] for r in table[:1]]) < 0.05:
-        log.warning(
-            "warning: %s",
+        warnings.append(
             "the model's accuracy on the renders is under 5 %: check its output is disparity "
-            "(positive, in pixels; RAFT-Stereo's flow is -d) in the conventional sign",
+            "(positive, in pixels; RAFT-Stereo's flow is -d) in the conventional sign"
         )
+    warnings = [w for w in (*warnings, testability_warning(checks)) if w]
+    for warning in warnings:
+        log.warning("warning: %s", warning)
     formats = {k: v for k, v in outputs.items() if k != "json"}
     if formats:
         write_tables(
@@ -125,12 +130,28 @@ def probe_model_job(
             list(table[0]),
             formats,
             caption=TABLE_CAPTION,
-            constants={"source": source, "model": factory} if source else {"model": factory},
+            constants={
+                **({"source": source} if source else {}),
+                "model": factory,
+                "testable": "yes" if checks["testable"] else f"no: {checks['problem']}",
+            },
         )
-    record = {"model": factory, "weights": str(weights), "reading": reading, "rows": table}
+    lines = model_lines(table)
+    record = {
+        "model": factory,
+        "weights": str(weights),
+        "reading": reading,
+        "testable": checks["testable"],
+        "checks": checks,
+        "warnings": warnings,
+        "lines": lines,
+        "rows": table,
+    }
     if outputs.get("json"):
         text = json.dumps(record, indent=2, default=float) + "\n"
         write_file(Path(outputs["json"]), lambda tmp: Path(tmp).write_text(text))
+    for line in lines:
+        log.info("%s", line)
     log.info("%s", reading)
     return record
 

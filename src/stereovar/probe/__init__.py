@@ -14,9 +14,12 @@ scored per tile (:mod:`~stereovar.probe.scoring`) and summarised with intervals 
 seeds and test tiles (:mod:`~stereovar.probe.metrics`); :mod:`~stereovar.probe.verdict`
 states whether each network uses the cue, against its twin, and the smallest reliance the
 probe detects. :mod:`~stereovar.probe.user_model` runs the user's own trained network through
-the same counterfactual inputs.
+the same counterfactual inputs, loaded by :mod:`~stereovar.probe.user_loading`, checked for a
+response to its input and against the best constant disparity by
+:mod:`~stereovar.probe.user_checks`, and summarised in a table and a reading by
+:mod:`~stereovar.probe.user_summary`.
 
 The modules that train or run a network import PyTorch (the ``probe`` extra); ``inputs``,
-``scoring``, ``metrics``, ``verdict``, ``conditions``, ``architectures`` and ``convergence``
-need only numpy, scipy and pandas.
+``scoring``, ``metrics``, ``verdict``, ``conditions``, ``architectures``, ``convergence`` and
+``user_checks`` need only numpy, scipy and pandas.
 """

@@ -1,8 +1,8 @@
 """The user's own stereo network on the counterfactual inputs: does *it* use the Monte Carlo cue?
 
 A team's network is a PyTorch module built by a factory it names
-(``package.module:factory``) with weights from a file. It must map a batch of
-stereo pairs to disparity:
+(``package.module:factory``) with weights from a file (loaded by
+:mod:`stereovar.probe.user_loading`). It must map a batch of stereo pairs to disparity:
 
 .. math::
 
@@ -51,52 +51,53 @@ where its NaN fall, not what the shuffle costs it. The bound is the largest erro
 finite answer in the frame's disparity range (:math:`|\\hat d - d| \\le \\max_\\Omega d`
 for :math:`\\hat d, d \\in [0, \\max_\\Omega d]`), and at least a miss's 1 px, so that
 a NaN never scores better than an answer in range. A model with no finite prediction at all
-on a frame stops the probe (:class:`ModelError`).
+on a frame stops the probe (:class:`~stereovar.probe.user_loading.ModelError`).
+
+Beside the inputs, each frame is scored for its best constant answers, and the model is run
+once more on the first test render with the right view moved by 2 px
+(:mod:`stereovar.probe.user_checks`): a model no better than a constant disparity, or whose
+output does not follow the move, reads *no use* whatever it is, and the reading
+(:mod:`stereovar.probe.user_summary`, which also makes the table) says *not testable* instead.
 
 Importing this module imports PyTorch (the ``probe`` extra).
 """
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
-import math
-import os
-import stat
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from ..errors import StereovarError
-from ..io.images import file_kind, linear_to_srgb
+from ..io.images import linear_to_srgb
 from ..seeding import derive_seed
-from ..statistics.bootstrap import draw_counts, percentile_interval, tile_labels
+from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import valid_set
 from .inputs import STRATA, camera_residual, counterfactual_pair, reference_mean
 from .scoring import tile_sums
+from .user_checks import (
+    CONSTANT_ROW,
+    RESPONSE_ROW,
+    RESPONSE_SHIFT,
+    best_constants,
+    response_sums,
+    shifted_right,
+)
+from .user_loading import ModelError, _one_line
 
 __all__ = [
     "COMPARISONS",
     "MODEL_INPUTS",
     "MODEL_SUMS",
-    "ModelError",
     "ModelSettings",
     "camera_stack",
     "check_output",
-    "check_weights_file",
     "frame_law",
-    "load_user_model",
     "model_image",
-    "model_reading",
-    "model_rows",
+    "model_pairs",
     "nonfinite_bound",
-    "nonfinite_warning",
     "predict_user",
     "score_frame",
-    "model_pairs",
 ]
 
 MODEL_INPUTS = ("normal", "shuffled", "camera", "camera_shuffled")
@@ -111,17 +112,6 @@ COMPARISONS = {
 MODEL_SUMS = ("n", "hits", "abs_error", "nonfinite")
 """The per-tile sums kept (:func:`stereovar.probe.scoring.tile_sums`): scored pixels, hits,
 summed end-point error, NaN or Inf predictions."""
-
-WEIGHTS_SUFFIXES = (".pt", ".pth", ".ckpt", ".tar", ".bin")
-"""Usual extensions of a file written by ``torch.save`` (offered from a folder given as
-weights)."""
-
-FACTORY_FORMAT = "package.module:factory (or path/to/file.py:factory)"
-
-
-class ModelError(StereovarError):
-    """The user's model cannot be imported, built, loaded or run as the probe needs it; the
-    message is one line naming the fix."""
 
 
 @dataclass(frozen=True)
@@ -154,212 +144,6 @@ class ModelSettings:
     seed: int = 0
     batch: int = 4
     level: float = 0.95
-
-
-# --------------------------------------------------------------------------------------------
-# loading
-# --------------------------------------------------------------------------------------------
-
-
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
-
-def _split_factory(spec: str) -> tuple[str, str]:
-    """``module:attribute`` of a factory spec; one line when it has another form.
-
-    Examples
-    --------
-    >>> _split_factory("mypkg.models:build")
-    ('mypkg.models', 'build')
-    """
-    module, sep, attr = str(spec).rpartition(":")
-    if not sep or not module or not attr or not all(p.isidentifier() for p in attr.split(".")):
-        raise ModelError(f"model {spec!r} is not {FACTORY_FORMAT}; give e.g. mypkg.nets:build")
-    return module, attr
-
-
-def _import_module(module: str):
-    if module.endswith(".py"):
-        path = Path(module)
-        if not path.is_file():
-            raise ModelError(f"model file {module} does not exist; give an existing .py file")
-        name = f"_stereovar_user_model_{abs(hash(str(path.resolve())))}"
-        spec = importlib.util.spec_from_file_location(name, path)
-        mod = importlib.util.module_from_spec(spec)
-        try:
-            sys.modules[name] = mod
-            spec.loader.exec_module(mod)
-        except Exception as err:
-            sys.modules.pop(name, None)
-            raise ModelError(
-                f"model file {module} does not import ({_one_line(err)}); run it with python "
-                "to see the traceback"
-            ) from None
-        return mod
-    try:
-        return importlib.import_module(module)
-    except Exception as err:
-        raise ModelError(
-            f"model module {module!r} does not import ({_one_line(err)}); install its package "
-            "or add its folder to PYTHONPATH"
-        ) from None
-
-
-def _factory(spec: str):
-    module, attr = _split_factory(spec)
-    obj = _import_module(module)
-    for part in attr.split("."):
-        if not hasattr(obj, part):
-            raise ModelError(
-                f"model module {module!r} has no attribute {attr!r}; name the function or "
-                f"class that builds the model ({FACTORY_FORMAT})"
-            )
-        obj = getattr(obj, part)
-    if not callable(obj):
-        raise ModelError(f"model factory {spec!r} is not callable; name a function or class")
-    return obj
-
-
-def _state_dict(payload, weights) -> dict:
-    if isinstance(payload, dict) and isinstance(payload.get("state_dict"), dict):
-        payload = payload["state_dict"]
-    if not isinstance(payload, dict) or not all(
-        isinstance(v, torch.Tensor) for v in payload.values()
-    ):
-        raise ModelError(
-            f"weights file {weights} holds no state_dict (a dict of tensors, or a dict with "
-            "'state_dict'); save it with torch.save(model.state_dict(), FILE)"
-        )
-    return payload
-
-
-def check_weights_file(weights) -> Path:
-    """``weights`` as a path, once it is known to be a regular file (a link to one counts);
-    nothing is opened, so a named pipe is refused without waiting on it.
-
-    Parameters
-    ----------
-    weights : str or path
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    ModelError
-        One line: the path does not exist, cannot be looked at, is a directory (naming the
-        weights files inside it, if any), or is a named pipe, a device or a socket
-        (:func:`stereovar.io.images.file_kind`).
-    """
-    path = Path(weights)
-    try:
-        mode = os.stat(path).st_mode
-    except FileNotFoundError:
-        raise ModelError(
-            f"weights file {path} does not exist; give the model's saved weights"
-        ) from None
-    except OSError as err:
-        raise ModelError(
-            f"weights file {path} cannot be looked at ({err.strerror or err}); give a readable "
-            "path to the model's saved weights"
-        ) from None
-    if stat.S_ISDIR(mode):
-        raise ModelError(f"weights {path} is a directory; {_inside(path)}")
-    if not stat.S_ISREG(mode):
-        raise ModelError(
-            f"weights {path} is {file_kind(mode)}, not a file; give the model's weights file "
-            "saved with torch.save"
-        )
-    return path
-
-
-def _inside(folder: Path) -> str:
-    """The fix for a folder given as weights: the file inside it to give, named where the
-    folder holds files with a :data:`WEIGHTS_SUFFIXES` extension."""
-    try:
-        found = sorted(
-            p for p in folder.iterdir() if p.suffix.lower() in WEIGHTS_SUFFIXES and p.is_file()
-        )
-    except OSError:
-        found = []
-    if not found:
-        return "give the weights file inside it (the file torch.save wrote, e.g. model.pt)"
-    listed = ", ".join(str(p) for p in found[:3]) + (", ..." if len(found) > 3 else "")
-    return f"give the weights file inside it: {listed}"
-
-
-def load_user_model(factory: str, weights, *, device: str = "cpu") -> torch.nn.Module:
-    """The user's model: ``factory()`` with the weights of ``weights``, in eval mode.
-
-    Parameters
-    ----------
-    factory : str
-        ``package.module:factory`` (or ``path/to/file.py:factory``): a callable without
-        arguments that returns a :class:`torch.nn.Module`.
-    weights : str or path
-        A file saved with ``torch.save``: the model's ``state_dict``, or a dict holding it as
-        ``"state_dict"``; read with ``torch.load(weights_only=True)``.
-    device : str, keyword-only
-
-    Returns
-    -------
-    torch.nn.Module
-
-    Raises
-    ------
-    ModelError
-        One line each: the weights file is missing or not a file (:func:`check_weights_file`),
-        the spec is malformed, the module does not import, it has no such attribute, the
-        factory raises or returns no module, the weights do not load or do not fit the model.
-    """
-    weights = check_weights_file(weights)
-    build = _factory(factory)
-    try:
-        model = build()
-    except Exception as err:
-        raise ModelError(
-            f"model factory {factory!r} raised {_one_line(err)}; it must build the model "
-            "without arguments (wrap it in a function that passes them)"
-        ) from None
-    if not isinstance(model, torch.nn.Module):
-        raise ModelError(
-            f"model factory {factory!r} returned {type(model).__name__}, not a torch.nn.Module"
-        )
-    try:
-        payload = torch.load(weights, map_location="cpu", weights_only=True)
-    except Exception as err:
-        raise ModelError(
-            f"weights file {weights} does not load with torch.load(weights_only=True) "
-            f"({_one_line(err)}); save the state_dict with torch.save"
-        ) from None
-    state = _state_dict(payload, weights)
-    try:
-        model.load_state_dict(state)
-    except Exception as err:
-        raise ModelError(
-            f"weights file {weights} does not fit the model of {factory!r} ({_one_line(err)})"
-        ) from None
-    return model.to(_device(device)).eval()
-
-
-def _device(device) -> torch.device:
-    """``device`` as a torch device PyTorch can use here, else one line."""
-    try:
-        dev = torch.device(device)
-    except (RuntimeError, TypeError) as err:
-        raise ModelError(
-            f"device {device!r} is not a torch device ({_one_line(err)}); use cpu, cuda or "
-            "cuda:N"
-        ) from None
-    if dev.type == "cuda" and not torch.cuda.is_available():
-        raise ModelError(
-            f"device {device!r}: PyTorch sees no CUDA GPU here (torch {torch.__version__}); "
-            "use --device cpu, or a machine with a GPU and a CUDA build of PyTorch"
-        )
-    return dev
 
 
 # --------------------------------------------------------------------------------------------
@@ -583,7 +367,13 @@ def score_frame(
     list of dict
         ``scene``, ``test_input``, ``tile`` and :data:`MODEL_SUMS`: the pixels of
         :math:`\\Omega` (paper Sec. 2.2), a NaN or Inf prediction a miss at
-        :func:`nonfinite_bound` (module docstring).
+        :func:`nonfinite_bound` (module docstring); with ``test_input``
+        :data:`~stereovar.probe.user_checks.CONSTANT_ROW`, the best constant answers of the
+        frame (:func:`~stereovar.probe.user_checks.best_constants`) on the same pixels, as
+        many times as there are test renders; and one row with ``test_input``
+        :data:`~stereovar.probe.user_checks.RESPONSE_ROW` and tile -1: the change of the
+        model's disparity when the first test render's right view is moved
+        (:func:`~stereovar.probe.user_checks.response_sums`; one more forward pass).
 
     Raises
     ------
@@ -596,9 +386,13 @@ def score_frame(
     d_gt = np.where(omega, d, np.nan)
     labels = tile_labels(d_gt.shape, settings.tile)
     keys = list(pairs)
+    first_l, first_r = pairs[(0, "normal")]
+    moved = (first_l, shifted_right(first_r, sign=sign, shift=RESPONSE_SHIFT))
     d_hats = predict_user(
-        model, [pairs[k] for k in keys], sign=sign, batch=settings.batch, device=device
+        model, [pairs[k] for k in keys] + [moved], sign=sign, batch=settings.batch,
+        device=device,
     )
+    d_moved = d_hats.pop()
     if not any(np.isfinite(d_hat).any() for d_hat in d_hats):
         raise ModelError(_no_finite_message(d_hats, keys, scene))
     bound = nonfinite_bound(d_gt)
@@ -609,10 +403,37 @@ def score_frame(
             acc = pooled.setdefault((kind, int(tile)), dict.fromkeys(MODEL_SUMS, 0))
             for s in MODEL_SUMS:
                 acc[s] += sums[s][i].item()
+    renders = len({n for n, _ in keys})
+    for tile, sums in _constant_sums(d_gt, omega, labels).items():
+        pooled[(CONSTANT_ROW, tile)] = {s: renders * v for s, v in sums.items()}
+    first = d_hats[keys.index((0, "normal"))]
+    response = response_sums(first, d_moved, d_gt, omega, sign=sign, shift=RESPONSE_SHIFT)
     return [
         {"scene": scene, "test_input": kind, "tile": tile, **sums}
         for (kind, tile), sums in pooled.items()
-    ]
+    ] + [{"scene": scene, "test_input": RESPONSE_ROW, "tile": -1, **response}]
+
+
+def _constant_sums(d_gt, omega, labels) -> dict:
+    """Per tile, :data:`MODEL_SUMS` of the frame's best constant answers: the hits of
+    :math:`c_A`, the end-point error of :math:`c_E`
+    (:func:`~stereovar.probe.user_checks.best_constants`), on the pixels the inputs are
+    scored on."""
+    scored = omega & np.isfinite(d_gt)
+    if not scored.any():
+        return {}
+    c_acc, c_epe = best_constants(d_gt[scored])
+    hits = tile_sums(np.full_like(d_gt, c_acc), d_gt, omega, labels, conflict_shift=0)
+    errors = tile_sums(np.full_like(d_gt, c_epe), d_gt, omega, labels, conflict_shift=0)
+    return {
+        int(tile): {
+            "n": errors["n"][i].item(),
+            "hits": hits["hits"][i].item(),
+            "abs_error": errors["abs_error"][i].item(),
+            "nonfinite": 0,
+        }
+        for i, tile in enumerate(errors["tile"])
+    }
 
 
 def nonfinite_bound(d_gt) -> float:
@@ -656,215 +477,6 @@ def _no_finite_message(d_hats, keys, scene: str) -> str:
         "(B, 3, H, W) and that its weights are finite (a NaN weight or a division by zero "
         "gives NaN)"
     )
-
-
-# --------------------------------------------------------------------------------------------
-# summary
-# --------------------------------------------------------------------------------------------
-
-
-def _sums_matrix(rows) -> tuple[np.ndarray, list]:
-    """(input, tile, sum) array over the (scene, tile) keys of ``rows`` (zeros where an input
-    scored no pixel of a tile) and the scene of each tile."""
-    keys = sorted({(r["scene"], int(r["tile"])) for r in rows})
-    index = {k: i for i, k in enumerate(keys)}
-    out = np.zeros((len(MODEL_INPUTS), len(keys), len(MODEL_SUMS)))
-    for r in rows:
-        if r["test_input"] not in MODEL_INPUTS:
-            continue
-        i = MODEL_INPUTS.index(r["test_input"])
-        out[i, index[(r["scene"], int(r["tile"]))]] += [float(r.get(s, 0)) for s in MODEL_SUMS]
-    return out, [k[0] for k in keys]
-
-
-def _stratified_counts(scenes, reps: int, seed) -> np.ndarray:
-    """Bootstrap draw counts (reps, tiles): each scene's tiles drawn with replacement among
-    themselves (:func:`stereovar.statistics.bootstrap.draw_counts` per scene)."""
-    scenes = np.asarray(scenes, dtype=object)
-    counts = np.zeros((int(reps), scenes.size))
-    for j, scene in enumerate(dict.fromkeys(scenes.tolist())):
-        cols = np.flatnonzero(scenes == scene)
-        counts[:, cols] = draw_counts(cols.size, int(reps), [int(seed), j])
-    return counts
-
-
-def _metrics(sums) -> dict:
-    """Accuracy and EPE of each input from summed (..., input, sum) arrays."""
-    n = sums[..., 0]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        acc = np.where(n > 0, sums[..., 1] / n, np.nan)
-        epe = np.where(n > 0, sums[..., 2] / n, np.nan)
-    return {"accuracy": acc, "epe": epe}
-
-
-def model_rows(rows, *, reps: int = 1000, seed: int = 0, level: float = 0.95) -> list[dict]:
-    """The user model's table: accuracy and EPE per input, and the drops under each shuffle.
-
-    Rows ``normal``, ``shuffled``, ``camera``, ``camera_shuffled`` give
-
-    .. math:: A = \\frac{\\sum_t \\mathrm{hits}_t}{\\sum_t n_t}, \\qquad
-        \\mathrm{EPE} = \\frac{\\sum_t |\\hat d - d|_t}{\\sum_t n_t};
-
-    rows ``mc_shuffle`` and ``camera_shuffle`` the drop of accuracy and the rise of EPE
-    under each shuffle (:data:`COMPARISONS`: before minus after, after minus before), and row
-    ``mc_minus_camera`` the difference of the two. Each with a percentile interval of a tile
-    bootstrap stratified by frame (``*_low``, ``*_high``); the inputs are paired by tile in
-    every replicate. A NaN or Inf prediction is one of the :math:`n_t` pixels, a miss, and
-    adds :func:`nonfinite_bound` to the EPE's sum (module docstring); ``nonfinite_share``
-    is their share of the scored pixels of an input (its rise under a comparison's shuffle;
-    the difference of the two rises for ``mc_minus_camera``).
-
-    Parameters
-    ----------
-    rows : list of dict
-        :func:`score_frame`'s rows of every frame.
-    reps, seed, level : keyword-only
-
-    Returns
-    -------
-    list of dict
-        ``row``, ``accuracy``, ``accuracy_low``, ``accuracy_high``, ``epe``, ``epe_low``,
-        ``epe_high``, ``nonfinite_share``, ``n_pixels``, ``n_tiles``, ``frames``.
-    """
-    sums, scenes = _sums_matrix(list(rows))
-    if not scenes:
-        raise ValueError("no scored pixel: the frames have no valid ground truth")
-    counts = _stratified_counts(scenes, reps, seed)
-    total = sums.sum(axis=1)  # (input, sum)
-    point = _metrics(total)
-    nonfinite = total[:, MODEL_SUMS.index("nonfinite")]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        share = np.where(total[:, 0] > 0, nonfinite / total[:, 0], np.nan)  # (input,)
-    boot = _metrics(np.einsum("rt,its->ris", counts, sums))  # (reps, input)
-
-    def drop(values, before, after, axis_last=True):
-        i, j = MODEL_INPUTS.index(before), MODEL_INPUTS.index(after)
-        return values[..., i] - values[..., j]
-
-    def summary(acc_p, acc_b, epe_p, epe_b) -> dict:
-        lo_a, hi_a = percentile_interval(acc_b, level)
-        lo_e, hi_e = percentile_interval(epe_b, level)
-        return {
-            "accuracy": float(acc_p),
-            "accuracy_low": lo_a,
-            "accuracy_high": hi_a,
-            "epe": float(epe_p),
-            "epe_low": lo_e,
-            "epe_high": hi_e,
-        }
-
-    common = {"n_tiles": len(scenes), "frames": len(set(scenes))}
-    out = []
-    for i, kind in enumerate(MODEL_INPUTS):
-        out.append(
-            {
-                "row": kind,
-                **summary(
-                    point["accuracy"][i], boot["accuracy"][:, i], point["epe"][i], boot["epe"][:, i]
-                ),
-                "nonfinite_share": float(share[i]),
-                "n_pixels": int(sums[i, :, 0].sum()),
-                **common,
-            }
-        )
-    diffs, rises = {}, {}
-    for name, (before, after) in COMPARISONS.items():
-        diffs[name] = (
-            drop(point["accuracy"], before, after),
-            drop(boot["accuracy"], before, after),
-            -drop(point["epe"], before, after),
-            -drop(boot["epe"], before, after),
-        )
-        rises[name] = -drop(share, before, after)
-    mc, cam = diffs["mc_shuffle"], diffs["camera_shuffle"]
-    diffs["mc_minus_camera"] = tuple(a - b for a, b in zip(mc, cam, strict=True))
-    rises["mc_minus_camera"] = rises["mc_shuffle"] - rises["camera_shuffle"]
-    for name, values in diffs.items():
-        out.append(
-            {
-                "row": name,
-                **summary(*values),
-                "nonfinite_share": float(rises[name]),
-                "n_pixels": int(sums[0, :, 0].sum()),
-                **common,
-            }
-        )
-    return out
-
-
-def _points(value, low, high, scale=100.0) -> str:
-    return f"{scale * value:+.2f} [{scale * low:+.2f}, {scale * high:+.2f}]"
-
-
-def _share(value: float) -> str:
-    """A share in percent, one decimal; a share that rounds to 0 or 100 % but is not says
-    so.
-
-    Examples
-    --------
-    >>> _share(0.5), _share(0.0), _share(2e-5), _share(1.0)
-    ('50.0 %', '0 %', '< 0.1 %', '100 %')
-    """
-    if value <= 0 or value >= 1:
-        return f"{100 * value:.0f} %"
-    if value < 0.0005:
-        return "< 0.1 %"
-    if value > 0.9995:
-        return "> 99.9 %"
-    return f"{100 * value:.1f} %"
-
-
-def nonfinite_warning(rows) -> str | None:
-    """The one-line warning when the model returned NaN or Inf at any scored pixel, with the
-    share of each input (:func:`model_rows`' ``nonfinite_share``); None when it never did.
-
-    Examples
-    --------
-    >>> rows = [{"row": k, "nonfinite_share": s} for k, s in zip(MODEL_INPUTS, (0, 0.5, 0, 0))]
-    >>> nonfinite_warning(rows)[:85]
-    'the model returned NaN or Inf disparity at scored pixels (normal 0 %, shuffled 50.0 %'
-    >>> nonfinite_warning(rows[:1]) is None
-    True
-    """
-    shares = {r["row"]: r["nonfinite_share"] for r in rows if r["row"] in MODEL_INPUTS}
-    if not any(s > 0 for s in shares.values()):
-        return None
-    listed = ", ".join(f"{kind} {_share(s)}" for kind, s in shares.items())
-    return (
-        f"the model returned NaN or Inf disparity at scored pixels ({listed}); they "
-        "count as misses at an end-point error of the frame's largest disparity (column "
-        "nonfinite_share); check the model for a division by zero or a log of a negative "
-        "number"
-    )
-
-
-def model_reading(rows) -> str:
-    """One sentence: does the model use the Monte Carlo cue, from :func:`model_rows`.
-
-    It does when the accuracy drop under the Monte Carlo shuffle is above 0 and above the
-    camera shuffle's (the interval of ``mc_minus_camera`` lies above 0); it shows no use when
-    that interval holds 0; and the shuffle helps it when the interval lies below 0.
-    """
-    by = {r["row"]: r for r in rows}
-    mc, cam, diff = by["mc_shuffle"], by["camera_shuffle"], by["mc_minus_camera"]
-    numbers = (
-        f"accuracy drop under the Monte Carlo shuffle "
-        f"{_points(mc['accuracy'], mc['accuracy_low'], mc['accuracy_high'])} points, under the "
-        "camera-noise shuffle "
-        f"{_points(cam['accuracy'], cam['accuracy_low'], cam['accuracy_high'])}"
-        f", difference {_points(diff['accuracy'], diff['accuracy_low'], diff['accuracy_high'])}"
-        f" (EPE rise {mc['epe']:+.3f} vs {cam['epe']:+.3f} px)"
-    )
-    low, high = diff["accuracy_low"], diff["accuracy_high"]
-    if not (math.isfinite(low) and math.isfinite(high)):
-        verdict = "not determined (too few tiles for an interval)"
-    elif low > 0:
-        verdict = "the model uses the Monte Carlo cue"
-    elif high < 0:
-        verdict = "the shuffle helps the model more than camera noise's (not a cue use)"
-    else:
-        verdict = "no use of the Monte Carlo cue detected"
-    return f"{verdict}: {numbers}, over {diff['frames']} frames ({diff['n_tiles']} tiles)."
 
 
 def frame_law(left, valid=None) -> tuple[float, float]:
