@@ -48,6 +48,10 @@ def verdict_summary():
         summary = {
             "schema_version": SUMMARY_SCHEMA_VERSION, "audit": name,
             "found": "1 frame × 2 views × 4 seeds", "mc_specific": None,
+            "mc_specific_rho": {"value": None, "low": None, "high": None, "null": None,
+                                "interval": "", "light": light},
+            "provenance": {"stereovar_version": "0.1.0", "created": "2026-01-01T00:00:00Z",
+                           "inputs_sha256": "0" * 64, "n_inputs": 0, "config_sha256": ""},
             "matched_null": False, "strength": "not testable", "matching_cue": None,
             "text": lines[0], "light": light, "decision": lines[:1], "shared_streams": None,
             "seeding": "", "flags": [], "summary": list(lines), "mitigations": [],
@@ -128,6 +132,31 @@ def docs_site(tmp_path_factory):
         f"the documentation build failed (warnings are errors):\n{result.stdout}{result.stderr}"
     )
     return out / "html"
+
+
+@pytest.fixture(scope="session")
+def interval_problems():
+    """A function of a page's shown text and its quantities ``(value, low, high)``: the
+    problems of its intervals, one line each. Every correlation-style interval (three
+    decimals, ``v [a, b]``) lies inside [-1, 1], and wherever a quantity's value is shown
+    with an interval, that interval is the quantity's own: one interval per quantity."""
+    import math
+    import re
+
+    shown = re.compile(r"(?<![\d.])(-?\d+\.\d{3}) \[(-?\d+\.\d{3}), (-?\d+\.\d{3})\]")
+
+    def problems(text: str, quantities=()) -> list[str]:
+        out = [f"interval outside [-1, 1]: {m.group(0)}" for m in shown.finditer(text)
+               if not all(-1.0 <= float(x) <= 1.0 for x in m.groups()[1:])]
+        for value, low, high in quantities:
+            if not all(math.isfinite(float(x)) for x in (value, low, high)):
+                continue
+            own = f"{value:.3f} [{low:.3f}, {high:.3f}]"
+            out += [f"{m.group(0)} where {own} is meant" for m in shown.finditer(text)
+                    if m.group(1) == f"{value:.3f}" and m.group(0) != own]
+        return out
+
+    return problems
 
 
 @pytest.fixture(scope="session")

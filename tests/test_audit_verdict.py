@@ -137,7 +137,7 @@ def row(quantity, value, low, high, region="all"):
 
 def test_control_flags_against_their_rules():
     rows = [
-        row("Pearson rho after the warp (Eq. 3)", 0.5, 0.4, 0.6),
+        row("Pearson rho after the warp", 0.5, 0.4, 0.6),
         row("null: disparity shifted", 0.368, 0.185, 0.551),  # the 8-bit PNG case
         row("null: right field flipped", 0.02, -0.05, 0.09),  # about 0
         row("null: right field flipped", NULL_OFF / 2, 0.01, 0.09, "glass"),  # small: kept
@@ -166,7 +166,7 @@ def test_control_flags_against_their_rules():
         at_edge = min(value, 1.0 - value) < EDGE
         assert bool(control_flags([], one)) == at_edge, value
     # no warp correlating as much as the warp is flagged
-    same = [row("Pearson rho after the warp (Eq. 3)", 0.5, 0.4, 0.6),
+    same = [row("Pearson rho after the warp", 0.5, 0.4, 0.6),
             row("null: no warp", 0.55, 0.45, 0.65)]
     assert [f["kind"] for f in control_flags(same, [])] == ["control"]
 
@@ -369,7 +369,7 @@ def test_control_flags_reach_the_page():
 def test_the_opening_quotes_its_numbers_with_intervals_and_controls():
     rows = [
         row("intensity-controlled rho", 0.6128, 0.5666, 0.6589),
-        row("Pearson rho after the warp (Eq. 3)", 0.5501, 0.4843, 0.6158),
+        row("Pearson rho after the warp", 0.5501, 0.4843, 0.6158),
         row("camera baseline: simulated sensor, same N", 0.6905, 0.6798, 0.7012),
     ]
     seeding = {"shared": True, "zero": (0.3, 0.2, 0.4)}

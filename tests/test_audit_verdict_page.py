@@ -258,6 +258,56 @@ def test_the_page_in_chromium_at_1280_px(headless_chromium, audited, tmp_path):
         assert caption(kind, frame="f00").split("**")[1].rstrip(".") in shown["text"]
 
 
+def test_the_page_is_one_file_that_says_where_it_came_from(headless_chromium, audited,
+                                                           interval_problems):
+    """Every image embedded, so the one file can be shared; the version, the date and the
+    inputs' and config's hashes shown; each quantity with its one interval, none of a
+    correlation outside [-1, 1]."""
+    import stereovar
+    from stereovar.provenance import inputs_digest
+
+    load = headless_chromium(audited["html"], width=1280, height=800, expression=PROBE)
+    shown = json.loads(load.value)
+    assert shown["images"] and all(src.startswith("data:image/png;base64,")
+                                   for src, _ in shown["images"])
+    written = json.loads(audited["summary"].read_text())
+    origin = written["provenance"]
+    records = [json.loads((audited["root"] / import_record(NAME, f)).read_text())
+               for f in FRAMES]
+    hashes = {p: e["sha256"] for r in records for p, e in r["files"].items()}
+    assert origin["inputs_sha256"] == inputs_digest(hashes) and origin["n_inputs"] == len(hashes)
+    assert f"stereovar {stereovar.__version__}" in shown["text"]
+    assert origin["inputs_sha256"][:12] in shown["text"]
+    assert origin["created"][:10] in shown["text"]
+    rows = [(r["value"], r["low"], r["high"]) for r in written["rows"]
+            if None not in (r["value"], r["low"], r["high"])]
+    assert interval_problems(shown["text"], rows) == []
+    assert interval_problems("rho 0.967 [0.724, 1.210]") != []  # the check can fail
+
+
+def test_the_summary_gives_the_number_a_script_reads(audited):
+    written = json.loads(audited["summary"].read_text())
+    top = written["mc_specific_rho"]
+    row = next((r for r in written["rows"]
+                if r["quantity"] == "Monte Carlo-specific rho" and r["region"] == "all"),
+               {"value": None, "low": None, "high": None})  # no matched null: no number
+    assert (top["value"], top["low"], top["high"]) == (row["value"], row["low"], row["high"])
+    assert top["light"] == written["light"]
+
+
+def test_a_summary_of_another_major_version_is_refused_in_one_line(audited, tmp_path):
+    from stereovar.audit.summary_schema import read_summary
+    from stereovar.errors import AuditError
+
+    written = json.loads(audited["summary"].read_text())
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps({**written, "schema_version": "2.0"}))
+    with pytest.raises(AuditError, match=r"schema version 2\.0; this stereovar .* reads 1\.x"):
+        read_summary(path)
+    path.write_text(json.dumps({**written, "schema_version": "1.0"}))
+    assert read_summary(path)["light"] == written["light"]  # an older 1.x reads the same
+
+
 def test_the_docs_page_describes_every_key_of_the_schema():
     docs = (Path(__file__).parents[1] / "docs" / "summary_json.md").read_text()
     schema = summary_schema()

@@ -17,7 +17,7 @@ from stereovar import layout
 from stereovar.io.tables import read_rows, write_tables
 from stereovar.jobs.claims import results_page_job
 from stereovar.pages.names import claim_name
-from stereovar.pages.results import CONTROL_GROUPS, REGIONS
+from stereovar.pages.results import CONTROL_GROUPS, INTERVAL_NOTE, REGIONS, interval_keys
 from stereovar.statistics.claims import CLAIMS_COLUMNS, load_claims
 
 from .test_page_captions import REPOSITORY_PATHS
@@ -207,6 +207,8 @@ def synthetic_results(
                 "region": region, "method": method, "mean_rho": rho,
                 "boot_low": rho - float(rng.uniform(0.01, 0.1)),
                 "boot_high": rho + float(rng.uniform(0.01, 0.1)),
+                "scenes_low": max(rho - float(rng.uniform(0.1, 0.3)), -1.0),
+                "scenes_high": min(rho + float(rng.uniform(0.1, 0.3)), 1.0),
                 "std_rho": 0.1, "n_scenes": 3, "mean_rho_corrected": rho,
             })
     # the intensity-controlled rho over all pixels as the statistics table makes it from the
@@ -367,8 +369,8 @@ def check_headline(page: Page, summary: dict, matched=None) -> None:
         assert close(numbers(warp.split(":", 1)[1])[0], main["mean_rho"])
     else:
         assert value and close(float(value.group(1)), main["mean_rho"])
-        assert interval and close(float(interval.group(1)), main["boot_low"])
-        assert close(float(interval.group(2)), main["boot_high"])
+        assert interval and close(float(interval.group(1)), main["scenes_low"])
+        assert close(float(interval.group(2)), main["scenes_high"])
     # one row per statistic: its label, then a cell per region
     controls = {m for _, _, methods in CONTROL_GROUPS for m, _ in methods}
     expected_controls = controls & {m for _, m in stats}
@@ -385,7 +387,7 @@ def check_headline(page: Page, summary: dict, matched=None) -> None:
             continue
         for region, cell in zip(REGIONS, cells, strict=True):
             row = stats.get((region, method)) or {}
-            expected = shown_interval(*(row.get(k) for k in ("mean_rho", "boot_low", "boot_high")))
+            expected = shown_interval(*(row.get(k) for k in ("mean_rho", *interval_keys(method))))
             if not expected:
                 assert cell == "n/a", (method, region, cell)
                 continue
@@ -428,7 +430,7 @@ def test_headline_is_the_monte_carlo_specific_rho_beside_its_matched_null(synthe
     _, kwargs, text, page = synthetic()
     summary = json.loads(Path(kwargs["summary"]).read_text())
     check_headline(page, summary, expected_matched(*scene_partials()))
-    assert summary["interval"] in " ".join(page.text_by_id["headline"].split())
+    assert INTERVAL_NOTE in " ".join(page.text_by_id["headline"].split())
     # the conclusion, the headline and the claims come before the figures
     assert text.index('id="conclusion"') < text.index('id="headline"')
     assert text.index('id="headline"') < text.index('id="claims"') < text.index('id="figures"')
@@ -448,7 +450,7 @@ def test_a_headline_without_its_interval_says_so(synthetic):
     summary = json.loads(Path(kwargs["summary"]).read_text())
     for row in summary["statistics"]:
         if (row["region"], row["method"]) == ("all", "warp"):
-            row["boot_low"] = row["boot_high"] = None
+            row["boot_low"] = row["boot_high"] = row["scenes_low"] = row["scenes_high"] = None
     Path(kwargs["summary"]).write_text(json.dumps(summary))
     _, page = build_page(root, kwargs)
     text = " ".join(page.text_by_id["headline"].split())
@@ -547,7 +549,7 @@ def test_one_compact_mitigation_table_with_the_full_table_linked(synthetic):
     column = {name: header.index(name) for name in header}
     for shown, row in zip(cells, rows, strict=True):
         assert shown[column["mitigation"]] == row["mitigation"]
-        specific = numbers(shown[column["Monte Carlo-specific ρ [95%]"]])
+        specific = numbers(shown[column["Monte Carlo-specific ρ of its renders [95%]"]])
         assert all(close(g, v) for g, v in zip(specific, [row["mc_specific"],
                    row["mc_specific_low"], row["mc_specific_high"]], strict=True))
         assert close(numbers(shown[column["matched null"]])[0], row["null_partial"])
@@ -769,7 +771,8 @@ def test_tiny_run_writes_its_results_page(tiny_run):
 
 
 @pytest.mark.workflow
-def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path):
+def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path,
+                                           interval_problems):
     share, ids, load = claims_visibility(headless_chromium, tiny_run / layout.results_page())
     (tmp_path / "index.png").write_bytes(load.screenshot)
     assert load.errors == []
@@ -777,6 +780,19 @@ def test_tiny_run_results_page_in_chromium(headless_chromium, tiny_run, tmp_path
     assert share >= VISIBLE, f"claims table not visible ({share:.2f}): {tmp_path / 'index.png'}"
     claims = read_rows(tiny_run / layout.claims_tables()[0])
     assert ids == [str(r["id"]) for r in claims]
+    # one interval per quantity, none of a correlation outside [-1, 1]; where it came from
+    import stereovar
+
+    summary = json.loads((tiny_run / layout.summary_json()).read_text())
+    quantities = [(r["mean_rho"], *(r[k] for k in interval_keys(r["method"])))
+                  for r in summary["statistics"]
+                  if None not in (r["mean_rho"], *(r[k] for k in interval_keys(r["method"])))]
+    assert quantities
+    text = load.shown["text"]
+    assert interval_problems(text, quantities) == []
+    origin = summary["provenance"]
+    assert f"stereovar {stereovar.__version__}" in text
+    assert origin["inputs_sha256"][:12] in text and origin["config_sha256"][:12] in text
 
 
 def page_job_inputs(root: Path) -> str:

@@ -1,5 +1,6 @@
 """Snakemake adapter: stereovar.jobs.audit.verdict_job."""
 
+from stereovar.io.contracts import config_digest
 from stereovar.jobs.audit import verdict_job
 from stereovar.jobs.common import run_job
 
@@ -24,5 +25,7 @@ run_job(
     warped=list(snakemake.input.warped),
     ground_truth=list(snakemake.input.ground_truth),
     outputs=dict(snakemake.output.items()),
+    # read here, not a param: the page records the config, a change of it reruns nothing
+    config_digest=config_digest(dict(snakemake.config)),
     **snakemake.params,
 )

@@ -8,7 +8,8 @@ what changed), from its parts: ``settings`` checks and digests the ``audit:`` se
 import finds and records; ``ground_truth`` builds the imported ground truth; ``sign``
 settles the disparity convention photometrically and ``offset`` finds a disparity off by a
 pixel or more; ``verdict`` decides whether the data carry the cue, ``strongest`` finds the
-frames and tiles where it is strongest, ``page`` lays the verdict out as one page and
+frames and tiles where it is strongest, ``page`` lays the verdict out as one page (with
+``plain`` saying what its numbers mean in plain words) and
 ``summary_schema`` checks its ``summary.json`` against the shipped schema; ``run`` makes an
 audit a workflow run (its discovery, config and targets, which ``stereovar audit`` drives);
 ``export`` writes this project's renders, variance fields and disparity in the same file

@@ -35,6 +35,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..io.tables import to_markdown
+from ..provenance import provenance_line
 from .importer import WARNING_KINDS
 from .verdict import FLAG_LABELS, LIGHTS, RULE_ITEMS, VERDICT_COLUMNS
 
@@ -61,6 +62,18 @@ BANNER_KINDS = ("sign_check", "sign_check_error", "disparity_offset")
 rests on was inconclusive, or won with a high error, or the disparity seems offset (the
 warp matches better shifted by a pixel or more: :mod:`stereovar.audit.offset`)."""
 
+FACT_LABELS = {
+    "valid_px": "valid pixels",
+    "invalid_disparity_px": "invalid disparity (px)",
+    "outside_px": "warped outside the image (px)",
+    "nonfinite_render_px": "non-finite render pixels",
+    "sign_check": "sign check: median warp error, declared / opposite convention",
+    "clipped": "clipped (share of pixels)",
+    "quantised": "quantised (share of pixels)",
+}
+"""Headers of the import-facts table, with units (the columns keep their names in the
+Markdown page's table and in scripts)."""
+
 FLAG_COLUMNS = ["flag", "frame", "what"]
 """Columns of the flags table (one row per warning or flag)."""
 
@@ -70,10 +83,11 @@ CAPTIONS = {
         "glass region where a material mask was given): the files the audit read."
     ),
     "teaser": (
-        "**Frame {frame}: the variance fields.** :math:`\\sigma^2_L` and :math:`\\sigma^2_R` "
-        "over the imported renders (Eq. 1), the right field warped into the left view by the "
-        "given disparity, :math:`\\hat\\sigma^2_{R \\to L}` (Eq. 2), and their joint "
-        "histogram over the valid set with Pearson's :math:`\\rho` (Eq. 3)."
+        "**Frame {frame}: the noise-level fields.** :math:`\\sigma^2_L` and "
+        ":math:`\\sigma^2_R`, each pixel's variance over the imported renders' seeds, the "
+        "right field moved into the left view by the given disparity, "
+        ":math:`\\hat\\sigma^2_{R \\to L}`, and their joint histogram over the pixels both "
+        "views see, with Pearson's :math:`\\rho`."
     ),
     "statistics": (
         "**Every statistic against its controls.** One row per statistic (above the dashed "
@@ -92,10 +106,13 @@ CAPTIONS = {
         ":math:`e_{R \\to L}`, side by side: where the views share a pattern, it shows in both."
     ),
     "mitigations": (
-        "**Mitigation trade-off.** One point per mitigation: the cue it leaves (the "
-        "intensity-controlled :math:`\\rho`, the :math:`C_\\sigma` lift over chance, the "
-        "residual correlation at zero disparity) against its PSNR, with 95% intervals; the "
-        "point to look for sits at the bottom right."
+        "**Mitigation trade-off.** One point per mitigation: the Monte Carlo-specific "
+        ":math:`\\rho` of what it ships (the intensity-controlled :math:`\\rho` minus its "
+        "matched null) against its image quality (PSNR, dB), with 95% intervals, and the "
+        "calibration's margin as a grey band around 0: a mitigation removes the cue where its "
+        "whole interval lies inside its band; the cue remains where the interval lies above "
+        "the red dotted line at 0.05. The point to look for sits inside its band, on the "
+        "right."
     ),
     "probe": (
         "**Learned probe: accuracy per test input.** Winner-take-all accuracy of each training "
@@ -126,18 +143,46 @@ def caption(kind: str, **fields) -> str:
 
 
 _MATH_ROLE = re.compile(r":math:`(.+?)`", re.S)
+_LITERAL = re.compile(r"``(.+?)``", re.S)
+_TEX_NAMES = {
+    "rho": "ρ", "sigma": "σ", "mu": "μ", "epsilon": "ε", "delta": "δ", "Delta": "Δ",
+    "Omega": "Ω", "tau": "τ", "to": "→", "pm": "±", "times": "×", "cdot": "·", "ln": "ln ",
+    "le": "≤", "ge": "≥", "approx": "≈",
+}
+"""TeX commands of the captions and rules, as the characters a plain text shows."""
+_SUPERSCRIPTS = str.maketrans("0123456789+-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻")
 
 
-def caption_markdown(text: str) -> str:
-    r"""A caption's inline markup as Markdown: ``:math:`x``` as ``$x$`` (GitHub's math),
-    ``**bold**`` kept, on one line.
+def math_text(tex: str) -> str:
+    r"""Inline TeX of the captions as plain text: Greek letters and arrows as characters,
+    ``^2`` as ², ``\hat x`` with a combining hat, subscripts after ``_`` without braces.
 
     Examples
     --------
-    >>> caption_markdown("**A.** :math:`\\rho` < 1")
-    '**A.** $\\rho$ &lt; 1'
+    >>> math_text("\\hat\\sigma^2_{R \\to L}"), math_text("C_\\sigma"), math_text("\\ln\\mu")
+    ('σ̂²_R→L', 'C_σ', 'ln μ')
     """
-    return _MATH_ROLE.sub(lambda m: f"${m.group(1)}$", markdown_text(text))
+    text = re.sub(r"\\hat\s*\\?([A-Za-z]+)",
+                  lambda m: _TEX_NAMES.get(m.group(1), m.group(1)) + "\u0302", tex)
+    text = re.sub(r"\\([A-Za-z]+)", lambda m: _TEX_NAMES.get(m.group(1), m.group(1)), text)
+    text = re.sub(r"  +", " ", text)
+    text = re.sub(r"\^\{?([0-9+-]+)\}?", lambda m: m.group(1).translate(_SUPERSCRIPTS), text)
+    text = re.sub(r"_\{([^}]*)\}", lambda m: "_" + m.group(1).replace(" ", ""), text)
+    return text.replace("{", "").replace("}", "").strip()
+
+
+def caption_markdown(text: str) -> str:
+    r"""A caption's inline markup as plain Markdown, readable in a text editor as rendered:
+    ``:math:`x``` as text (:func:`math_text`), ````x```` as a code span, ``**bold**`` kept,
+    on one line.
+
+    Examples
+    --------
+    >>> caption_markdown("**A.** :math:`\\rho` < 1 in ``x_R``")
+    '**A.** ρ &lt; 1 in `x_R`'
+    """
+    text = _MATH_ROLE.sub(lambda m: math_text(m.group(1)), text)
+    return _LITERAL.sub(lambda m: f"`{m.group(1)}`", markdown_text(text))
 
 
 _MARKDOWN_ACTIVE = re.compile(r"[&<>]|\](?=\()|[\r\n]+")
@@ -235,7 +280,7 @@ def _sign_fact(sign: dict) -> str:
     if not sign:
         return ""
     text = (
-        f"{100 * sign['error']:.1f}% declared vs {100 * sign['opposite_error']:.1f}% opposite"
+        f"{100 * sign['error']:.1f}% declared / {100 * sign['opposite_error']:.1f}% opposite"
     )
     text += "" if sign.get("conclusive", True) else " (inconclusive)"
     return text + (" (error high)" if sign.get("high_error") else "")
@@ -385,6 +430,8 @@ def page_sections(
     statistics: tuple | None = None,
     strongest: dict | None = None,
     rules=RULE_ITEMS,
+    meaning=(),
+    provenance: dict | None = None,
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
@@ -393,7 +440,10 @@ def page_sections(
     learned probe's verdict paragraph (``audit.probe: true``); ``statistics`` the
     statistics-against-controls figure as a pair; ``strongest``: ``text``, ``ranking`` and
     ``tiles`` (:mod:`stereovar.audit.strongest`) and its figure as a pair or None;
-    ``rules``: how the verdict reads its numbers, one item each (inline markup).
+    ``rules``: how the verdict reads its numbers, one item each (inline markup);
+    ``meaning``: the "What these numbers mean" box, ``(term, text)`` pairs
+    (:func:`stereovar.audit.plain.meaning_items`); ``provenance``: the stereovar version, the
+    date and the hashes of the inputs and config (:func:`stereovar.provenance.provenance`).
     """
     banners = [f["text"] for f in flags if f["kind"] in BANNER_KINDS]
     if strongest:
@@ -417,6 +467,8 @@ def page_sections(
         "mitigations": mitigations,
         "probe": probe,
         "figures": _captioned(figures, "teaser"),
+        "meaning": [tuple(item) for item in meaning],
+        "provenance": dict(provenance or {}),
     }
 
 
@@ -428,6 +480,8 @@ def _normalised(s: dict) -> dict:
         "statistics": None,
         "strongest": None,
         "probe": "",
+        "meaning": [],
+        "provenance": {},
         **s,
         "thumbnails": _captioned(s["thumbnails"], "thumbnail"),
         "figures": _captioned(s["figures"], "teaser"),
@@ -447,10 +501,17 @@ def to_markdown_page(s: dict) -> str:
     m = markdown_text
     lines = [f"# {m(s['title'])}", ""]
     lines += [f"> **Warning.** {m(b)}" for b in s["banners"]] + ([""] if s["banners"] else [])
+    lines += [f"**{m(d['light'].upper())}: {m(d['headline'])}**", ""]
+    if d.get("do"):
+        lines += [f"**What to do.** {m(d['do'])}", "", m(d["sure"]), ""]
+    else:
+        lines += [" ".join(m(x) for x in d["sentences"]), ""]
+    if s["provenance"]:
+        lines += [f"*{m(provenance_line(s['provenance']))}*", ""]
+    if s["meaning"]:
+        lines += ["### What these numbers mean", ""]
+        lines += [f"- **{m(term)}:** {m(text)}" for term, text in s["meaning"]] + [""]
     lines += [
-        f"**{m(d['light'].upper())}: {m(d['headline'])}** "
-        + " ".join(m(x) for x in d["sentences"]),
-        "",
         "## What was imported",
         "",
         f"{markdown_line(s['found'])}.",
@@ -503,11 +564,20 @@ def to_markdown_page(s: dict) -> str:
     return "\n".join(lines)
 
 
-def to_html_page(s: dict) -> str:
+def to_html_page(s: dict, base=None) -> str:
     """The page as one self-contained HTML document: the template ``verdict.html.j2``
     (:mod:`stereovar.pages.templates`), every text escaped, captions and rules rendered from
-    their inline markup (:func:`stereovar.pages.captions.caption_markup`, math as MathML)."""
+    their inline markup (:func:`stereovar.pages.captions.caption_markup`, math as MathML).
+
+    With ``base`` (the page's folder), every image is embedded as a ``data:`` URI
+    (:func:`stereovar.pages.html.data_uri`) read from its path relative to ``base``, so the
+    one file can be mailed or attached on its own; without it, images are linked by those
+    relative paths."""
+    from ..pages.html import data_uri
     from ..pages.templates import render
+
+    def embed(src):
+        return data_uri(Path(base) / src) if base is not None else src
 
     s = _normalised(s)
     light = s["decision"]["light"]
@@ -519,6 +589,9 @@ def to_html_page(s: dict) -> str:
         colour=LIGHTS[light],
         alt=lambda src: Path(src).stem,
         fact_columns=FACT_COLUMNS,
+        fact_labels=FACT_LABELS,
+        embed=embed,
+        provenance=provenance_line(s["provenance"]),
         flag_columns=FLAG_COLUMNS,
         verdict_columns=VERDICT_COLUMNS,
         strongest_frame_columns=STRONGEST_FRAME_COLUMNS,

@@ -9,7 +9,10 @@ each key.
 
 Versioning: ``schema_version`` is ``major.minor``. A minor version only adds keys; removing a
 key or changing its meaning makes a new major version, so a script written for ``1.x`` reads
-any ``1.y``.
+any ``1.y``. Version 1.1 adds ``mc_specific_rho`` (the verdict's number with its interval,
+its null and the light) and ``provenance`` (:mod:`stereovar.provenance`). A summary of
+another major version is refused by :func:`read_summary` with the version it has and the
+one this stereovar reads, before its keys are checked.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import json
 from functools import cache
 from pathlib import Path
 
-SUMMARY_SCHEMA_VERSION = "1.0"
+SUMMARY_SCHEMA_VERSION = "1.1"
 """The version the verdict job writes."""
 
 SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "audit_summary.schema.json"
@@ -41,7 +44,7 @@ def validate_summary(summary: dict) -> None:
 
     Examples
     --------
-    >>> validate_summary({"schema_version": "1.0"})  # doctest: +ELLIPSIS
+    >>> validate_summary({"schema_version": "1.1"})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     ValueError: summary.json breaks its schema ... at (top level): 'audit' is a required ...
@@ -58,11 +61,18 @@ def validate_summary(summary: dict) -> None:
         )
 
 
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
+
+
 def read_summary(path) -> dict:
     """An audit's ``summary.json``, read through :func:`summary_schema`: what ``stereovar
     audit`` prints and its ``--fail-on`` gate decides from. A file that is not JSON, not a
-    JSON object or breaks the schema is refused, so that the gate fails closed on a verdict
-    it cannot read rather than pass on a ``light`` it was handed.
+    JSON object, has another major schema version or breaks the schema is refused, so that
+    the gate fails closed on a verdict it cannot read rather than pass on a ``light`` it was
+    handed.
 
     Parameters
     ----------
@@ -109,6 +119,14 @@ def read_summary(path) -> dict:
         raise AuditError(
             f"{path} is not a summary the verdict job wrote: it holds a JSON "
             f"{type(summary).__name__}, not an object; {fix}"
+        )
+    version = str(summary.get("schema_version", ""))
+    major = SUMMARY_SCHEMA_VERSION.split(".")[0]
+    if version and version.split(".")[0] != major:
+        raise AuditError(
+            f"{path} has summary schema version {version}; this stereovar "
+            f"{_version()} reads {major}.x: read it with the stereovar that wrote it, or "
+            f"{fix}"
         )
     try:
         validate_summary(summary)

@@ -72,7 +72,7 @@ markup with ``:math:`` roles."""
 VERDICT_COLUMNS = ["quantity", "region", "value", "low", "high", "note"]
 
 ROWS = (
-    ("warp", "Pearson rho after the warp (Eq. 3)", ""),
+    ("warp", "Pearson rho after the warp", "the raw correlation; a camera gives one too"),
     ("corrected", "attenuation-corrected rho", "rho / sqrt(split-half reliabilities)"),
     ("spearman", "Spearman rho", "robust to fireflies"),
     ("log", "log-Pearson rho", "robust to fireflies"),
@@ -232,7 +232,8 @@ def verdict_rows(
     for source, label in (("render", "renders"), ("sensor", "simulated camera frames")):
         value, low, high = wta_lift(intervention, source)
         quantity = f"C_sigma WTA accuracy minus chance, {label}"
-        out.append(_row(quantity, "all", value, low, high, "intervention (Sec. 3.4)"))
+        out.append(_row(quantity, "all", value, low, high,
+                        "share of pixels above chance (0.10 = 10 pp)"))
         if source == "render" and nulls is not None:
             from ..intervention.lift import LIFT_METHOD
             from ..statistics.mitigations import matched_difference
@@ -665,7 +666,8 @@ def decision(
     Returns
     -------
     dict
-        ``light`` (a :data:`LIGHTS` key), ``headline`` and ``sentences``.
+        ``light`` (a :data:`LIGHTS` key), ``headline`` and ``sentences`` (how sure, what
+        to do), the two also as ``sure`` and ``do``.
     """
     mc, word = result["mc_specific"], result["strength"]
     strong = mc is True and word in ("strong", "moderate")
@@ -754,4 +756,5 @@ def decision(
         do = "Nothing needs mitigating for this cue before training."
     if seeding.get("shared") is True:
         do += " Render each view with its own sampler seed (Cycles: scene.cycles.seed)."
-    return {"light": light, "headline": headline, "sentences": [sure, do]}
+    return {"light": light, "headline": headline, "sentences": [sure, do], "sure": sure,
+            "do": do}

@@ -249,6 +249,7 @@ def verdict_job(
     warped=(),
     ground_truth=(),
     analysis=None,
+    config_digest: str = "",
 ) -> dict:
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``.
 
@@ -274,7 +275,11 @@ def verdict_job(
     top frames, and their figure at ``outputs["strongest"]`` when given). Every figure has a
     caption that says what it shows (:data:`stereovar.audit.page.CAPTIONS`). ``summary.json``
     carries ``schema_version`` and is validated against its schema before it is written
-    (:mod:`stereovar.audit.summary_schema`)."""
+    (:mod:`stereovar.audit.summary_schema`). The page opens with what to do and a "What these
+    numbers mean" box (:func:`stereovar.audit.plain.meaning_items`); the HTML page embeds its
+    images, and both pages and ``summary.json`` carry the provenance
+    (:func:`stereovar.provenance.provenance`: the stereovar version, the date, the SHA-256
+    over the imported files' recorded SHA-256s and ``config_digest``, the config's)."""
     from ..audit.page import (
         caption,
         import_flags,
@@ -286,6 +291,7 @@ def verdict_job(
     from ..audit.summary_schema import SUMMARY_SCHEMA_VERSION, validate_summary
     from ..audit.verdict import (
         RULES,
+        SPECIFIC,
         VERDICT_COLUMNS,
         as_table,
         control_flags,
@@ -371,6 +377,14 @@ def verdict_job(
     if strongest and strongest["frames"] and outputs.get("strongest"):
         strongest["figure"] = (relative(outputs["strongest"]),
                                caption("strongest", tile=TILE))
+    from ..audit.plain import meaning_items
+    from ..provenance import provenance
+
+    origin = provenance(
+        {path: entry["sha256"] for record in records
+         for path, entry in (record.get("files") or {}).items() if entry.get("sha256")},
+        config_digest,
+    )
     sections = page_sections(
         name=name,
         found=found,
@@ -381,7 +395,8 @@ def verdict_job(
         flags=flags,
         table=table,
         caption=f"Audit {name}: {found}. Every statistic over the frames, with its 95% "
-        "interval and the control it is read against.",
+        "interval and the control it is read against. rho values are correlations (-1 to 1); "
+        "C_sigma rows are shares of pixels.",
         mitigations=findings,
         thumbnails=[(relative(t), caption("thumbnail", frame=frame_of(t))) for t in thumbnails],
         figures=figures,
@@ -390,11 +405,23 @@ def verdict_job(
         if statistics_figure
         else None,
         strongest=strongest,
+        meaning=meaning_items(rows, result),
+        provenance=origin,
     )
+    specific = next((r for r in table if r["quantity"] == SPECIFIC and r["region"] == "all"),
+                    {})
     summary = {
         "schema_version": SUMMARY_SCHEMA_VERSION,
         "audit": name,
         "found": found,
+        "mc_specific_rho": {
+            **_json_numbers([{k: specific.get(k, math.nan)
+                              for k in ("value", "low", "high", "null")}])[0],
+            "interval": "95%: the frames' spatial block-bootstrap intervals combined, with the "
+            "matched null's standard error",
+            "light": opening["light"],
+        },
+        "provenance": origin,
         **result,
         "light": opening["light"],
         "decision": [opening["headline"], *opening["sentences"]],
@@ -416,7 +443,7 @@ def verdict_job(
         else None,
     }
     validate_summary(summary)
-    md, page = to_markdown_page(sections), to_html_page(sections)
+    md, page = to_markdown_page(sections), to_html_page(sections, base=base)
     write_file(outputs["md"], lambda tmp: Path(tmp).write_text(md))
     write_file(outputs["html"], lambda tmp: Path(tmp).write_text(page))
     write_file(outputs["summary"], lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=1)))

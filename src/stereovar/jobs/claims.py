@@ -26,7 +26,9 @@ def statistics_job(correlations, curves, outputs: dict, curve_outputs: dict, *, 
         outputs,
         caption=(
             f"Every statistic and control across scenes at SPP={spp}: mean rho with the 95% "
-            "interval from the scenes' spatial block bootstraps, the spread over scenes, "
+            "interval from the scenes' spatial block bootstraps (boot_low, boot_high: these "
+            "scenes) and the 95% interval for the mean over scenes like these (scenes_low, "
+            "scenes_high: random effects, as the claims read them), the spread over scenes, "
             "the mean widths of the Fisher-z (independent pixels) and bootstrap intervals, "
             "the share of the covariance in the top 0.1% of products, fireflies, split-half "
             "reliabilities and the attenuation-corrected rho"
@@ -62,7 +64,9 @@ def claims_job(
     interval and control, the config digest, the renderer, the estimator and the claims file
     with its SHA-256; with ``mitigations`` (``results/tables/mitigations.csv``), every
     mitigation row too; with ``probe`` (``results/tables/probe_verdict.json``, when the probe
-    has run), the probe's verdict and a claims row "a trained matcher uses the cue".
+    has run), the probe's verdict and a claims row "a trained matcher uses the cue". Its
+    ``provenance`` (:func:`stereovar.provenance.provenance`) hashes the tables it reads and
+    gives the version and the date; the results page shows it.
 
     ``claims_digest`` is the claims file's SHA-256 when the workflow was read (the rule's
     rerun trigger); a file changed since is refused, so the table never mixes the two."""
@@ -115,6 +119,8 @@ def claims_job(
                 "mean_rho",
                 "boot_low",
                 "boot_high",
+                "scenes_low",
+                "scenes_high",
                 "std_rho",
                 "n_scenes",
                 "mean_rho_corrected",
@@ -123,13 +129,20 @@ def claims_job(
         }
         for r in statistics_table(rows, spp=int(spp))
     ]
+    from ..provenance import file_hashes, provenance
+
+    inputs = [*correlations, *curves, *([sweep] if sweep else []), *interventions,
+              *([mitigations] if mitigations else []), *([probe] if probe else [])]
     document = {
+        "provenance": provenance(file_hashes(inputs), config_digest),
         "config_digest": config_digest,
         **run,
         "spp": int(spp),
         "n_seeds": int(rows[0]["n_seeds"]) if rows else None,
         "scenes": sorted({str(r["scene"]) for r in rows}),
-        "interval": "95% spatial block bootstrap (scenes combined)",
+        "interval": "95% spatial block bootstrap (scenes combined): boot_low, boot_high; "
+        "95% over scenes like these (random effects, as the claims read them): scenes_low, "
+        "scenes_high",
         "statistics": headline,
         "claims_file": {"path": "stereovar/statistics/claims.yaml", "sha256": claims_file.sha256},
         "claims": [{k: clean(v) for k, v in c.items()} for c in claims],
@@ -391,6 +404,8 @@ def results_page_job(
         calibration=headline(read_rows(calibration)) if calibration else "",
         nulls=read_rows(nulls) if nulls else None,
         claim_statistics=claim_statistics(claims_file.claims),
+        own_scale={c["id"] for c in claims_file.claims if c.get("paper_scale") == "own"},
+        provenance=document.get("provenance"),
         docs={
             "page": docs_page("outputs", "the-results-page"),
             "calibration": docs_page("calibration"),

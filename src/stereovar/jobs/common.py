@@ -112,7 +112,16 @@ def left_right(ds, name):
 
 
 def run_label(renderer: str, estimator: str | None = None) -> str:
-    """``renderer mitsuba, estimator seeds``: which renders a table or figure shows."""
+    """``renderer mitsuba, estimator seeds``: which renders a table or figure shows; an
+    audit's imported renders (renderer ``audit/{name}``) as ``audit {name}``.
+
+    Examples
+    --------
+    >>> run_label("mitsuba", "seeds"), run_label("audit/team_v2", "seeds")
+    ('renderer mitsuba, estimator seeds', 'audit team_v2')
+    """
+    if str(renderer).startswith("audit/"):
+        return f"audit {str(renderer).split('/', 1)[1]}"
     text = f"renderer {renderer}"
     return f"{text}, estimator {estimator}" if estimator else text
 

@@ -146,7 +146,9 @@ def statistics_dot_figure_job(correlations, out, *, spp) -> None:
     rows = [r for path in correlations for r in read_rows(path)]
     attrs = rows[0] if rows else {}
     n_scenes = len({r["scene"] for r in rows})
-    title = _title(attrs, f"every statistic and control, {_scenes(n_scenes)}{_spp(spp)}")
+    audit = str(attrs.get("renderer", "")).startswith("audit/")
+    count = f"{n_scenes} frame{'' if n_scenes == 1 else 's'}" if audit else _scenes(n_scenes)
+    title = _title(attrs, f"every statistic and control, {count}{_spp(spp)}")
     _save(statistics_dot_figure(rows, spp=spp, title=title, drop_empty=True), out)
 
 

@@ -39,6 +39,7 @@ __all__ = [
     "conclusion",
     "control_rows",
     "headline",
+    "interval_keys",
     "interval_text",
     "matched_headline",
     "mitigation_rows",
@@ -56,6 +57,34 @@ REGIONS = {"all": "all valid pixels", "non_glass": "non-glass", "glass": "glass"
 
 HEADLINE_METHOD = "warp"
 """The paper's statistic: Pearson's :math:`\\rho` after the warp (Eq. 3)."""
+
+SCENE_METHODS = frozenset({"warp", "sensor_sim", "sensor", "null_shift", "null_flip",
+                           "no_warp"})
+"""Statistics the page reads against the paper and the camera, as the claims do: each shown
+with the interval for the mean over scenes like these (``scenes_low``, ``scenes_high``, a
+random-effects interval), the same interval as in the claims table. The others (the
+intensity-controlled :math:`\\rho`, read against its matched null as the calibration and the
+mitigations read it) keep the scenes' block-bootstrap intervals combined. One quantity, one
+interval: no number on the page is shown with both."""
+
+INTERVAL_NOTE = (
+    "95% intervals: of ρ after the warp and its camera and null-warp controls, over scenes "
+    "like these (as the claims); of the intensity-controlled and Monte Carlo-specific ρ, on "
+    "these scenes' pixels (block bootstrap, as the calibration and the mitigations)."
+)
+"""How the page's intervals are made, under the headline table."""
+
+
+def interval_keys(method: str) -> tuple[str, str]:
+    """The statistics-table columns of ``method``'s interval on the page
+    (:data:`SCENE_METHODS`).
+
+    Examples
+    --------
+    >>> interval_keys("warp"), interval_keys("partial")
+    (('scenes_low', 'scenes_high'), ('boot_low', 'boot_high'))
+    """
+    return ("scenes_low", "scenes_high") if method in SCENE_METHODS else ("boot_low", "boot_high")
 
 MATCHED_METHOD = "partial"
 """The statistic whose difference from its matched null is the Monte Carlo-specific part:
@@ -139,9 +168,9 @@ TABLE_LABELS = {
 MITIGATION_COLUMNS = {
     "mitigation": "mitigation",
     "samples": "samples per image",
-    "mc_specific": "Monte Carlo-specific ρ [95%]",
+    "mc_specific": "Monte Carlo-specific ρ of its renders [95%]",
     "null": "matched null",
-    "ships": "in what it ships",
+    "ships": "Monte Carlo-specific ρ of what it ships [95%] (the verdict reads it)",
     "verdict": "verdict",
     "psnr": "PSNR, dB [95%]",
     "budget": "raw render at equal budget, dB",
@@ -203,7 +232,8 @@ def _statistic(statistics: list[dict], region: str, method: str) -> dict | None:
 
 def headline(statistics: list[dict]) -> dict:
     """:math:`\\rho` after the warp over all valid pixels (Eq. 3) from ``summary.json``'s
-    ``statistics``: the mean over scenes with its combined bootstrap interval.
+    ``statistics``: the mean over scenes with its interval for scenes like these
+    (:func:`interval_keys`; the claims table's).
 
     Returns
     -------
@@ -213,13 +243,13 @@ def headline(statistics: list[dict]) -> dict:
 
     Examples
     --------
-    >>> h = headline([{"region": "all", "method": "warp", "mean_rho": 0.7, "boot_low": 0.6,
-    ...                "boot_high": 0.8, "n_scenes": 3}])
+    >>> h = headline([{"region": "all", "method": "warp", "mean_rho": 0.7, "boot_low": 0.65,
+    ...                "boot_high": 0.75, "scenes_low": 0.6, "scenes_high": 0.8, "n_scenes": 3}])
     >>> h["text"], h["n_scenes"]
     ('0.700 [0.600, 0.800]', 3)
     """
     row = _statistic(statistics, "all", HEADLINE_METHOD) or {}
-    rho, low, high = (_f(row.get(k)) for k in ("mean_rho", "boot_low", "boot_high"))
+    rho, low, high = (_f(row.get(k)) for k in ("mean_rho", *interval_keys(HEADLINE_METHOD)))
     return {
         "rho": rho,
         "low": low,
@@ -356,7 +386,7 @@ def control_rows(
     """The headline table by region: the Monte Carlo-specific :math:`\\rho` and its matched
     null (over all valid pixels, where the calibration has them), :math:`\\rho` after the warp,
     then each control of :data:`CONTROL_GROUPS` that ``statistics`` holds, each with its
-    interval in every region.
+    interval in every region (:func:`interval_keys`).
 
     Parameters
     ----------
@@ -379,7 +409,7 @@ def control_rows(
     >>> stats = [{"region": g, "method": m, "mean_rho": 0.5, "boot_low": 0.4, "boot_high": 0.6}
     ...          for g in ("all", "glass") for m in ("warp", "partial")]
     >>> [(r["method"], r["label"]) for r in control_rows(stats)]
-    [('warp', 'ρ after the warp (Eq. 3)'), ('partial', 'intensity-controlled: partial ρ')]
+    [('warp', 'ρ after the warp'), ('partial', 'intensity-controlled: partial ρ')]
     >>> control_rows(stats)[1]["cells"]
     {'all': '0.500 [0.400, 0.600]', 'non_glass': 'n/a', 'glass': '0.500 [0.400, 0.600]'}
     """
@@ -389,7 +419,7 @@ def control_rows(
         return {
             region: interval_text(
                 *(_f((_statistic(statistics, region, method) or {}).get(k))
-                  for k in ("mean_rho", "boot_low", "boot_high"))
+                  for k in ("mean_rho", *interval_keys(method)))
             )
             for region in REGIONS
         }
@@ -407,7 +437,7 @@ def control_rows(
              "label": "its matched null (camera-law noise)",
              "cells": {"all": f"{matched['null']:.3f}", **none}, "explained": {}},
         ]
-    rows.append({"method": HEADLINE_METHOD, "group": "paper", "label": "ρ after the warp (Eq. 3)",
+    rows.append({"method": HEADLINE_METHOD, "group": "paper", "label": "ρ after the warp",
                  "cells": cells(HEADLINE_METHOD), "explained": marks(HEADLINE_METHOD)})
     present = {r.get("method") for r in statistics}
     for group, _, methods in CONTROL_GROUPS:
@@ -471,11 +501,14 @@ def conclusion(matched: dict, warp: dict, explained: dict | None = None) -> dict
     return {"word": word, "cls": cls, "text": text, "verdict": verdict}
 
 
-def claim_cells(row: dict) -> dict:
+def claim_cells(row: dict, *, rho: bool = False, own_scale: bool = False) -> dict:
     """One claims-table row (:data:`stereovar.statistics.claims.CLAIMS_COLUMNS`) as the
     page shows it: the claim by name (:func:`stereovar.pages.names.claim_name`), where the
     paper makes it by section name, numbers to 3 significant digits with their 95%
-    intervals, the control in words.
+    intervals (``rho``: a correlation claim, to 3 decimals as the headline table shows the
+    same numbers), the control in words. ``own_scale``: the paper's value is in the paper's
+    own units (``paper_scale: own`` in the claims file), so the paper column gives its sign,
+    the only part that compares, with the value named as the paper's own.
 
     Examples
     --------
@@ -492,18 +525,26 @@ def claim_cells(row: dict) -> dict:
     ("ρ of a simulated camera's noise", '0.01 [-0.02, 0.04]')
     """
     paper = row.get("paper")
+    fmt = ".3f" if rho else "sig"
     control_value = interval_text(
-        row.get("control_value"), row.get("control_low"), row.get("control_high"), fmt="sig"
+        row.get("control_value"), row.get("control_low"), row.get("control_high"), fmt=fmt
     )
+    if math.isfinite(_f(paper)) and own_scale:
+        sign = "positive" if _f(paper) > 0 else "negative" if _f(paper) < 0 else "zero"
+        paper_text = f"{sign} (sign only: {significant(_f(paper))} in the paper's own units)"
+    elif math.isfinite(_f(paper)):
+        paper_text = significant(_f(paper))
+    else:
+        paper_text = str(paper or "")
     verdict = str(row.get("verdict", ""))
     return {
         "id": str(row.get("id", "")),
         "claim": claim_name(str(row.get("id", "")), str(row.get("claim", ""))),
         "section": section_name(str(row.get("section", ""))),
         "note": readable(str(row.get("note") or "")),
-        "paper": significant(_f(paper)) if math.isfinite(_f(paper)) else str(paper or ""),
+        "paper": paper_text,
         "ours": interval_text(row.get("ours"), row.get("ours_low"), row.get("ours_high"),
-                              fmt="sig"),
+                              fmt=fmt),
         "control": control_name(str(row.get("control") or "")) or "none",
         "control_value": control_value if row.get("control") else "",
         "verdict": verdict,
@@ -576,6 +617,8 @@ def page_sections(
     nulls: list[dict] | None = None,
     claim_statistics: dict | None = None,
     docs: dict | None = None,
+    own_scale=(),
+    provenance: dict | None = None,
 ) -> dict:
     """Everything the page shows, in reading order (see the module docstring).
 
@@ -616,6 +659,10 @@ def page_sections(
     docs : dict, optional
         Documentation addresses by topic (``page``, ``calibration``, ``mitigations``,
         ``probe``, ``generators``; :func:`stereovar.links.docs_page`).
+    own_scale : iterable of str, optional
+        Ids of the claims whose paper value is in the paper's own units (:func:`claim_cells`).
+    provenance : dict, optional
+        :func:`stereovar.provenance.provenance` of the page.
     """
     statistics = list(summary.get("statistics") or [])
     tally: dict[str, int] = {}
@@ -665,11 +712,13 @@ def page_sections(
         "headline": warp,
         "matched": matched,
         "explained": explained,
-        "interval": str(summary.get("interval") or "95% interval"),
+        "interval": INTERVAL_NOTE,
+        "provenance": dict(provenance or {}),
         "controls": control_rows(statistics, matched, explained),
         "control_notes": [(group, note) for group, note, _ in CONTROL_GROUPS],
         "tally": tally,
-        "claims": [claim_cells(r) for r in claims],
+        "claims": [claim_cells(r, rho=r.get("id") in (claim_statistics or {}),
+                               own_scale=r.get("id") in set(own_scale)) for r in claims],
         "claims_text": claims_text,
         "rules": list(rules),
         "figures": list(figures),
@@ -706,7 +755,8 @@ def _generator_table(rows: list[dict]) -> dict:
 
 def to_html_page(s: dict) -> str:
     """The page as one self-contained HTML document (``results.html.j2``, no script)."""
+    from ..provenance import provenance_line
     from .templates import render
 
     return render("results.html.j2", s=s, title=s["title"], band=CLAIMS_BAND,
-                  regions=REGIONS)
+                  regions=REGIONS, provenance=provenance_line(s.get("provenance") or {}))

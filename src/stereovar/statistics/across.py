@@ -30,6 +30,8 @@ STATISTICS_COLUMNS = [
     "mean_rho",
     "boot_low",
     "boot_high",
+    "scenes_low",
+    "scenes_high",
     "std_rho",
     "n_scenes",
     "mean_fisher_width",
@@ -370,7 +372,10 @@ def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
         \\bar\\rho = \\frac1S \\sum_s \\rho_s, \\quad
         \\mathrm{std} = \\sqrt{\\tfrac{1}{S-1} \\sum_s (\\rho_s - \\bar\\rho)^2}
 
-    with the interval of :func:`combined_interval`, the mean widths of the Fisher-z and
+    with the interval of :func:`combined_correlation_interval` (``boot_low``, ``boot_high``:
+    conditional on the scenes run) and that of :func:`random_effects_correlation_interval`
+    (``scenes_low``, ``scenes_high``: for the mean over scenes like those run, the one the
+    claims read; none for one scene), the mean widths of the Fisher-z and
     bootstrap intervals, the mean top-0.1% share, firefly count, reliabilities and
     attenuation-corrected :math:`\\rho` (and how many scenes' corrected :math:`\\rho` exceed 1).
 
@@ -392,6 +397,7 @@ def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
             ok = [r for r in group if math.isfinite(float(r["rho"]))]
             rho = _finite(r["rho"] for r in ok)
             _, low, high = rows_interval(ok)
+            _, scenes_low, scenes_high = random_effects_correlation_interval(rho)
             reasons = sorted({str(r.get("reason", "")) for r in group} - {""})
             corrected = _finite(r.get("rho_corrected", math.nan) for r in ok)
             out.append(
@@ -401,6 +407,8 @@ def statistics_table(rows: list[dict], *, spp: int | None = None) -> list[dict]:
                     "mean_rho": float(rho.mean()) if rho.size else math.nan,
                     "boot_low": low,
                     "boot_high": high,
+                    "scenes_low": scenes_low,
+                    "scenes_high": scenes_high,
                     "std_rho": float(rho.std(ddof=1)) if rho.size > 1 else math.nan,
                     "n_scenes": int(rho.size),
                     "mean_fisher_width": _mean(

@@ -468,10 +468,16 @@ def _seed_change(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate
 
 
 def _corrected_rho(inputs: ClaimInputs, *, region, method, level=0.95) -> Estimate:
-    """Mean over scenes of the attenuation-corrected :math:`\\rho` with a t interval."""
+    """Mean over scenes of the attenuation-corrected :math:`\\rho` with a t interval, cut to
+    :math:`[-1, 1]`: a corrected value is a ratio that can pass 1, but it estimates a
+    correlation, and cutting the interval to where that lies keeps its coverage (as
+    :func:`stereovar.audit.verdict.correlation_summary` does). The mean itself is not cut."""
     rows = _select(inputs.rows, region, method)
     values = [float(r.get("rho_corrected", math.nan)) for r in rows]
-    return Estimate(*t_interval(values, level=level))
+    value, low, high = t_interval(values, level=level)
+    if math.isfinite(low) and math.isfinite(high):
+        low, high = min(max(low, -1.0), 1.0), min(max(high, -1.0), 1.0)
+    return Estimate(value, low, high)
 
 
 def _region_ratio(

@@ -420,12 +420,14 @@ def mitigation_findings(rows: list[dict], region: str = "all") -> list[str]:
     for r in chosen:
         ships = ""
         if math.isfinite(_f(r.get("shipped_mc_specific"))):
-            ships = f", {_iv(r, 'shipped_mc_specific')} in what it ships"
+            ships = (f"; in what it ships (one image per view, the seed mean through the "
+                     f"mitigation) {_iv(r, 'shipped_mc_specific')}, the number its verdict "
+                     "reads")
         lines.append(
-            f"{r['mitigation']}: Monte Carlo-specific rho {_iv(r, 'mc_specific')}{ships} "
-            f"({r['mc_cue']}; intensity-controlled rho minus its matched null "
-            f"{_f(r.get('null_partial')):.3f}), residual correlation at zero disparity "
-            f"{_iv(r, 'residual_rho_zero')}, PSNR {_iv(r, 'psnr', ' dB', 2)}"
+            f"{r['mitigation']}: {r['mc_cue']}. Monte Carlo-specific rho "
+            f"{_iv(r, 'mc_specific')} (its intensity-controlled rho minus its matched null, "
+            f"which is {_f(r.get('null_partial')):.3f}){ships}; residual correlation at zero "
+            f"disparity {_iv(r, 'residual_rho_zero')}; PSNR {_iv(r, 'psnr', ' dB', 2)}"
         )
     margins = [_f(r.get("margin")) for r in chosen if math.isfinite(_f(r.get("margin")))]
     within = " (its interval inside the calibration's equivalence margin)" if margins else ""
