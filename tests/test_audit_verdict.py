@@ -221,14 +221,17 @@ def test_where_no_mitigation_removes_it_the_advice_names_a_budget_or_the_probe()
     opening = decision(verdict_result(True), {"shared": False}, [], none, dose=removing)
     advice = opening["sentences"][-1]
     assert "To remove it: sensor_only with a camera of gain 30" in advice
-    assert "256 SPP per image" in advice and "audit.probe" not in advice
+    assert "256 SPP per image" in advice and "stereovar probe" not in advice
     stays = dose_findings([{**row, "kind": "predicted", "mc_specific": 0.3,
                             "mc_specific_low": 0.25, "mc_specific_high": 0.35,
                             "mc_cue": "remains"}])
     advice = decision(verdict_result(True), {"shared": False}, [], none, dose=stays)[
         "sentences"][-1]
     assert "no budget up to 256 SPP per image removes it" in advice
-    assert "set audit.probe: true with your own network" in advice
+    assert "stereovar probe --model" in advice and "--config audit.yaml" in advice
+    # without the dose-response, the advice names it and the probe: never a dead end
+    advice = decision(verdict_result(True), {"shared": False}, [], none)["sentences"][-1]
+    assert "add sensor_only to audit.mitigations" in advice and "stereovar probe" in advice
 
 
 # -- every import warning reaches the page ---------------------------------------------------

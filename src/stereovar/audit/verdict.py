@@ -629,6 +629,14 @@ def control_flags(rows: list[dict], correlations: list[dict]) -> list[dict]:
 
 
 LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#808080"}
+
+PROBE_COMMAND = (
+    "stereovar probe --model yourpkg.nets:build --weights model.pt --config audit.yaml "
+    "(your network's factory and weights, this audit's config; docs: Probing your own "
+    "network)."
+)
+"""The command the advice names when no mitigation removes the cue: the probe of the team's
+own network on the audit's frames."""
 """Traffic-light colours of the decision."""
 
 
@@ -739,19 +747,25 @@ def decision(
               "Carlo-specific part at their own budget; see the Mitigations section. ")
         if removing:
             do += "To remove it: " + removing[0]
+        elif dose:
+            do += (dose[0] + " No budget or camera measured removes it, so the next step is "
+                   "to test whether your own network uses it: " + PROBE_COMMAND)
         else:
-            do += (
-                (dose[0] + " " if dose else "")
-                + "No budget or camera measured removes it, so the next step is to test "
-                "whether your network uses it: set audit.probe: true with your own network "
-                "(docs: probe_own_model) and run the audit again."
-            )
+            do += ("Next: add sensor_only to audit.mitigations to find the budget and camera "
+                   "that remove it (the dose-response), or test whether your own network "
+                   "uses it: " + PROBE_COMMAND)
     elif red or mc is True:
         do = (
             "Before training a stereo network on them, measure which mitigation removes the "
             "cue and at what budget, camera and image quality: set audit.mitigations: "
             "[denoise, denoise_sensor, equalise, sensor_only] and run the audit again."
         )
+    elif mc is None:
+        do = ("Nothing can be concluded yet: give the audit more frames or seeds (stereovar "
+              "sample plans how many) or fix what the flags below name, and run it again.")
+    elif flags:
+        do = ("No cue to mitigate was found; check the flags below before relying on that, "
+              "as each can hide one.")
     else:
         do = "Nothing needs mitigating for this cue before training."
     if seeding.get("shared") is True:
