@@ -1,7 +1,8 @@
 """The command line as a new user meets it: ``python -m stereovar``, a bare ``stereovar``
 and ``--help`` (examples and the documentation's address), ``run --help``'s targets against
-the workflow's own rules, tab completion, ``init --example`` run twice, and the CI gate
-``audit --fail-on``."""
+the workflow's own rules, the stages ``run --help`` and ``audit --help`` list against those a
+run prints, Snakemake's own options on ``run``'s line (``stereovar run -n``), tab completion,
+``init --example`` run twice, and the CI gate ``audit --fail-on``."""
 
 from __future__ import annotations
 
@@ -21,6 +22,8 @@ from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.cli.audit import FAIL_ON_STATUS, verdict_fails
 from stereovar.cli.workflow import RUN_TARGETS
 from stereovar.links import docs_page
+from stereovar.progress import Progress
+from stereovar.stages import AUDIT_STAGES, RUN_STAGES
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -125,6 +128,134 @@ def test_run_help_lists_every_target_rule_and_only_rules(capsys):
     for line in listed:
         if line.startswith("  ") and line[2] != " ":
             assert re.search(r"\(~?\d+ min\)|\(seconds\)", line) or len(line) > 70, line
+
+
+# -- the stages the help lists are those a run prints -------------------------------------------
+
+
+class Clock:
+    def __init__(self):
+        self.t = 0.0
+
+    def __call__(self):
+        return self.t
+
+
+@pytest.mark.parametrize(("group", "stages"), [("audit", AUDIT_STAGES), ("run", RUN_STAGES)])
+def test_the_help_lists_the_stages_a_run_prints(capsys, group, stages):
+    """The stages ``--help`` names, in its order, are the lines a run with a job in every
+    stage prints (its events given here), one definition for both."""
+    with pytest.raises(SystemExit):
+        cli.main([group, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("one line per stage with jobs, in this order: ", 1)[1]
+    listed = listed.split(";", 1)[0].split(", ")
+    clock = Clock()
+    progress = Progress(stages, clock=clock)
+    rules = [names[0] for names in stages.values()]
+    printed = progress.plan({rule: 1 for rule in rules})
+    for jobid, rule in enumerate(rules):
+        printed += progress.job(jobid, rule)
+        clock.t += 1.0
+        printed += progress.done(jobid)
+    printed += progress.finish()
+    assert listed == [line.split(" ... ")[0] for line in printed.splitlines()] == list(stages)
+    assert printed.splitlines()[-1].endswith(f"{len(rules)} of {len(rules)} in all)")
+
+
+# -- Snakemake's options on run's line ----------------------------------------------------------
+
+
+@pytest.fixture
+def run_args(tmp_path, monkeypatch):
+    """``run_args(*words)``: the options ``stereovar <words>`` hands Snakemake (a stand-in
+    that records them), in an empty folder."""
+    monkeypatch.chdir(tmp_path)
+    seen = []
+    monkeypatch.setattr(cli, "_snakemake", lambda args, root: seen.append(list(args)) or 0)
+
+    def run(*words):
+        seen.clear()
+        assert cli.main(list(words)) == 0
+        (args,) = seen
+        return args
+
+    return run
+
+
+@pytest.mark.parametrize(
+    ("words", "snakemake"),
+    [
+        (["run", "-n"], ["-j", "2", "all", "-n"]),
+        (["run", "--dry-run", "-j1"], ["-j", "1", "all", "--dry-run"]),
+        (["run", "-np", "mitigations"], ["-j", "2", "-np", "mitigations"]),
+        (["run", "mitigations", "-n"], ["-j", "2", "mitigations", "-n"]),
+        (["run", "-R", "render", "-j", "4"], ["-j", "4", "-R", "render"]),
+        (["run", "probe", "--forcerun=render"], ["-j", "2", "probe", "--forcerun=render"]),
+        (["run", "--config", "spp=2", "-n"], ["-j", "2", "--config", "spp=2", "-n"]),
+        (["run", "-n", "--", "-p"], ["-j", "2", "all", "-n", "-p"]),
+        (["run", "--", "-n", "mitigations"], ["-j", "2", "-n", "mitigations"]),
+        (["report", "--notemp"], ["--report", "results/report.html", "--notemp"]),
+    ],
+)  # fmt: skip
+def test_options_run_does_not_take_go_to_snakemake(run_args, words, snakemake):
+    """An option of Snakemake's on run's line is Snakemake's, as after --; a word after it is
+    Snakemake's too (its value or a target), and run names no target of its own then
+    (Snakemake's default target is all); --config is Snakemake's, not short for
+    --configfile."""
+    assert run_args(*words) == snakemake
+
+
+def test_run_n_is_run_dashes_n(run_args):
+    """The same command to Snakemake, so the same run (the dry run itself: below)."""
+    assert run_args("run", "-n") == run_args("run", "--", "-n")
+    assert run_args("run", "-n", "-j3", "-v") == run_args("run", "-j3", "-v", "--", "-n")
+
+
+def test_an_option_no_command_takes_is_refused_by_the_others(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "_snakemake", lambda args, root: pytest.fail("ran"))
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["export", "--format", "npy", "-n"])
+    assert stop.value.code == 2
+    assert "unrecognized arguments: -n" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:  # stereovar's -v fused with Snakemake's -n
+        cli.main(["run", "-vn"])
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert stop.value.code == 2 and "-vn: -v is stereovar's option" in err and "-v -n" in err
+
+
+def cli_in(folder: Path, *words) -> subprocess.Popen:
+    folder.mkdir()
+    return subprocess.Popen([sys.executable, "-m", "stereovar.cli", *words], cwd=folder,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_run_n_is_a_dry_run_of_the_default_workflow_that_writes_nothing(tmp_path,
+                                                                       tree_snapshot):
+    """Real Snakemake, two commands at once in empty folders: ``run -n`` (Snakemake's command
+    that of ``run -- -n``: above) prints the plan by stage and writes only its log; a
+    mistyped option, which Snakemake does not take either, is one line, and leaves no log."""
+    procs = {name: cli_in(tmp_path / name, *words)
+             for name, words in {"n": ["run", "-n"], "typo": ["run", "--dryrunn"]}.items()}
+    out = {name: (*proc.communicate(timeout=120), proc.returncode)
+           for name, proc in procs.items()}
+    plan, err, rc = out["n"]
+    assert rc == 0, err
+    lines = plan.splitlines()
+    assert lines[0].startswith("scenes: ") and re.fullmatch(
+        r"\d+ jobs in all \(a dry run: nothing was run\)", lines[-1])
+    assert [line.split(":")[0] for line in lines[:-1]] == [
+        stage for stage in RUN_STAGES if any(line.startswith(f"{stage}:") for line in lines)]
+    (log,) = err.splitlines()
+    assert re.fullmatch(r"log: logs/stereovar-run-[\d-]+\.log", log)
+    assert set(tree_snapshot(tmp_path / "n")) == {"logs", log.removeprefix("log: ")}
+    _, typo, rc = out["typo"]
+    assert rc == 2 and typo.splitlines() == [
+        "stereovar: error: snakemake refused its options: unrecognized arguments: --dryrunn "
+        "(stereovar run and report pass the options they do not take to snakemake; stereovar "
+        "run --help and snakemake --help list them)"]
+    assert not list((tmp_path / "typo").glob("logs/*"))
 
 
 # -- tab completion ------------------------------------------------------------------------------

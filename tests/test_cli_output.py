@@ -1,6 +1,7 @@
-"""What `stereovar audit` prints: one line per stage, the verdict's summary, the page and the
-log file (Snakemake's whole output, never overwritten); -v shows that output live; a failed
-job gives its one-line error and the log's path."""
+"""What `stereovar audit` prints: one line per stage (the last with all of the run's jobs),
+the verdict's summary, the page and the log file (Snakemake's whole output, never
+overwritten); -v shows that output live; a failed job gives its one-line error and the log's
+path."""
 
 import re
 import subprocess
@@ -70,15 +71,27 @@ def audited(tmp_path_factory):
     return root, proc
 
 
+def stage_lines(err: list) -> list:
+    """The lines that end a stage (``<stage> ... done``), each stage's last; the others say
+    where the run stood inside a stage that took long (30 s on a slow machine)."""
+    # a stage's line may say that the next one started while it waited
+    done = [line for line in err if re.fullmatch(r".+ \.\.\. (· .+ started )?done.*", line)]
+    for line in err:
+        if line not in done:
+            assert re.search(r" \.\.\. .*(\d+ of \d+ in all|last change .+ ago)", line), line
+    return done
+
+
 def test_default_output_is_the_stages_the_verdict_and_the_log(audited):
     root, proc = audited
     err = proc.stderr.splitlines()
-    assert [line.split(":")[0].split(" ...")[0] for line in err] == STAGES, proc.stderr
+    done = stage_lines(err)
+    assert [line.split(":")[0].split(" ...")[0] for line in done] == STAGES, proc.stderr
     assert err[0] == "import: 1 frame × 2 views × 4 seeds ... done"
-    # a stage's line may say that the next one started while it waited
-    assert all(re.fullmatch(r".+ \.\.\. (· .+ started )?done.*", line) for line in err), err
+    # the last line counts every job of the run
+    assert err[-1] == done[-1] and re.search(r"; (\d+) of \1 in all\)$", err[-1]), err
     out = proc.stdout.splitlines()
-    assert len(out) + len(err) <= 20 and len(out) <= 15, proc.stdout
+    assert len(out) + len(done) <= 20 and len(out) <= 15, proc.stdout
     summary = yaml.safe_load((root / "results/audit/tiny/summary.json").read_text())["summary"]
     assert out[: len(summary)] == summary  # once, from the verdict job's summary.json
     assert out[0].startswith(("RED:", "AMBER:", "GREEN:"))

@@ -3,113 +3,45 @@
 ``stereovar run`` and ``stereovar audit`` run Snakemake with the logger plugin
 ``stereovar`` (package :mod:`snakemake_logger_plugin_stereovar`), which hands each of
 Snakemake's log events to a :class:`Progress`: the plan (``RUN_INFO``: jobs per rule), each
-job as it starts (``JOB_INFO``: its rule and wildcards), ends (``JOB_FINISHED``) or fails
-(``JOB_ERROR``: its log files) and Snakemake's own errors (``ERROR``). A :class:`Progress`
-only keeps count and returns the text to show; nothing here writes, so every line can be
-checked from events alone.
+job as it starts (``JOB_INFO``: its rule), ends (``JOB_FINISHED``) or fails (``JOB_ERROR``:
+its log files) and Snakemake's own errors (``ERROR``). A :class:`Progress` only keeps count
+and returns the text to show; nothing here writes, and its clock is a parameter, so every
+line can be checked from events and their times alone.
 
-A stage is a group of workflow rules (:data:`RUN_STAGES`, :data:`AUDIT_STAGES`). Stages are
-reported in their order: a stage is done when every job planned for its rules has finished
-and the stages before it are done, so each stage's line is written once, as
-``<stage> ... done (<n> jobs; <k> of <N> in all)``.
+A stage is a group of workflow rules (:mod:`stereovar.stages`). Stages are reported in their
+order: a stage is done when every job planned for its rules has finished and the stages
+before it are done, so each stage's line is written once, as ``<stage> ... done (<n> jobs;
+<k> of <N> in all; about <time> left)``; where several stages are done at once, the last of
+them says where the run stands. Inside a long stage, a job that ends :data:`TICK_S` after the
+last line says where the run stands: ``<stage> ... <j> of <m> jobs · <k> of <N> in all ·
+about <time> left`` (:mod:`stereovar.eta`).
 """
 
 from __future__ import annotations
 
 import re
+import time
 from collections import Counter
 from pathlib import Path
 
-#: The rules of the intervention (Sec. 3.4) and of the mitigations, stages of both maps.
-INTERVENTION_RULES = ("intervention", "intervention_table", "margin_figure")
-MITIGATION_RULES = (
-    "render_policy",
-    "render_aux",
-    "transform",
-    "mitigation_scene",
-    "mitigations_table",
-    "mitigations",
-)
+from .eta import Pace, status, time_left_text
 
-#: The stages ``stereovar run`` reports, in order, and the workflow rules of each. A rule
-#: named nowhere counts as ``statistics``; ``all`` (the target, no work) counts nowhere.
-RUN_STAGES = {
-    "scenes": ("generate_scene", "scene_summary", "preview"),
-    "render": ("render", "render_moments", "render_profile"),
-    "ground truth": ("ground_truth",),
-    "statistics": ("variance", "warp", "correlation"),
-    "controls": ("estimator_check", "estimator_tables", "estimators"),
-    "intervention": INTERVENTION_RULES,
-    "mitigations": MITIGATION_RULES,
-    "calibration": (
-        "calibration_scene",
-        "calibration_table",
-        "calibration",
-        "generator_calibration",
-        "generators_table",
-        "generators",
-    ),
-    "probe": (
-        "probe_model_frames",
-        "probe_planted",
-        "probe_train",
-        "probe_train_control",
-        "probe_test",
-        "probe_table",
-        "probe",
-    ),
-    "tables": (
-        "statistics_table",
-        "cross_scene_table",
-        "spp_sweep_table",
-        "cross_renderer_table",
-        "claims",
-    ),
-    "pages": (
-        "teaser_figure",
-        "rho_vs_spp_figure",
-        "rho_vs_seeds_figure",
-        "statistics_dot_figure",
-        "material_scatter_figure",
-        "cross_renderer_figure",
-        "results_page",
-    ),
-    "export": ("export_scene", "export"),
-}
+# ``name as name``: the stage maps, read here by the logger plugin and by the tests.
+from .stages import AUDIT_STAGES as AUDIT_STAGES
+from .stages import DEFAULT_STAGE as DEFAULT_STAGE
+from .stages import RUN_STAGES as RUN_STAGES
+from .stages import STAGE_MAPS as STAGE_MAPS
+from .stages import TARGET_RULES as TARGET_RULES
+from .stages import rule_stage as rule_stage
+from .stages import stage_map as stage_map
 
-#: The stages ``stereovar audit`` reports, in order, and the workflow rules of each.
-AUDIT_STAGES = {
-    "import": ("audit_import",),
-    "statistics": ("variance", "warp", "correlation"),
-    "controls": ("audit_seeding", "estimator_check", "estimator_tables", "estimators"),
-    "intervention": INTERVENTION_RULES,
-    "calibration": ("calibration_scene", "calibration_table", "calibration"),
-    "mitigations": MITIGATION_RULES,
-    "probe": ("probe_train", "probe_train_control", "probe_test", "probe_table", "probe"),
-    "tables and figures": (
-        "statistics_table",
-        "cross_scene_table",
-        "spp_sweep_table",
-        "statistics_dot_figure",
-        "rho_vs_seeds_figure",
-        "audit_teaser",
-        "audit_thumbnail",
-    ),
-    "verdict": ("audit_verdict",),
-}
+#: Seconds after the last line at which a job that ends says where the run stands, where the
+#: lines are not rewritten in place (a log file, a pipe).
+TICK_S = 30.0
 
-#: The stage maps by the name the logger plugin's ``stages`` setting gives.
-STAGE_MAPS = {"run": RUN_STAGES, "audit": AUDIT_STAGES}
-
-#: The stage a rule named in no stage counts in.
-DEFAULT_STAGE = "statistics"
-
-#: Rules that are targets only: their jobs count in no stage.
-TARGET_RULES = ("all",)
-
-#: Audit stages whose line says only ``done`` (one job per frame, or one job), and that say
-#: ``up to date`` when nothing of them runs.
-PLAIN_STAGES = ("import", "verdict")
+#: Audit stages whose line says only ``done`` (the import counts its frames in the line
+#: itself), and that say ``up to date`` when nothing of them runs.
+PLAIN_STAGES = ("import",)
 
 #: Snakemake's options after which it runs no job and prints what was asked (``stereovar
 #: run -- --unlock``): their output is the command's, not a run's.
@@ -194,56 +126,6 @@ def is_dry_run(snakemake_args) -> bool:
     )
 
 
-def stage_map(name: str) -> dict:
-    """The stages of ``name`` (``run`` or ``audit``): :data:`STAGE_MAPS`."""
-    try:
-        return STAGE_MAPS[name]
-    except KeyError:
-        raise ValueError(f"unknown stages {name!r}; use one of {sorted(STAGE_MAPS)}") from None
-
-
-def rule_stage(rule, stages: dict):
-    """The stage of ``rule`` in ``stages``; None for a target rule (``all``) or no rule.
-
-    Examples
-    --------
-    >>> rule_stage("audit_import", AUDIT_STAGES), rule_stage("new_rule", AUDIT_STAGES)
-    ('import', 'statistics')
-    >>> rule_stage("all", RUN_STAGES) is None
-    True
-    """
-    if not rule or rule in TARGET_RULES:
-        return None
-    for stage, rules in stages.items():
-        if rule in rules:
-            return stage
-    return DEFAULT_STAGE if DEFAULT_STAGE in stages else None
-
-
-def job_stage(rule, wildcards, stages: dict, source: str = ""):
-    """The stage of one job: its rule's (:func:`rule_stage`), except that a job on a
-    mitigated copy of an audit's renders (wildcard ``renderer`` ``<source>/<mitigation>``)
-    counts as ``mitigations``.
-
-    Examples
-    --------
-    >>> job_stage("variance", {"renderer": "audit/a/denoise"}, AUDIT_STAGES, "audit/a")
-    'mitigations'
-    >>> job_stage("variance", {"renderer": "audit/a"}, AUDIT_STAGES, "audit/a")
-    'statistics'
-    """
-    stage = rule_stage(rule, stages)
-    renderer = str((wildcards or {}).get("renderer", ""))
-    if (
-        source
-        and stage is not None
-        and "mitigations" in stages
-        and renderer.startswith(source + "/")
-    ):
-        return "mitigations"
-    return stage
-
-
 def job_error(line: str):
     """The message of a job's ``ERROR`` log line (without its ``error:``), else None.
 
@@ -321,29 +203,49 @@ class Progress:
     """What a run has planned and done, per stage, and the lines that say so.
 
     Each event method returns the text to write (possibly ``""``): whole lines, and in the
-    one open stage's line its start (``"statistics ... "``) and, later, its end. With
-    ``live`` (a terminal) the open line is rewritten in place with its count (``import: 3
-    frames ... frame 2 of 3``) instead.
+    one open stage's line its start (``"statistics ... "``) and, later, its end. A job that
+    ends :data:`TICK_S` or more after the last line ended ends the open line with where the
+    run stands (:meth:`status`) and begins it again. With ``live`` (a terminal) the open
+    line is rewritten in place with its status (``import: 3 frames ... frame 2 of 3 · 1 of 5
+    in all · about 20 s left``) at every event instead.
 
     Parameters
     ----------
     stages : dict
-        Stage name: rule names, in order (:data:`RUN_STAGES`, :data:`AUDIT_STAGES`).
+        Stage name: rule names, in order (:data:`~stereovar.stages.RUN_STAGES`,
+        :data:`~stereovar.stages.AUDIT_STAGES`).
     labels : dict, optional
         What a stage's line calls it (default: its name), e.g. ``{"import": "import: 2
         frames × 2 views × 4 seeds"}``.
     source : str
-        An audit's renderer wildcard (``audit/<name>``): jobs on its mitigated copies count
-        as ``mitigations`` (:func:`job_stage`).
+        An audit's renderer wildcard (``audit/<name>``), as the logger plugin gives it. A job
+        counts in its rule's stage whatever its renderer, so that each stage's total is the
+        plan's from the start.
     live : bool
-        Rewrite the open line with counts (a terminal).
+        Rewrite the open line with its status (a terminal).
+    clock : callable
+        The time in seconds, read at each event (default :func:`time.monotonic`).
+    tick : float
+        Seconds from the last line to a status line (:data:`TICK_S`).
     """
 
-    def __init__(self, stages: dict, *, labels=None, source: str = "", live: bool = False):
+    def __init__(
+        self,
+        stages: dict,
+        *,
+        labels=None,
+        source: str = "",
+        live: bool = False,
+        clock=time.monotonic,
+        tick: float = TICK_S,
+    ):
         self.stages = stages
         self.labels = dict(labels or {})
         self.source = source
         self.live = live
+        self.clock = clock
+        self.tick = tick
+        self.pace = Pace()  # when each job started and ended: the time left
         self.planned: dict = {}  # stage: jobs
         self.rules: dict = {}  # stage: Counter of rules, as planned
         self.finished: Counter = Counter()  # stage: jobs
@@ -358,6 +260,7 @@ class Progress:
         self.shown: list = []  # stages whose line is complete
         self.open = None  # the stage whose line is begun, not yet ended
         self._marks = 0  # per-frame marks written in the open (not live) line
+        self._line_at = None  # when the last line ended (or the plan came)
 
     # -- events ---------------------------------------------------------------------------
 
@@ -370,28 +273,23 @@ class Progress:
             if stage is not None:
                 planned[stage] = planned.get(stage, 0) + int(count)
                 rules.setdefault(stage, Counter())[rule] += int(count)
-        # jobs already moved to another stage (mitigated copies) stay moved
-        for jobid, stage in self.job_stages.items():
-            home = rule_stage(self.job_rules.get(jobid), self.stages)
-            if stage != home and home in planned:
-                planned[home] -= 1
-                rules[home][self.job_rules[jobid]] -= 1
-                planned[stage] = planned.get(stage, 0) + 1
-                rules.setdefault(stage, Counter())[self.job_rules[jobid]] += 1
         for stage in set(planned) | set(self.finished):
             planned[stage] = max(planned.get(stage, 0), self.finished[stage])
         first = not self.seen_plan
         self.planned, self.rules, self.seen_plan = planned, rules, True
+        if self._line_at is None:
+            self._line_at = self.clock()
         text = ""
         if first:
             for stage in PLAIN_STAGES[:1]:
-                if stage in self.stages and not self.planned.get(stage) and self._ends(stage):
+                if stage in self.stages and not self.planned.get(stage):
                     text += f"{self.label(stage)} ... up to date\n"
                     self.shown.append(stage)
         return text + self.advance()
 
     def job(self, jobid, rule: str, wildcards=None) -> str:
-        """A job starts (``JOB_INFO``; in a dry run, every planned job).
+        """A job starts (``JOB_INFO``; in a dry run, every planned job); ``wildcards`` (its
+        wildcards, as the plugin passes them) do not change the stage it counts in.
 
         Where it belongs to another stage than the open line's, and no job of that one
         runs (it waits for jobs still to come), the line says what runs: with ``live``, the
@@ -399,20 +297,13 @@ class Progress:
         ``· <stage> started``, once, so that it never stands alone for work that is not
         going on."""
         self.job_rules[jobid] = rule
-        stage = job_stage(rule, wildcards, self.stages, self.source)
+        stage = rule_stage(rule, self.stages)
         if stage is None:
             return ""
         self.job_stages[jobid] = stage
         self.running[stage] += 1
-        home = rule_stage(rule, self.stages)
-        text = ""
-        if stage != home and self.seen_plan:
-            self.planned[home] = max(self.planned.get(home, 1) - 1, self.finished[home])
-            self.rules.get(home, Counter())[rule] -= 1
-            self.planned[stage] = self.planned.get(stage, 0) + 1
-            self.rules.setdefault(stage, Counter())[rule] += 1
-            text = self.advance()
-        return text + self._meanwhile(stage)
+        self.pace.start(jobid, rule, self.clock())
+        return self._meanwhile(stage)
 
     def _meanwhile(self, stage: str) -> str:
         """What the open line says when a job of ``stage`` starts (:meth:`job`)."""
@@ -426,8 +317,9 @@ class Progress:
         self._noted = True
         return f"· {self.label(stage)} started "
 
-    def _stopped(self, jobid) -> str | None:
+    def _stopped(self, jobid, failed: bool = False) -> str | None:
         """The stage of a job that ended (its count of running jobs one less)."""
+        self.pace.end(jobid, self.clock(), failed=failed)
         stage = self.job_stages.get(jobid)
         if stage is None:
             stage = rule_stage(self.job_rules.get(jobid), self.stages)
@@ -436,69 +328,99 @@ class Progress:
         return stage
 
     def done(self, jobid) -> str:
-        """A job finished (``JOB_FINISHED``)."""
+        """A job finished (``JOB_FINISHED``): the lines of the stages now done, or (not
+        ``live``) the open line's status where :data:`TICK_S` have passed since the last
+        line."""
         stage = self._stopped(jobid)
         if stage is None:
             return ""
         self.finished[stage] += 1
         self.planned[stage] = max(self.planned.get(stage, 0), self.finished[stage])
-        return self.advance()
+        text = self.advance()
+        due = self._line_at is not None and self.clock() - self._line_at >= self.tick
+        if not self.live and self.open is not None and "\n" not in text and due:
+            self._line_at = self.clock()
+            text += f"{self.status()}\n{self.label(self.open)} ... "
+        return text
 
     def fail(self, rule: str, jobid=None, logs=()) -> None:
         """A job failed (``JOB_ERROR``), its log files ``logs``."""
-        self._stopped(jobid)
+        self._stopped(jobid, failed=True)
         self.failed.append({"rule": rule, "jobid": jobid, "logs": [str(p) for p in logs]})
 
     def error(self, message: str, exception: str = "") -> None:
         """Snakemake stopped with an exception (``ERROR``)."""
         self.errors.append({"exception": exception or "", "message": str(message or "")})
 
-    # -- lines ----------------------------------------------------------------------------
+    # -- where the run stands -------------------------------------------------------------
 
     def label(self, stage: str) -> str:
+        """What ``stage``'s line calls it."""
         return self.labels.get(stage, stage)
 
     def totals(self) -> tuple:
         """Jobs finished and planned, all stages."""
         return sum(self.finished.values()), sum(self.planned.values())
 
-    def _ends(self, stage: str) -> bool:
-        """Whether ``stage`` gets a line in this map (it is one of its stages)."""
-        return stage in self.stages
+    def time_left(self) -> float | None:
+        """Seconds the run has left now (:meth:`stereovar.eta.Pace.left`); None before a job
+        has finished."""
+        planned = Counter()
+        for rules in self.rules.values():
+            planned.update(rules)
+        return self.pace.left(planned, self.clock())
 
-    def _word(self, stage: str) -> str:
-        n = self.finished[stage]
+    def status(self, stage=None) -> str:
+        """Where the run stands, said in ``stage``'s line (default: the open one): its jobs
+        done of its total, the run's, the time left and the other stages running
+        (:func:`stereovar.eta.status`)."""
+        stage = stage or self.open
+        done, total = self.totals()
+        left = self.time_left() if done < total else None
+        return status(self._count(stage), done, total, left, self._elsewhere())
+
+    def _word(self, stage: str, last: bool) -> str:
+        """How a done stage's line ends; the ``last`` of the stages done at once says where
+        the run stands."""
         if stage in PLAIN_STAGES:
             return "done"
-        done, total = self.totals()
-        return f"done ({_jobs(n)}; {done} of {total} in all)"
+        parts = [_jobs(self.finished[stage])]
+        if last:
+            done, total = self.totals()
+            parts.append(f"{done} of {total} in all")
+            if done < total:
+                parts.append(time_left_text(self.time_left()))
+        return f"done ({'; '.join(part for part in parts if part)})"
 
     def _count(self, stage: str) -> str:
-        """The open line's count, live: ``frame k of n`` for the import, else jobs."""
+        """A stage's count: ``frame k of n`` for the import, else ``k of n jobs``."""
         k, n = self.finished[stage], self.planned.get(stage, 0)
         if stage == "import":
             return f"frame {min(k + 1, n)} of {n}" if k < n else f"{n} of {n} frames"
         return f"{k} of {_jobs(n)}"
 
     def _elsewhere(self) -> str:
-        """The live line's account of the stages other than the open one with jobs running:
-        ``· running: calibration 3 of 8 jobs``."""
+        """The other stages than the open one with jobs running: ``running: calibration 3
+        of 8 jobs``."""
         busy = [s for s in self.stages if s != self.open and self.running[s] > 0]
         if not busy:
             return ""
         counts = ", ".join(f"{s} {self.finished[s]} of {_jobs(self.planned.get(s, 0))}"
                            for s in busy)
-        return f" · running: {counts}"
+        return f"running: {counts}"
+
+    # -- lines ----------------------------------------------------------------------------
 
     def _begin(self, stage: str) -> str:
         self.open, self._marks, self._noted = stage, 0, False
         if self.live:
-            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}{self._elsewhere()}"
+            return f"\r\x1b[K{self.label(stage)} ... {self.status(stage)}"
         return f"{self.label(stage)} ... "
 
     def _end(self, word: str) -> str:
         stage, self.open = self.open, None
         self.shown.append(stage)
+        self._line_at = self.clock()
         if self.live:
             return f"\r\x1b[K{self.label(stage)} ... {word}\n"
         return f"{word}\n"
@@ -506,7 +428,7 @@ class Progress:
     def _step(self, stage: str) -> str:
         """The open line, one more job of it finished and more to come."""
         if self.live:
-            return f"\r\x1b[K{self.label(stage)} ... {self._count(stage)}{self._elsewhere()}"
+            return f"\r\x1b[K{self.label(stage)} ... {self.status(stage)}"
         k, n = self.finished[stage], self.planned.get(stage, 0)
         if stage != "import" or n < 2 or k > n or k * 20 // n <= self._marks:
             return ""
@@ -514,21 +436,25 @@ class Progress:
         return f"{k}/{n} "
 
     def advance(self, final: bool = False) -> str:
-        """Lines for the stages that are now done, and the start of the next."""
-        text = ""
+        """Lines for the stages that are now done, and the start of the next; ``final``:
+        every stage with jobs is done."""
+        closing, next_open = [], None
         for stage in self.stages:
             if stage in self.shown or not self.planned.get(stage):
                 continue
-            was_open = self.open == stage
-            if not was_open:
-                text += self._begin(stage)
             if not final and self.finished[stage] < self.planned[stage]:
-                if was_open:
-                    text += self._step(stage)
-                return text
-            if was_open and not self.live:
+                next_open = stage
+                break
+            closing.append(stage)
+        text = ""
+        for k, stage in enumerate(closing):
+            if self.open != stage:
+                text += self._begin(stage)
+            elif not self.live:
                 text += self._step(stage)  # the last frame's mark
-            text += self._end(self._word(stage))
+            text += self._end(self._word(stage, last=k == len(closing) - 1))
+        if next_open is not None:
+            text += self._step(next_open) if self.open == next_open else self._begin(next_open)
         return text
 
     def finish(self) -> str:
@@ -548,7 +474,7 @@ class Progress:
         if self.nothing or (self.seen_plan and total == 0):
             text = ""
             for stage in PLAIN_STAGES[:1]:
-                if self._ends(stage) and stage not in self.shown:
+                if stage in self.stages and stage not in self.shown:
                     text += f"{self.label(stage)} ... up to date\n"
                     self.shown.append(stage)
             return text + "Nothing to be done: every result is up to date\n"

@@ -10,9 +10,13 @@ Commands are grouped with argparse subparsers, one module per group:
 - :mod:`~stereovar.cli.sample` -- ``sample``: a re-render plan for one render per view;
 - :mod:`~stereovar.cli.completion` -- ``completion``: the shell's tab completion;
 - :mod:`~stereovar.cli.snakemake` -- what they share: the folder they work in, the
-  workflow's folder and config, and running Snakemake;
+  workflow's folder and config, Snakemake's options on a command's line, and running
+  Snakemake;
 - :mod:`~stereovar.cli.monitor` -- how a command follows a Snakemake run (the logger
-  plugin ``stereovar``: one line per stage, the errors of a failed run);
+  plugin ``stereovar``: one line per stage, the errors of a failed run, and while the run is
+  quiet its status again, its estimate counted down);
+- :mod:`~stereovar.cli.console` -- what every command prints through: the program's name
+  and ``say``, which escapes control characters;
 - ``__main__`` -- ``python -m stereovar.cli``.
 
 To add a group (e.g. ``stereovar backend``), write a module with a
@@ -20,6 +24,11 @@ To add a group (e.g. ``stereovar backend``), write a module with a
 on each leaf command, and call it from :func:`build_parser`. Handlers take the parsed
 namespace and return an exit status. Heavy modules (numpy, mitsuba, ...) are imported inside
 the handlers so that ``stereovar --help`` stays fast.
+
+``run`` and ``report`` pass the options they do not take themselves on to Snakemake, as
+they do the words after ``--`` (``stereovar run -n`` is ``stereovar run -- -n``;
+:func:`~stereovar.cli.snakemake.split_snakemake_options`); every other command refuses an
+option it does not know.
 
 Every :class:`~stereovar.errors.StereovarError` is printed as one line,
 ``stereovar: error: <message>``, on stderr and the exit status is 2. A bare ``stereovar``
@@ -45,7 +54,7 @@ from .probe import _register_probe
 from .sample import _register_sample
 from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR
-from .snakemake import PROG, _workflow, check_cores, say
+from .snakemake import PROG, _workflow, check_cores, say, split_snakemake_options
 from .snakemake import _project_root as _project_root
 from .snakemake import _snakemake as _snakemake
 from .snakemake import _workflow_config as _workflow_config
@@ -114,7 +123,7 @@ def main(argv=None) -> int:
         :class:`~stereovar.errors.StereovarError`, 130 when stopped by Ctrl-C; ``audit --fail-on``:
         :data:`~stereovar.cli.audit.FAIL_ON_STATUS` for a verdict at or past the level.
     """
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv = given = list(sys.argv[1:] if argv is None else argv)
     passthrough = []
     if "--" in argv:  # snakemake's own options, for the commands that run it
         cut = argv.index("--")
@@ -124,6 +133,9 @@ def main(argv=None) -> int:
         import argcomplete
 
         argcomplete.autocomplete(parser)  # answers and exits
+    # run and report: the options they do not take are Snakemake's, as after --
+    argv, unknown = split_snakemake_options(parser, argv)
+    passthrough = [*unknown, *passthrough]
     args = parser.parse_args(argv)
     if args.command is None and not passthrough:
         parser.print_help()
@@ -134,7 +146,7 @@ def main(argv=None) -> int:
             + (f", not {args.command}" if args.command else "")
         )
     args.snakemake_args = passthrough
-    args.command_line = shlex.join([PROG, *argv, *(["--", *passthrough] if passthrough else [])])
+    args.command_line = shlex.join([PROG, *given])
     try:
         check_cores(getattr(args, "cores", None))
         return int(args.func(args) or 0)

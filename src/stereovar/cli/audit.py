@@ -9,6 +9,7 @@ import sys
 
 from ..errors import StereovarError
 from ..progress import JOB_LINE
+from ..stages import stage_list
 from .monitor import _Run, log_line
 from .snakemake import (
     _MONITOR,
@@ -241,10 +242,11 @@ def _register_audit(subparsers) -> None:
         description="Import N >= 2 renders per view of stereo frames and their ground truth "
         "(the audit: section of CONFIG), run every statistic, control and the intervention on "
         "them, and print the verdict's summary; the page is results/audit/<name>/verdict.html. "
-        "Prints one line per stage (import, statistics, controls, intervention, mitigations, "
-        "verdict) and the import's warnings; Snakemake's whole output goes to a log file whose "
-        "path is printed (-v shows it live). A failed job: its one-line error, the log's "
-        "path and a non-zero exit status.",
+        f"Prints one line per stage with jobs, in this order: {stage_list('audit')}; inside "
+        "a long stage, its jobs done, the run's and an estimate of the time left; then the "
+        "import's warnings. Snakemake's whole output goes to a log file whose path is printed "
+        "(-v shows it live). A failed job: its one-line error, the log's path and a non-zero "
+        "exit status.",
     )
     audit.add_argument("config", metavar="CONFIG", help="YAML config with an audit: section")
     audit.add_argument("-j", "--cores", type=int, default=2, help="cores (default 2)")

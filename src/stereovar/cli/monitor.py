@@ -3,24 +3,45 @@
 per stage to a pipe the command shows, Snakemake's whole output to the run's log file, and
 at the end what the run did and which jobs failed to a JSON file (:class:`_Run`).
 
+While a run's lines are quiet (a long job, nothing ends), the command says where the run
+stood again, its estimate of the time left counted down (:class:`Heartbeat`): every
+:data:`HEARTBEAT_S` in a log or a pipe, every :data:`LIVE_HEARTBEAT_S` on a terminal, where the
+line is rewritten in place.
+
 After the run, :meth:`_Run.errors` gives one line per error: each failed job's, from its log
-file; else, for a run stopped before its jobs, who holds the lock that stopped it, the
-workflow's own ``stereovar:`` line, Snakemake's error or a full disk, read from the end of
-the run's log; else the exit status.
+file; else, for a run stopped before its jobs, Snakemake's refusal of its options, who holds
+the lock that stopped it, the workflow's own ``stereovar:`` line, Snakemake's error or a full
+disk, read from the end of the run's log; else the exit status.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import sys
 
+from ..eta import (
+    SEPARATOR,
+    format_duration,
+    in_all,
+    stage_count,
+    time_left_in,
+    time_left_text,
+)
 from ..progress import JOB_FAILED, exception_line, is_dry_run, job_error, log_error
-from .snakemake import PROG, say
+from .console import PROG, isatty, say
 
 #: The workflow's own one-line errors (``stereovar.errors.exit_with_one_line``), and the
-#: lines it prints with the same prefix that are not errors.
+#: lines it prints with the same prefix that are not errors (the command's own header among
+#: them: ``stereovar: running ...``).
 _WORKFLOW_LINE = "stereovar: "
-_WORKFLOW_NOTES = ("warning:", "removed the lock")
+_WORKFLOW_NOTES = ("warning:", "removed the lock", "running ")
+#: Seconds of quiet after which a run's status is said again (:class:`Heartbeat`): in a log
+#: or a pipe, where each is a line of its own; on a terminal, where the line is rewritten.
+HEARTBEAT_S = 30.0
+LIVE_HEARTBEAT_S = 5.0
+#: argparse's last line when it refuses a command line: ``<program>: error: <message>``.
+_USAGE_ERROR = re.compile(r"\S+: error: (.+)")
 #: How much of the end of the run's log is read for the errors of a run that stopped early.
 _TAIL_BYTES = 64 * 1024
 #: The exit status of a run stopped by Ctrl-C (SIGINT), as a shell gives it: 128 + 2.
@@ -99,6 +120,39 @@ def workflow_error(lines) -> str | None:
     return None
 
 
+def usage_error(lines) -> str | None:
+    """Snakemake's refusal of its options (argparse's ``usage: ...`` then ``<program>: error:
+    <message>``) as one line that says where the options are listed; None without one.
+
+    Parameters
+    ----------
+    lines : iterable of str
+        Snakemake's output, or its end.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> usage_error(["usage: snakemake [-h] ...", "   [targets ...]",
+    ...              "snakemake: error: unrecognized arguments: --dryrunn"])  # doctest: +ELLIPSIS
+    'snakemake refused its options: unrecognized arguments: --dryrunn (stereovar run and ...)'
+    """
+    lines = [line.rstrip("\n") for line in lines]
+    if not any(line.startswith("usage: ") for line in lines):
+        return None
+    for line in reversed(lines):
+        match = _USAGE_ERROR.fullmatch(line.strip())
+        if match:
+            return (
+                f"snakemake refused its options: {match.group(1)} ({PROG} run and report pass "
+                f"the options they do not take to snakemake; {PROG} run --help and snakemake "
+                "--help list them)"
+            )
+    return None
+
+
 def raised_error(lines, where=".") -> str | None:
     """The last ``SomeError: message`` line of a traceback in ``lines`` (a full disk said
     as such, with the free space of ``where``), else None."""
@@ -121,6 +175,81 @@ def raised_error(lines, where=".") -> str | None:
             f"{kind}: {message}); free space on it, then run the same command again"
         )
     return f"{kind}: {message}"
+
+
+class Heartbeat:
+    """What a command says while a run's lines are quiet: the open stage's line again, with
+    where the run stood (the stage's count, the run's, read from the lines so far), its
+    estimate of the time left counted down, and how long ago the last line came.
+
+    It reads only the text the logger plugin writes, and its times are given, so that what
+    it says follows from the lines and their times alone.
+
+    Parameters
+    ----------
+    live : bool
+        The lines are rewritten in place (a terminal): the heartbeat rewrites the open line
+        too; else it ends the open line with the status and begins it again.
+    every : float, optional
+        Seconds of quiet between two heartbeats (default :data:`LIVE_HEARTBEAT_S` live, else
+        :data:`HEARTBEAT_S`).
+    """
+
+    def __init__(self, live: bool = False, every: float | None = None):
+        self.live = live
+        self.every = every or (LIVE_HEARTBEAT_S if live else HEARTBEAT_S)
+        self.line = ""  # the open line as the plugin wrote it (live: as rewritten last)
+        self.count = ("", "")  # the label of the line that last said its stage's count, and it
+        self.in_all = ""  # the run's count the lines said last
+        self.left = None  # the time left they said last (s), and when
+        self.left_at = 0.0
+        self.last = None  # when the plugin wrote last
+        self.said = None  # when the heartbeat said something last
+
+    def seen(self, text: str, now: float) -> None:
+        """The plugin wrote ``text`` at ``now``."""
+        self.last = now
+        for piece in re.split(r"(\n)", text):
+            if piece == "\n":
+                self._read(self.line, now)
+                self.line = ""
+            elif piece:
+                self.line = (self.line + piece).rsplit("\r\x1b[K", 1)[-1]
+        if self.line:
+            self._read(self.line, now)
+
+    def _read(self, line: str, now: float) -> None:
+        count = in_all(line)
+        if count:
+            self.in_all = count
+            self.left, self.left_at = time_left_in(line), now
+        label, begun, body = line.partition(" ... ")
+        if begun and stage_count(body):
+            self.count = (label, stage_count(body))
+
+    def _since(self, now: float) -> float:
+        """When the plugin or the heartbeat last wrote (``now`` before either did)."""
+        return max((t for t in (self.last, self.said) if t is not None), default=now)
+
+    def wait(self, now: float) -> float:
+        """Seconds until a heartbeat may be due."""
+        return max(self._since(now) + self.every - now, 0.05)
+
+    def due(self, now: float) -> str:
+        """The text to write at ``now``: ``""`` unless :attr:`every` seconds have passed since
+        the plugin or the heartbeat last wrote and a stage's line is open."""
+        label, begun, _ = self.line.partition(" ... ")
+        if not begun or self.last is None or now - self._since(now) < self.every:
+            return ""
+        parts = [self.count[1] if self.count[0] == label else "", self.in_all]
+        if self.left is not None:
+            parts.append(time_left_text(self.left - (now - self.left_at)))
+        parts.append(f"last change {format_duration(now - self.last)} ago")
+        body = SEPARATOR.join(part for part in parts if part)
+        self.said = now
+        if self.live:
+            return f"\r\x1b[K{label} ... {body}"
+        return f"{body}\n{label} ... "
 
 
 def _default_sigint():
@@ -175,6 +304,7 @@ class _Run:
         self.log_error = None  # why the log stopped being written, if it did
         self.interrupted = False  # the user pressed Ctrl-C while the run went on
         self._partial = False  # the lines shown end inside a line (a stage's, begun)
+        self.heartbeat_s = None  # seconds of quiet between heartbeats (None: Heartbeat's)
 
     # -- running ----------------------------------------------------------------------------
 
@@ -194,7 +324,7 @@ class _Run:
             options.append("--logger-stereovar-verbose")
         else:
             options.append(f"--logger-stereovar-log={os.path.abspath(self.log)}")
-        if _isatty(sys.stderr):
+        if isatty(sys.stderr):
             options.append("--logger-stereovar-live")
         return options
 
@@ -244,8 +374,10 @@ class _Run:
                     record = None
                 if self.verbose:
                     self._tee(proc.stdout)
-                else:
-                    self._show(read, shown)
+                else:  # a dry run's plan comes at its end: nothing to say meanwhile
+                    quiet = shown is sys.stderr
+                    beat = Heartbeat(isatty(sys.stderr), self.heartbeat_s) if quiet else None
+                    self._show(read, shown, beat)
             except KeyboardInterrupt:  # Snakemake got it too: let it stop, keep what it says
                 self.interrupted = True
                 if write is not None:  # so that its lines end when Snakemake does
@@ -285,18 +417,35 @@ class _Run:
             except KeyboardInterrupt:
                 self.interrupted = True
 
-    def _show(self, fd: int, stream) -> None:
-        """Copy the plugin's lines from ``fd`` to ``stream`` until the run closes it."""
+    def _show(self, fd: int, stream, heartbeat: Heartbeat | None = None) -> None:
+        """Copy the plugin's lines from ``fd`` to ``stream`` until the run closes it; while
+        they are quiet, what ``heartbeat`` says."""
         import codecs
+        import select
+        import time
 
         decoder = codecs.getincrementaldecoder("utf-8")("replace")
-        while chunk := os.read(fd, 4096):
+        while True:
+            if heartbeat is not None:
+                wait = heartbeat.wait(time.monotonic())
+                if not select.select([fd], [], [], wait)[0]:
+                    self._say(stream, heartbeat.due(time.monotonic()))
+                    continue
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                break
             text = decoder.decode(chunk)
+            self._say(stream, text)
+            if heartbeat is not None:
+                heartbeat.seen(text, time.monotonic())
+        stream.write(decoder.decode(b"", final=True))
+
+    def _say(self, stream, text: str) -> None:
+        """Show ``text``, keeping whether the lines shown end inside a line."""
+        if text:
             stream.write(text)
             stream.flush()
-            if text:
-                self._partial = not text.endswith("\n")
-        stream.write(decoder.decode(b"", final=True))
+            self._partial = not text.endswith("\n")
 
     @staticmethod
     def _drain(fd: int) -> None:
@@ -365,13 +514,19 @@ class _Run:
             reported = self.summary.get("errors", [])
             events = (exception_line(e["message"], e["exception"], ours) for e in reported)
             messages = [
-                self._locked(tail)
+                usage_error(tail)
+                or self._locked(tail)
                 or workflow_error(tail)
                 or next(filter(None, events), None)
                 or raised_error(tail, self.root or ".")
                 or f"snakemake stopped with exit status {rc}"
             ]
         return list(dict.fromkeys(" ".join(m.split()) for m in messages))
+
+    def refusal(self) -> str | None:
+        """Snakemake's refusal of its options (:func:`usage_error`), where it stopped so
+        before the run began; else None."""
+        return None if self.summary else usage_error(self._tail())
 
     def _locked(self, tail) -> str | None:
         """Who holds the lock, when Snakemake stopped because the folder is locked."""
@@ -397,13 +552,6 @@ class _Run:
         if rc != 0:
             for message in self.errors(rc):
                 say(f"{PROG}: error: {message}")
-
-
-def _isatty(stream) -> bool:
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError, OSError):
-        return False
 
 
 def log_line(shown_log: str, jobs=()) -> str:

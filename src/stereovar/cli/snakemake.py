@@ -1,5 +1,5 @@
 """Running the workflow: the folder a command works in, the workflow's folder and config,
-and Snakemake itself.
+Snakemake's own options on a command's line, and Snakemake itself.
 
 Every command runs Snakemake through :func:`_run_snakemake`, which calls
 ``stereovar.cli._snakemake`` as the package holds it at call time: replacing that one name
@@ -13,7 +13,9 @@ import sys
 
 from ..errors import StereovarError
 
-PROG = "stereovar"
+# ``name as name``: what every command prints through, reached here by the command modules.
+from .console import PROG as PROG
+from .console import say as say
 
 
 def check_cores(cores) -> None:
@@ -59,9 +61,7 @@ def _snakemake(args: list, root) -> int:
     :class:`~stereovar.cli.monitor._Run`; else, for a run of jobs (or a dry run), through a
     new one (:func:`_run_with_progress`): one line per stage, Snakemake's whole output in a
     new log file; else (options that run nothing, such as ``--unlock``) with Snakemake's own
-    output on the terminal."""
-    import subprocess
-
+    output on the terminal (:func:`_run_plain`)."""
     from ..progress import reports_progress
 
     snakefile = _workflow() / "Snakefile"
@@ -72,7 +72,42 @@ def _snakemake(args: list, root) -> int:
     if reports_progress(args):
         return _run_with_progress(cmd, root)
     print("stereovar: running " + " ".join(cmd[1:]), file=sys.stderr)
-    return subprocess.run(cmd, cwd=root, check=False).returncode
+    return _run_plain(cmd, root)
+
+
+def _run_plain(cmd: list, root) -> int:
+    """Run ``cmd`` (Snakemake) in ``root`` with its own output, stdout and stderr, on the
+    command's, as it comes; but where Snakemake refuses its options (argparse's ``usage:``
+    and error), one line that says so (:func:`~stereovar.cli.monitor.usage_error`). Returns
+    its exit status."""
+    import subprocess
+
+    from .monitor import usage_error
+
+    held = []  # from a usage line on: a refusal of the options, said once Snakemake stopped
+    with subprocess.Popen(
+        cmd, cwd=root, stderr=subprocess.PIPE, text=True, errors="replace"
+    ) as proc:
+        try:
+            for line in proc.stderr:
+                if held or line.startswith("usage: "):
+                    held.append(line)
+                else:
+                    sys.stderr.write(line)
+                    sys.stderr.flush()
+            rc = proc.wait()
+        except KeyboardInterrupt:  # the terminal's Ctrl-C reached Snakemake too: it stops
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+            raise
+    message = usage_error(held)
+    if message:
+        say(f"{PROG}: error: {message}")
+    else:
+        sys.stderr.writelines(held)
+    return rc
 
 
 #: The :class:`~stereovar.cli.monitor._Run` that :func:`_snakemake` runs Snakemake through,
@@ -107,9 +142,10 @@ def _new_log(folder, stem: str):
 
 def _run_with_progress(cmd: list, root) -> int:
     """Run Snakemake (``cmd``) with one line per stage of the workflow
-    (:data:`stereovar.progress.RUN_STAGES`) and its whole output in a new log file,
+    (:data:`stereovar.stages.RUN_STAGES`) and its whole output in a new log file,
     ``logs/stereovar-run-<time>.log``; after the run, a failed run's errors (one line
-    each) and the log's path."""
+    each) and the log's path; where Snakemake refused its options, only that line (the log,
+    which holds nothing else, is removed)."""
     import os
 
     from .monitor import _Run, log_line
@@ -120,6 +156,9 @@ def _run_with_progress(cmd: list, root) -> int:
     run = _Run(path, stages="run", verbose=_VERBOSE.get(), command=" ".join([PROG, *sys.argv[1:]]))
     rc = run.run(cmd, root)
     run.report(rc)
+    if rc and run.refusal():  # its options refused: the log holds only Snakemake's usage
+        path.unlink(missing_ok=True)
+        return rc
     say(log_line(shown, run.job_logs() if rc else ()))
     return rc
 
@@ -154,15 +193,6 @@ def _hold_results(root, config: dict, command: str, snakemake_args=()):
     return RunLock(root, lock_scope(config), command)
 
 
-def say(text: str, stream=None) -> None:
-    """Print ``text`` (lines) with the terminal's control characters in a user's paths and
-    names escaped (:func:`stereovar.errors.printable`): every command prints what holds a
-    user's text through it. Default stream: stderr."""
-    from ..errors import printable
-
-    print("\n".join(map(printable, str(text).split("\n"))), file=stream or sys.stderr)
-
-
 def _warn_unlocked(lock) -> None:
     """Say when the run goes on without its lock (a file system without locks)."""
     if getattr(lock, "warning", None):
@@ -189,3 +219,64 @@ def _run_snakemake(args: list, root) -> int:
     from .. import cli
 
     return cli._snakemake(args, root)
+
+
+def split_snakemake_options(parser, argv: list) -> tuple:
+    """``argv`` (the words before any ``--``) split into the command's own and Snakemake's,
+    for a command whose parser sets ``passthrough`` (``run``, ``report``).
+
+    An option the command's parser names, in full, is the command's, with its value (``-j
+    4``, ``-j4``, ``--configfile=a.yaml``); every other option is Snakemake's, and so is each
+    word after Snakemake's first option (a value of it, or a target, as Snakemake reads
+    them: ``-R render``); the words before it are the command's (its targets). So ``stereovar
+    run -n mitigations`` is ``stereovar run mitigations -- -n`` and ``stereovar run -R
+    render`` is ``stereovar run -- -R render``. Other commands' words are left whole: their
+    parser refuses what it does not know.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The top-level parser (:func:`stereovar.cli.build_parser`).
+    argv : list of str
+        The words after the program's name, before any ``--``.
+
+    Returns
+    -------
+    tuple of list
+        The command's words (the group name included) and Snakemake's, each in order.
+    """
+    import argparse
+
+    commands = {}
+    for action in parser._actions:  # argparse lists a parser's subcommands nowhere public
+        if isinstance(action, argparse._SubParsersAction):
+            commands.update(action.choices)
+    at = next((k for k, word in enumerate(argv) if not word.startswith("-")), None)
+    command = commands.get(argv[at]) if at is not None else None
+    if command is None or not command.get_default("passthrough"):
+        return list(argv), []
+    # each option of the command: whether it takes a value
+    owned = {name: action.nargs != 0 for action in command._actions
+             for name in action.option_strings}
+    ours, theirs = list(argv[: at + 1]), []
+    words = iter(argv[at + 1 :])
+    for word in words:
+        if not word.startswith("-") or word == "-":
+            (theirs if theirs else ours).append(word)
+            continue
+        name = word.split("=", 1)[0] if word.startswith("--") else word[:2]
+        takes_value = owned.get(name)
+        if takes_value is None:
+            theirs.append(word)
+            continue
+        if not takes_value and word != name:  # -vn: stereovar's -v, Snakemake's -n
+            command.error(
+                f"{word}: {name} is stereovar's option; give it apart from Snakemake's "
+                f"(e.g. {name} -{word[2:]})"
+            )
+        ours.append(word)
+        if takes_value and word == name:
+            value = next(words, None)  # its value, the next word (argparse checks it)
+            if value is not None:
+                ours.append(value)
+    return ours, theirs

@@ -7,6 +7,7 @@ import argparse
 import sys
 
 from ..errors import StereovarError
+from ..stages import stage_list
 from .snakemake import (
     _VERBOSE,
     _hold_results,
@@ -158,13 +159,29 @@ def _configfiles(args) -> list:
     return files
 
 
+def _targets(targets: list, snakemake_args: list) -> list:
+    """The targets ``run`` names to Snakemake: the given ones; else ``all``, unless a word of
+    Snakemake's options is not an option (``-n mitigations``, ``-R render``): Snakemake reads
+    it as a target or as a value, and without a target it runs ``all``, the workflow's
+    default target, as it would have.
+
+    Examples
+    --------
+    >>> _targets([], ["-n"]), _targets([], ["-n", "mitigations"]), _targets(["probe"], [])
+    (['all'], [], ['probe'])
+    """
+    if targets:
+        return list(targets)
+    return [] if any(not arg.startswith("-") for arg in snakemake_args) else ["all"]
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     files = _configfiles(args)
     root = _project_root()
     # the config as the workflow will read it: refused in one line before Snakemake starts,
     # and the results the run may write, which it holds while it goes
     config = _workflow_config(root, [*files, *_passed_configfiles(args.snakemake_args)])
-    options = ["-j", str(args.cores), *(args.targets or ["all"])]
+    options = ["-j", str(args.cores), *_targets(args.targets, args.snakemake_args)]
     if files:
         options += ["--configfile", *files]
     with _hold_results(root, config, args.command_line, args.snakemake_args) as lock:
@@ -219,9 +236,13 @@ def _register_workflow(subparsers) -> None:
         help="run the workflow here (results under ./results)",
         description="Run the stereovar workflow with the current directory as its working "
         "directory: config.yaml here if there is one (else the defaults), then --preset and "
-        "--configfile configs. Options after -- go to snakemake unchanged.",
+        "--configfile configs. Any other option goes to snakemake, as do the words after "
+        "its first one and after -- (stereovar run -n: a dry run, the plan by stage). "
+        f"Prints one line per stage with jobs, in this order: {stage_list('run')}; inside a "
+        "long stage, its jobs done, the run's and an estimate of the time left.",
         epilog=_run_epilog(),
         formatter_class=_ListFormatter,
+        allow_abbrev=False,  # --config is Snakemake's, not short for --configfile
     )
     targets = run.add_argument(
         "targets", nargs="*", metavar="TARGET", help="targets, listed below (default: all)"
@@ -241,7 +262,9 @@ def _register_workflow(subparsers) -> None:
         "report",
         help="write Snakemake's report of the run here",
         description="Write Snakemake's self-contained report of the results here (the "
-        "workflow's captions, figures and tables). Options after -- go to snakemake.",
+        "workflow's captions, figures and tables). Any other option goes to snakemake, as "
+        "do the words after -- .",
+        allow_abbrev=False,
     )
     report.add_argument(
         "-o", "--output", default="results/report.html", help="default results/report.html"
