@@ -318,6 +318,10 @@ def synthetic(tmp_path, monkeypatch):
     return build
 
 
+OWN_SCALE = {c["id"] for c in load_claims().claims if c.get("paper_scale") == "own"}
+"""Claims whose paper value is in the paper's own units: the page gives its sign."""
+
+
 def check_claims(page: Page, claims: list[dict]) -> None:
     """Every claims-table row is on the page: its claim by name, paper value, our value with
     its interval, its control and its verdict."""
@@ -333,7 +337,11 @@ def check_claims(page: Page, claims: list[dict]) -> None:
             shown = numbers(ours)
             assert len(shown) == len(expected), ours
             assert all(close(s, v) for s, v in zip(shown, expected, strict=True)), ours
-        if isinstance(c["paper"], (int, float)) and math.isfinite(c["paper"]):
+        if str(c["id"]) in OWN_SCALE:  # the paper's own units: its sign, the value named
+            sign = "> 0" if c["paper"] > 0 else "< 0"
+            assert paper.startswith(sign) and "own units" in paper, paper
+            assert close(numbers(paper.split("paper's", 1)[1])[0], c["paper"])
+        elif isinstance(c["paper"], (int, float)) and math.isfinite(c["paper"]):
             assert close(numbers(paper)[0], c["paper"])
         if c["control"] and math.isfinite(float(c["control_value"] or math.nan)):
             name, _, value = control.rpartition(":")

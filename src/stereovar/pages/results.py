@@ -529,9 +529,10 @@ def claim_cells(row: dict, *, rho: bool = False, own_scale: bool = False) -> dic
     control_value = interval_text(
         row.get("control_value"), row.get("control_low"), row.get("control_high"), fmt=fmt
     )
+    paper_note = ""
     if math.isfinite(_f(paper)) and own_scale:
-        sign = "positive" if _f(paper) > 0 else "negative" if _f(paper) < 0 else "zero"
-        paper_text = f"{sign} (sign only: {significant(_f(paper))} in the paper's own units)"
+        paper_text = "> 0" if _f(paper) > 0 else "< 0" if _f(paper) < 0 else "0"
+        paper_note = f"sign only: the paper's {significant(_f(paper))} is in its own units"
     elif math.isfinite(_f(paper)):
         paper_text = significant(_f(paper))
     else:
@@ -543,6 +544,7 @@ def claim_cells(row: dict, *, rho: bool = False, own_scale: bool = False) -> dic
         "section": section_name(str(row.get("section", ""))),
         "note": readable(str(row.get("note") or "")),
         "paper": paper_text,
+        "paper_note": paper_note,
         "ours": interval_text(row.get("ours"), row.get("ours_low"), row.get("ours_high"),
                               fmt=fmt),
         "control": control_name(str(row.get("control") or "")) or "none",
