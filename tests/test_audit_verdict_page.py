@@ -194,6 +194,18 @@ def test_captions_describe_the_figures(audited):
     assert "statistics_dots.png" in md and "strongest.png" in md
 
 
+def test_the_markdown_page_reads_as_plain_text(audited):
+    """verdict.md reads in a text editor as it renders: math as characters, code spans in
+    single backticks, no TeX or reStructuredText left; the opening says what to do first."""
+    md = audited["md"].read_text()
+    assert not TEX.search(md.replace("\\]", "")), TEX.search(md)
+    assert "``" not in md and ":math:" not in md
+    assert "σ²" in md and "ρ" in md
+    opening = md.split("## What was imported")[0]
+    assert "**What to do.**" in opening and "### What these numbers mean" in opening
+    assert opening.index("**What to do.**") < opening.index("How sure:")
+
+
 def test_the_rules_are_a_short_list_with_math(audited):
     html = audited["html"].read_text()
     rules = re.search(r'<ul class="rules">(.*?)</ul>', html, re.S).group(1)

@@ -182,7 +182,7 @@ def teaser_figure(sigma_left, sigma_right, warped, omega, *, title: str = "", bi
     panels = (
         (sl, None, r"(a) $\sigma_L^2$"),
         (sr, None, r"(b) $\sigma_R^2$"),
-        (sw, om, r"(c) $\hat\sigma_{R\to L}^2$ (grey: outside $\Omega$)"),
+        (sw, om, r"(c) $\hat\sigma_{R\to L}^2$ (grey: not seen by both views)"),
     )
     image = None
     for ax, (field, mask, name) in zip(axes[:3], panels, strict=True):
@@ -210,7 +210,7 @@ def teaser_figure(sigma_left, sigma_right, warped, omega, *, title: str = "", bi
         ax.text(0.5, 0.5, message, ha="center", va="center", transform=ax.transAxes)
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(f"(d) joint over $\\Omega$ ($n = {n_omega}$)")
+        ax.set_title(f"(d) joint, pixels both views see ($n = {n_omega}$)")
     else:
         lo, hi = _log_limits(np.concatenate([x[pos], y[pos]]))
         edges = _log_edges(lo, hi, bins)
@@ -231,7 +231,7 @@ def teaser_figure(sigma_left, sigma_right, warped, omega, *, title: str = "", bi
         ax.set_aspect("equal")
         ax.legend(loc="upper left", fontsize="small")
         fig.colorbar(mesh, ax=ax, shrink=0.85, label="pixels per bin")
-        ax.set_title(f"(d) joint over $\\Omega$\n$\\rho = {_fmt_rho(rho)}$ ($n = {n_omega}$)")
+        ax.set_title(f"(d) joint, pixels both views see\n$\\rho = {_fmt_rho(rho)}$ ($n = {n_omega}$)")
     if title:
         fig.suptitle(title)
     return fig
