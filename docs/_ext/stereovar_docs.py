@@ -664,6 +664,50 @@ def reuse_numpydoc_template() -> None:
     numpydoc.get_doc_object = get_doc_object
 
 
+def visit_autosummary_table(self, node) -> None:
+    """An API summary table's signatures may wrap before their arguments and between them,
+    never inside a name: autosummary's own visitor joins them with no-break spaces, which
+    pushed a summary table with long result paths past the article at 1280 px."""
+    from docutils import nodes
+
+    for row in node.findall(nodes.row):
+        if not row.children or not row[0].children:
+            continue
+        par = row[0][0]
+        if not isinstance(par, nodes.paragraph):
+            continue
+        for child in list(par.children):
+            if isinstance(child, nodes.Text) and child.astext().startswith("("):
+                par.insert(par.index(child), nodes.raw("", "<wbr>", format="html"))
+
+
+def list_mock_decorated_functions() -> None:
+    """List and summarise a function behind a decorator of a mocked module as a function.
+
+    Where autodoc mocks PyTorch, ``@torch.no_grad()`` turns the function it decorates into a
+    mock holding it. autodoc's own directives unwrap such a mock
+    (:func:`sphinx.ext.autodoc.mock.undecorate`); autosummary's member lists and summary
+    tables did not, so the function was left out of its module's page. Here both see the
+    function itself (Sphinx is pinned in the docs extra, so these two names are known)."""
+    from sphinx.ext import autosummary
+    from sphinx.ext.autodoc.mock import undecorate
+    from sphinx.ext.autosummary import generate
+
+    if getattr(autosummary.get_documenter, "undecorates", False):
+        return
+    documenter, members = autosummary.get_documenter, generate._get_all_members
+
+    def get_documenter(app, obj, parent):
+        return documenter(app, undecorate(obj), parent)
+
+    def get_all_members(doc, app, obj):
+        return {name: undecorate(value) for name, value in members(doc, app, obj).items()}
+
+    get_documenter.undecorates = True
+    autosummary.get_documenter = generate.get_documenter = get_documenter
+    generate._get_all_members = get_all_members
+
+
 def setup(app):
     app.connect("builder-inited", remove_stale_api_pages, priority=100)
     reuse_numpydoc_template()
@@ -672,5 +716,11 @@ def setup(app):
     autosummary.WELL_KNOWN_ABBREVIATIONS = tuple(
         dict.fromkeys((*autosummary.WELL_KNOWN_ABBREVIATIONS, *PAPER_ABBREVIATIONS))
     )
+    list_mock_decorated_functions()
     app.connect("builder-inited", generate)
+    app.add_node(
+        autosummary.autosummary_table,
+        html=(visit_autosummary_table, autosummary.autosummary_noop),
+        override=True,
+    )
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
