@@ -1,11 +1,12 @@
 # stereovar: set up, run the default experiment, test, lint.
-# `make run` and `make test` set up ./.venv first (scripts/setup.sh; fast when up to date).
+# `make run` and `make test` set up ./.venv first (scripts/setup.sh; fast when up to date);
+# `make docs` sets up only what the documentation needs (scripts/setup.sh --docs).
 
 VENV := .venv
 PYTHON := $(VENV)/bin/python
 SNAKEMAKE := $(VENV)/bin/snakemake
 
-.PHONY: setup run test test-other-cpu lint docs docs-figures clean
+.PHONY: setup run test test-other-cpu lint docs-setup docs docs-figures clean
 
 setup:
 	bash scripts/setup.sh
@@ -36,8 +37,13 @@ lint: setup
 	$(PYTHON) -m ruff check .
 	$(SNAKEMAKE) --lint
 
+# The documentation's set-up alone: the docs extra in .venv (scripts/setup.sh --docs: no
+# Blender, no PyTorch, no libLLVM); a .venv that `make setup` made is used as it is.
+docs-setup:
+	bash scripts/setup.sh --docs
+
 # The documentation site, warnings as errors; open docs/_build/html/index.html.
-docs: setup
+docs: docs-setup
 	$(PYTHON) -m sphinx -W --keep-going -b html docs docs/_build/html
 
 # The documentation's figures (docs/figures/*.png), from a tiny run and the example audit.

@@ -57,12 +57,47 @@ autosummary_ignore_module_all = True
 autodoc_member_order = "bysource"
 autodoc_typehints = "none"
 autodoc_default_options = {"show-inheritance": True}
-# Optional extras (the probe's PyTorch, the denoiser, Blender): documented without them.
-autodoc_mock_imports = [
-    name
-    for name in ("torch", "pyoidn", "bpy", "mitsuba", "drjit")
-    if importlib.util.find_spec(name) is None
-]
+
+
+def _missing(name: str) -> bool:
+    """Whether ``name`` cannot be imported here (a finder that refuses it counts)."""
+    try:
+        return importlib.util.find_spec(name) is None
+    except (ImportError, ValueError):
+        return True
+
+
+#: The optional extras' modules (the probe's PyTorch, the denoiser's pyoidn, Blender's bpy).
+#: The build never imports them: autodoc mocks them, and where they are installed (the full
+#: set-up) :class:`_WithoutOptionalExtras` makes any other import of them fail as it would
+#: with the docs extra alone (``make docs``, Read the Docs), so the site is the same from
+#: either, and a page that needs Blender or PyTorch to build fails in both.
+OPTIONAL_EXTRAS = ("torch", "pyoidn", "bpy")
+# Mitsuba and Dr.Jit are core dependencies, mocked only where they are missing.
+autodoc_mock_imports = [*OPTIONAL_EXTRAS, *(n for n in ("mitsuba", "drjit") if _missing(n))]
+
+
+class _WithoutOptionalExtras:
+    """A ``sys.meta_path`` finder that refuses the :data:`OPTIONAL_EXTRAS`. autodoc's mock
+    finder, inserted before it while a documented module is imported, still answers."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname.partition(".")[0] in OPTIONAL_EXTRAS:
+            raise ModuleNotFoundError(
+                f"No module named {fullname!r} (the documentation builds without it)",
+                name=fullname,
+            )
+        return None
+
+
+sys.meta_path.insert(0, _WithoutOptionalExtras())
+
+# SciPy's statistics draw examples when first imported, and ask on the way whether an array
+# is a torch tensor if a module named torch is loaded: imported under autodoc's mock (a
+# documented module's ``from scipy import stats``) they fail on the mock. Imported here
+# first, before any mock, they see no torch.
+import scipy.stats  # noqa: E402, F401
+
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_validation_checks: set[str] = set()
@@ -85,3 +120,4 @@ html_theme_options = {
 html_sidebars = {"**": ["sidebar-nav-bs"], "index": [], "getting-started": [],
                  "configuration": [], "performance": [], "citing": [], "development": []}
 html_show_sourcelink = False
+

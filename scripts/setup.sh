@@ -8,6 +8,11 @@
 # and, where apt-get can install it, Debian's chromium for the results page's browser test.
 # Called by `make setup`, `make run` and `make test`; safe to run again.
 #
+# scripts/setup.sh --docs (called by `make docs`) sets up only what the documentation build
+# needs: Python >= 3.10 and `pip install -e ".[docs]"` in ./.venv (stereovar's own
+# dependencies and Sphinx; no Blender, no PyTorch, no pyoidn, no libLLVM, no chromium). A
+# .venv that the full set-up made is used as it is.
+#
 # Environment:
 #   PYTHON                      interpreter used to create .venv (default: python3)
 #   DRJIT_LIBLLVM_PATH          use this libLLVM instead of searching
@@ -19,15 +24,50 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 PYTHON="${PYTHON:-python3}"
 VENV=.venv
 STAMP="$VENV/.stereovar-setup"
+DOCS_STAMP="$VENV/.stereovar-setup-docs"
 
 say() { echo "stereovar setup: $*"; }
 die() { echo "stereovar setup: error: $*" >&2; exit 1; }
+
+MODE=full
+case "${1-}" in
+    "") ;;
+    --docs) MODE=docs ;;
+    *) die "unknown option '$1'; use scripts/setup.sh (everything) or scripts/setup.sh --docs (the documentation build only)" ;;
+esac
+
+make_venv() {  # creates $VENV unless a working one is there; sets want (the stamps' content)
+    if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c '' 2>/dev/null; then
+        "$PYTHON" -c 'import venv, ensurepip' 2>/dev/null \
+            || die "'$PYTHON' lacks the venv module (with ensurepip); install it with: sudo apt-get install python3-venv"
+        say "creating $VENV with $("$PYTHON" -c 'import sys; print(sys.executable)')"
+        "$PYTHON" -m venv --clear "$VENV" || die "'$PYTHON -m venv $VENV' failed; on Debian/Ubuntu: sudo apt-get install python3-venv"
+    fi
+    want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("pyproject.toml", "rb").read()).hexdigest(), os.getcwd())')"
+}
 
 # --- Python ------------------------------------------------------------------
 command -v "$PYTHON" >/dev/null 2>&1 \
     || die "'$PYTHON' not found; install Python >= 3.10 (Debian/Ubuntu: sudo apt-get install python3 python3-venv) or set PYTHON=/path/to/python3"
 "$PYTHON" -c 'import sys; sys.exit(sys.version_info < (3, 10))' \
     || die "Python >= 3.10 is needed, '$PYTHON' is $("$PYTHON" -c 'import platform; print(platform.python_version())'); install a newer one or set PYTHON=/path/to/python3.10+"
+
+# --- the documentation build's set-up alone (--docs) -------------------------
+if [ "$MODE" = docs ]; then
+    make_venv
+    if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
+        say "dependencies up to date (the full set-up, the docs extra included)"
+    elif [ -f "$DOCS_STAMP" ] && [ "$(cat "$DOCS_STAMP")" = "$want" ]; then
+        say "the documentation's dependencies up to date (pyproject.toml unchanged)"
+    else
+        say "installing stereovar and the docs extra into $VENV (pip install -e \".[docs]\": no Blender, no PyTorch)"
+        "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e ".[docs]" \
+            || die "pip install -e \".[docs]\" failed (see the pip output above)"
+        echo "$want" >"$DOCS_STAMP"
+    fi
+    say "ready to build the documentation"
+    exit 0
+fi
 
 # --- libLLVM for Dr.Jit's LLVM backend ---------------------------------------
 # Reuses stereovar.renderers.mitsuba.backend (importable without any dependency installed).
@@ -122,14 +162,7 @@ fi
 [ -z "$LLVM_PATH" ] || say "libLLVM: $LLVM_PATH"
 
 # --- virtual environment -----------------------------------------------------
-if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c '' 2>/dev/null; then
-    "$PYTHON" -c 'import venv, ensurepip' 2>/dev/null \
-        || die "'$PYTHON' lacks the venv module (with ensurepip); install it with: sudo apt-get install python3-venv"
-    say "creating $VENV with $("$PYTHON" -c 'import sys; print(sys.executable)')"
-    "$PYTHON" -m venv --clear "$VENV" || die "'$PYTHON -m venv $VENV' failed; on Debian/Ubuntu: sudo apt-get install python3-venv"
-fi
-
-want="$("$VENV/bin/python" -c 'import hashlib, os; print(hashlib.sha256(open("pyproject.toml", "rb").read()).hexdigest(), os.getcwd())')"
+make_venv
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ]; then
     say "dependencies up to date (pyproject.toml unchanged)"
 else

@@ -1,11 +1,17 @@
 """The documentation site builds warnings-as-errors, its generated pages cover the schema and
-the code, and README.md stays short with working links."""
+the code, the addresses the package's messages give exist on it, ``make docs`` needs only
+the docs extra (no Blender, no PyTorch), and README.md stays short with working links."""
 
 from __future__ import annotations
 
 import ast
 import html
+import json
+import os
 import re
+import shutil
+import subprocess
+import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -229,6 +235,175 @@ def test_command_options_are_documented(site):
     for name in commands:
         assert f"stereovar {name} --help" in text, f"stereovar {name} has no help on the page"
         assert f"usage: stereovar {name}" in text
+
+
+def docs_page_calls() -> list[tuple[str, int, str, str | None]]:
+    """Every ``docs_page(page[, anchor])`` call of the package with literal arguments: its
+    file, line, page and anchor, read from the source."""
+    calls = []
+    for path in sorted(SRC.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            name = getattr(node, "func", None)
+            name = getattr(name, "id", None) or getattr(name, "attr", None)
+            if not (isinstance(node, ast.Call) and name == "docs_page"):
+                continue
+            args = [a.value if isinstance(a, ast.Constant) else None for a in node.args]
+            if args and all(isinstance(a, str) for a in args):
+                where = str(path.relative_to(SRC.parent))
+                calls.append((where, node.lineno, args[0], args[1] if len(args) > 1 else None))
+    return calls
+
+
+def test_every_documentation_address_the_package_gives_is_a_page_of_the_site(site):
+    """Messages, starter configs and pages link the site (stereovar.links.docs_page), never a
+    path of the repository: each page and anchor they name is in the built site, and the
+    single-render refusal names its page's address."""
+    from stereovar.estimators.single import refusal
+    from stereovar.links import docs_base
+
+    calls = docs_page_calls()
+    assert len(calls) >= 5, calls
+    for where, line, name, anchor in calls:
+        built = site / (f"{name}.html" if name else "index.html")
+        assert built.is_file(), f"{where}:{line} links page {name!r}, which the site lacks"
+        if anchor:
+            text = built.read_text(encoding="utf-8")
+            assert f'id="{anchor}"' in text, f"{where}:{line}: {name}.html has no #{anchor}"
+    line = refusal()
+    cited = re.findall(re.escape(docs_base()) + r"([\w-]+)\.html", line)
+    assert cited == ["single_render"], line
+    assert (site / "single_render.html").is_file()
+    assert "docs/" not in line.replace(docs_base(), ""), line
+
+
+# --- make docs: the docs extra alone --------------------------------------------------------
+
+
+def test_make_docs_sets_up_the_docs_extra_alone_then_builds():
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    plan = subprocess.run(["make", "-n", "docs"], cwd=REPO, capture_output=True, text=True,
+                          check=True).stdout.splitlines()  # fmt: skip
+    assert plan[0] == "bash scripts/setup.sh --docs", plan
+    assert not [c for c in plan if "setup.sh" in c and "--docs" not in c], plan
+    assert any(" -m sphinx -W --keep-going -b html docs " in c for c in plan), plan
+    assert not [c for c in plan if "pip install" in c or "snakemake" in c], plan
+
+
+FAKE_PYTHON = """#!/bin/sh
+# Runs Python as {python}, except `-m pip ...`, which it records in {log} and does not run.
+if [ "$1" = -m ] && [ "$2" = pip ]; then
+    shift 2
+    echo "$*" >> "{log}"
+    exit 0
+fi
+exec "{python}" "$@"
+"""
+
+
+def test_the_docs_set_up_installs_the_docs_extra_alone_and_once(tmp_path):
+    """scripts/setup.sh --docs in a copy of the checkout whose .venv's Python records the pip
+    commands it is given instead of running them: one ``pip install -e .[docs]``, no libLLVM,
+    no chromium, nothing again while pyproject.toml is unchanged, nothing over the full
+    set-up's .venv, and an unknown option refused."""
+    (tmp_path / "scripts").mkdir()
+    shutil.copy(REPO / "scripts" / "setup.sh", tmp_path / "scripts" / "setup.sh")
+    shutil.copy(REPO / "pyproject.toml", tmp_path / "pyproject.toml")
+    log = tmp_path / "pip.log"
+    python = tmp_path / ".venv" / "bin" / "python"
+    python.parent.mkdir(parents=True)
+    python.write_text(FAKE_PYTHON.format(python=sys.executable, log=log))
+    python.chmod(0o755)
+    env = {**os.environ, "PYTHON": sys.executable, "PATH": os.environ.get("PATH", "")}
+
+    def setup(*args):
+        return subprocess.run(["bash", "scripts/setup.sh", *args], cwd=tmp_path, env=env,
+                              capture_output=True, text=True)  # fmt: skip
+
+    first = setup("--docs")
+    assert first.returncode == 0, first.stderr
+    assert log.read_text().splitlines() == [
+        "install --quiet --disable-pip-version-check -e .[docs]"
+    ]
+    said = first.stdout + first.stderr
+    assert "no Blender, no PyTorch" in said and "ready to build the documentation" in said
+    assert "libLLVM" not in said and "chromium" not in said
+    assert (tmp_path / ".venv" / ".stereovar-setup-docs").is_file()
+
+    again = setup("--docs")
+    assert again.returncode == 0 and "up to date" in again.stdout
+    assert len(log.read_text().splitlines()) == 1, "pip ran again with pyproject.toml unchanged"
+
+    stamp = (tmp_path / ".venv" / ".stereovar-setup-docs").read_text()
+    (tmp_path / ".venv" / ".stereovar-setup-docs").unlink()
+    (tmp_path / ".venv" / ".stereovar-setup").write_text(stamp)  # the full set-up's .venv
+    full = setup("--docs")
+    assert full.returncode == 0 and "the full set-up" in full.stdout
+    assert len(log.read_text().splitlines()) == 1
+
+    wrong = setup("--doc")
+    assert wrong.returncode == 1 and "unknown option '--doc'" in wrong.stderr
+
+
+#: Run in a new Python: the optional extras made unimportable, as where only the docs extra
+#: is installed; then the Sphinx configuration, and every public module imported under
+#: autodoc's mocks as the build imports it, the extras' mocks already loaded. Prints what it
+#: found as JSON.
+WITHOUT_EXTRAS = r"""
+import importlib, json, runpy, sys
+EXTRAS = ("torch", "bpy", "pyoidn")
+
+class Absent:
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname.partition(".")[0] in EXTRAS:
+            raise ModuleNotFoundError(f"No module named {fullname!r}", name=fullname)
+
+sys.meta_path.insert(0, Absent())
+sys.argv = ["sphinx"]
+conf = runpy.run_path(CONF)
+from sphinx.ext.autodoc.mock import mock
+
+failed = {}
+for name in MODULES:
+    with mock(conf["autodoc_mock_imports"]):
+        try:
+            for extra in EXTRAS:  # loaded by a module documented before, as in a build
+                importlib.import_module(extra)
+            importlib.import_module(name)
+        except Exception as err:
+            failed[name] = f"{type(err).__name__}: {err}"
+real = sorted(n for n in EXTRAS if n in sys.modules)
+print(json.dumps({"mocked": conf["autodoc_mock_imports"], "failed": failed, "real": real}))
+"""
+
+
+def test_the_sphinx_configuration_and_every_module_load_without_blender_or_pytorch():
+    modules = public_modules()
+    code = WITHOUT_EXTRAS.replace("CONF", repr(str(DOCS / "conf.py"))).replace(
+        "MODULES", repr(modules)
+    )
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    found = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert {"torch", "bpy", "pyoidn"} <= set(found["mocked"]), found["mocked"]
+    assert not found["failed"], found["failed"]
+    assert found["real"] == [], f"imported for real: {found['real']}"
+    assert len(modules) > 100
+
+
+def test_with_the_full_set_up_the_build_still_imports_no_optional_extra():
+    """Where torch is installed, the configuration refuses it outside autodoc's mock, so the
+    build behaves as with the docs extra alone."""
+    pytest.importorskip("torch", reason="checks the full set-up, where torch is installed")
+    code = (
+        "import runpy, sys; sys.argv = ['sphinx']; runpy.run_path(CONF)\n"
+        "try:\n    import torch\nexcept ModuleNotFoundError as err:\n    print('refused', err)\n"
+    ).replace("CONF", repr(str(DOCS / "conf.py")))
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                          text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("refused"), proc.stdout
 
 
 # --- README.md -------------------------------------------------------------------------------

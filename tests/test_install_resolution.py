@@ -19,6 +19,10 @@ pip's configuration. The CPU index also serves other projects (numpy, jinja2, ..
 them CPU-only; the substitute holds torch alone, since which torch build pip picks is the
 question. The test skips where PyPI cannot be reached, or where neither the CPU index nor a
 copy of its wheel is at hand.
+
+``make docs`` installs the ``docs`` extra alone (``scripts/setup.sh --docs``); resolved the
+same way, it brings Sphinx at its pins and stereovar's own dependencies, and no Blender, no
+PyTorch, no pyoidn and no CUDA package.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ import json
 import os
 import re
 import shlex
+import shutil
 import socket
 import subprocess
 import sys
@@ -148,21 +153,35 @@ def resolve(args: list[str], cwd: Path) -> list[dict]:
 
 
 @pytest.fixture(scope="module")
-def resolution(tmp_path_factory) -> tuple[list[str], list[dict]]:
-    """The README's line as run (the CPU index substituted where unreachable) and what it
-    would install."""
+def checkout_wheel(tmp_path_factory) -> Path:
+    """This checkout built as a wheel, once for the module."""
     if not reachable("pypi.org"):
         pytest.skip("PyPI cannot be reached from here")
-    line = readme_install_line(README.read_text(encoding="utf-8"))
-    assert line[:2] == ["pip", "install"], line
-    work = tmp_path_factory.mktemp("resolve")
-    (target,) = [a for a in line if a.startswith("dist/")]
-    dist = work / "dist"
+    dist = tmp_path_factory.mktemp("dist")
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
          "-w", dist, REPO], check=True, capture_output=True,
     )  # fmt: skip
-    built = [p.name for p in dist.glob("stereovar-*.whl")]
+    (wheel,) = dist.glob("stereovar-*.whl")
+    return wheel
+
+
+def in_work_folder(wheel: Path, work: Path) -> Path:
+    """``work/dist/<wheel>``, the wheel as the README's line names it."""
+    (work / "dist").mkdir()
+    return Path(shutil.copy(wheel, work / "dist" / wheel.name))
+
+
+@pytest.fixture(scope="module")
+def resolution(checkout_wheel, tmp_path_factory) -> tuple[list[str], list[dict]]:
+    """The README's line as run (the CPU index substituted where unreachable) and what it
+    would install."""
+    line = readme_install_line(README.read_text(encoding="utf-8"))
+    assert line[:2] == ["pip", "install"], line
+    work = tmp_path_factory.mktemp("resolve")
+    (target,) = [a for a in line if a.startswith("dist/")]
+    in_work_folder(checkout_wheel, work)
+    built = [p.name for p in (work / "dist").glob("stereovar-*.whl")]
     assert built == [Path(target.split("[")[0]).name], f"README names {target}, built {built}"
     args = list(line)
     for i, arg in enumerate(args):
@@ -192,3 +211,44 @@ def test_readme_install_line_pulls_no_cuda_package(resolution):
         f"{shlex.join(args)} would install torch {torch} with {len(cuda)} CUDA packages: "
         f"{', '.join(cuda)}"
     )
+
+
+# --- make docs: the docs extra alone --------------------------------------------------------
+
+#: What the docs extra must not bring: Blender, PyTorch (with CUDA's packages), OIDN.
+NOT_FOR_DOCS = re.compile(r"^(bpy|torch|pyoidn|nvidia-.*|cuda-.*|triton)$")
+
+
+def docs_extra() -> dict[str, str]:
+    """The ``docs`` extra of pyproject.toml: each package's exact pin, by name."""
+    tomllib = pytest.importorskip("tomllib", reason="reading pyproject.toml needs Python 3.11")
+    with open(REPO / "pyproject.toml", "rb") as f:
+        extra = tomllib.load(f)["project"]["optional-dependencies"]["docs"]
+    pins = {}
+    for requirement in extra:
+        name, _, version = requirement.partition("==")
+        assert version, f"{requirement}: the docs extra pins each package exactly"
+        pins[name.strip().lower()] = version.strip()
+    return pins
+
+
+@pytest.fixture(scope="module")
+def docs_resolution(checkout_wheel, tmp_path_factory) -> list[dict]:
+    """What ``pip install <wheel>[docs]`` would install into an empty environment."""
+    work = tmp_path_factory.mktemp("resolve-docs")
+    wheel = in_work_folder(checkout_wheel, work)
+    return resolve(["pip", "install", f"dist/{wheel.name}[docs]"], work)
+
+
+def test_the_docs_extra_brings_sphinx_and_no_blender_pytorch_or_cuda(docs_resolution):
+    names = {
+        item["metadata"]["name"].lower().replace("_", "-"): item["metadata"]["version"]
+        for item in docs_resolution
+    }
+    pins = docs_extra()
+    assert "sphinx" in pins and len(pins) >= 4, pins
+    for name, version in pins.items():
+        assert names.get(name) == version, f"{name}: {names.get(name)}, the extra pins {version}"
+    assert "mitsuba" in names and "snakemake" in names, "stereovar's own dependencies"
+    unwanted = sorted(n for n in names if NOT_FOR_DOCS.match(n))
+    assert not unwanted, f"the docs extra would install {', '.join(unwanted)}"
