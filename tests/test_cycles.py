@@ -50,7 +50,7 @@ def test_missing_bpy_is_one_line_naming_the_extra(monkeypatch):
     with pytest.raises(BackendError) as err:
         load_bpy()
     message = str(err.value)
-    assert "\n" not in message and ".[cycles]" in message and "render.renderer" in message
+    assert "\n" not in message and "stereovar[cycles]" in message and "render.renderer" in message
 
 
 @pytest.mark.parametrize(

@@ -599,7 +599,8 @@ def test_audit_statistics_dots_show_only_the_regions_with_data(tmp_path, saved):
     assert [ax.get_title() for ax in fig.axes] == ["all pixels"]
     assert "no data" not in _panel_texts(fig)
     title = fig.get_suptitle()
-    assert "SPP" not in title and "1 scene " in title.replace("\n", " ") + " "
+    assert "SPP" not in title and "1 frame " in title.replace("\n", " ") + " "
+    assert "audit " in title and "renderer" not in title  # the audit by name, not a renderer
     assert layout_problems(fig) == []
 
 

@@ -231,7 +231,9 @@ def teaser_figure(sigma_left, sigma_right, warped, omega, *, title: str = "", bi
         ax.set_aspect("equal")
         ax.legend(loc="upper left", fontsize="small")
         fig.colorbar(mesh, ax=ax, shrink=0.85, label="pixels per bin")
-        ax.set_title(f"(d) joint, pixels both views see\n$\\rho = {_fmt_rho(rho)}$ ($n = {n_omega}$)")
+        ax.set_title(
+            f"(d) joint, pixels both views see\n$\\rho = {_fmt_rho(rho)}$ ($n = {n_omega}$)"
+        )
     if title:
         fig.suptitle(title)
     return fig

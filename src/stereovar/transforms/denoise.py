@@ -26,7 +26,7 @@ def _pyoidn():
     except ImportError as err:  # pragma: no cover - the extra is installed by make setup
         raise ImportError(
             "the denoise transform needs pyoidn; install the mitigations extra: "
-            "pip install -e '.[mitigations]' (make setup does)"
+            "pip install 'stereovar[mitigations]' (in a checkout, make setup does)"
         ) from err
     return pyoidn
 

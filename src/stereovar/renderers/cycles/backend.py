@@ -11,8 +11,9 @@ import sys
 from ...errors import BackendError
 
 EXTRA_HINT = (
-    "install Blender's Python module with pip install -e '.[cycles]' (bpy 5.0 wheels exist "
-    "for CPython 3.11 only), or set render.renderer: mitsuba"
+    "install Blender's Python module with pip install 'stereovar[cycles]' (in a checkout, "
+    "make setup does; bpy 5.0 wheels exist for CPython 3.11 only), or set render.renderer: "
+    "mitsuba"
 )
 
 
