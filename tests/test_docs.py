@@ -282,7 +282,8 @@ def test_every_documentation_address_the_package_gives_is_a_page_of_the_site(sit
 def test_make_docs_sets_up_the_docs_extra_alone_then_builds():
     if shutil.which("make") is None:
         pytest.skip("make is not installed")
-    plan = subprocess.run(["make", "-n", "docs"], cwd=REPO, capture_output=True, text=True,
+    plan = subprocess.run(["make", "--no-print-directory", "-n", "docs"], cwd=REPO,
+                          capture_output=True, text=True,
                           check=True).stdout.splitlines()  # fmt: skip
     assert plan[0] == "bash scripts/setup.sh --docs", plan
     assert not [c for c in plan if "setup.sh" in c and "--docs" not in c], plan
