@@ -93,9 +93,10 @@ def default_configfile(basedir) -> str:
 
 
 def presets(root: Path | None = None) -> list[str]:
-    """Names of the workflow's presets (``workflow/presets/<name>.yaml``)."""
+    """Names of the workflow's presets (``workflow/presets/<name>.yaml``, subfolders included:
+    ``generators/kubric``)."""
     folder = Path(root or workflow_root()) / "workflow" / "presets"
-    return sorted(p.stem for p in folder.glob("*.yaml"))
+    return sorted(p.relative_to(folder).with_suffix("").as_posix() for p in folder.rglob("*.yaml"))
 
 
 def preset_path(name: str, root: Path | None = None) -> Path:

@@ -213,8 +213,9 @@ def _add_configs(parser) -> None:
         action="append",
         metavar="NAME",
         help="a preset shipped with the workflow: paper, paper-moments or probe (the "
-        "paper's scale, with the moments estimator, the probe's frames), merged before "
-        "--configfile",
+        "paper's scale, with the moments estimator, the probe's frames), or "
+        "generators/kubric, generators/blenderproc, generators/infinigen (a generator's own "
+        "Cycles settings), merged before --configfile",
     )
 
 
