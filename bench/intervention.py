@@ -3,7 +3,7 @@
 Run with ``python bench/intervention.py``. A synthetic scene at 1280x720 with N = 30 seeds is
 generated seed by seed (a smooth clean image plus noise; the right view is the left shifted
 by a known disparity field), so the renders are never all in memory, exactly as the workflow
-reads its stores. It times :func:`stereovar.intervention.intervention_metrics` (streamed
+reads its stores. It times :func:`stereovar.intervention.metrics.intervention_metrics` (streamed
 scans, 2 threads) and, as the named baseline in the same run, the full-volume reference for
 one seed: the dense ``sad_cost_volume`` + ``gt_margin`` + ``wta_accuracy`` of C_ε
 (``tests/reference/costvolume.py``), which the streamed path replaces. Peak

@@ -13,7 +13,7 @@ per view, repeated over the N renders to get its spread), on the default experim
 2. **The matched control**: each partial rho minus the same statistic on camera-law noise
    drawn on the seed mean (one frame per view, the renders' channel correlation) and
    processed by the same estimator, with
-   :func:`stereovar.calibration.summary.difference_interval` (the misaligned null's spread as
+   :func:`stereovar.calibration.nulls.difference_interval` (the misaligned null's spread as
    chance).
 3. **Calibration** with N = 1 per view: the false-positive rate on the matched nulls
    (``camera``, ``misaligned``) and the smallest planted strength detected with 80% power
@@ -52,17 +52,11 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "src"))
 
-from stereovar.calibration.replicates import (  # noqa: E402
-    SceneFrames,
-    camera_residual_variance,
-    render_strength,
-)
-from stereovar.calibration.summary import (  # noqa: E402
-    calibration_table,
-    detectable,
-    difference_interval,
-    rate,
-)
+from stereovar.calibration.law import camera_residual_variance, render_strength  # noqa: E402
+from stereovar.calibration.nulls import difference_interval  # noqa: E402
+from stereovar.calibration.rates import detectable, rate  # noqa: E402
+from stereovar.calibration.scene_frames import SceneFrames  # noqa: E402
+from stereovar.calibration.summary import calibration_table  # noqa: E402
 from stereovar.calibration.synthesis import (  # noqa: E402
     camera_law,
     draw_frames,

@@ -11,8 +11,8 @@ import numpy as np
 
 from stereovar.audit.synthetic import synthetic_frame
 from stereovar.estimators.seeds import variance_field
-from stereovar.io.images import write_field, write_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field, write_image
 from stereovar.rig import VIEWS
 from stereovar.statistics.correlation import pearson_over_mask
 from stereovar.statistics.warp import warp_right_to_left

@@ -192,7 +192,7 @@ def test_c_claims_random_effects_interval_of_a_mean_rho_stays_below_one():
 def test_c_claims_difference_of_two_rho_keeps_the_normal_interval():
     """A difference of two correlations lies in [-2, 2]: its interval stays the Student-t
     interval of the per-scene differences."""
-    from stereovar.statistics.claims import STATISTICS, ClaimInputs
+    from stereovar.statistics.claim_statistics import STATISTICS, ClaimInputs
 
     glass, non_glass = [0.9, 0.8, 0.95, 0.7], [0.1, 0.3, -0.2, 0.25]
     rows = [
@@ -227,7 +227,8 @@ def test_corrected_interval_is_cut_to_minus_one_one():
 
 
 def test_audit_summaries_of_correlations_stay_inside_minus_one_one():
-    from stereovar.audit.verdict import correlation_summary, seeding_summary
+    from stereovar.audit.seeding import seeding_summary
+    from stereovar.audit.verdict import correlation_summary
 
     rhos, lows = [0.95, 0.98], [0.85, 0.90]
     rows = [
@@ -265,7 +266,7 @@ def test_audit_summaries_of_correlations_stay_inside_minus_one_one():
 
 
 def test_calibration_combined_rows_bound_rho_and_keep_differences_normal():
-    from stereovar.calibration.summary import combined_rows
+    from stereovar.calibration.nulls import combined_rows
 
     base = {"replicate": 0, "kind": "camera", "strength_factor": 1.0, "transform": "none",
             "region": "all", "method": "partial"}  # fmt: skip

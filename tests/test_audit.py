@@ -19,8 +19,9 @@ from stereovar.audit.sign import sign_check
 from stereovar.audit.synthetic import shift_rows, synthetic_frame, write_synthetic_audit
 from stereovar.audit.verdict import verdict, verdict_rows
 from stereovar.errors import AuditError, ImageError
-from stereovar.io.images import read_image, write_field, write_image
+from stereovar.io.images import read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field, write_image
 
 SMALL = {"width": 64, "height": 40, "n_seeds": 4}
 

@@ -32,7 +32,7 @@ from stereovar.audit import run as audit_run
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import validate_config
 from stereovar.errors import AuditError, ConfigError, ImageError
-from stereovar.io.renders import RERUN_ARGS_ENV, rebuild_command
+from stereovar.io.store import RERUN_ARGS_ENV, rebuild_command
 from stereovar.preflight import RUN_MARKER, RUNS_DIR, clear_stale_lock, stale_lock
 from stereovar.transforms import TRANSFORMS
 

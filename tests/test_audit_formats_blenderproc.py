@@ -21,7 +21,9 @@ import pytest
 from stereovar.audit.importer import import_audit, import_record
 from stereovar.errors import AuditError, ImageError
 from stereovar.io import hdf5
-from stereovar.io.images import image_size, read_field, read_image, read_labels, srgb_to_linear
+from stereovar.io.headers import image_size
+from stereovar.io.images import read_field, read_image, read_labels
+from stereovar.io.transfer import srgb_to_linear
 from stereovar.rig import VIEWS
 
 from .audit_formats import (

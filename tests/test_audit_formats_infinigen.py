@@ -23,7 +23,7 @@ import pytest
 from stereovar.audit.generators import downsample_2x
 from stereovar.audit.importer import import_audit
 from stereovar.errors import AuditError, ImageError
-from stereovar.io.images import write_image
+from stereovar.io.writers import write_image
 from stereovar.rig import VIEWS
 
 from .audit_formats import (

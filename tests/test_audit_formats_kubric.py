@@ -24,7 +24,8 @@ from PIL import Image
 from stereovar.audit.generators import kubric_planar_depth, read_camera, read_depth
 from stereovar.audit.importer import import_audit
 from stereovar.errors import AuditError, ImageError
-from stereovar.io.images import linear_to_srgb, read_image, read_labels, srgb_to_linear
+from stereovar.io.images import read_image, read_labels
+from stereovar.io.transfer import linear_to_srgb, srgb_to_linear
 from stereovar.rig import VIEWS
 
 from .audit_formats import FOCAL_PX, assert_same_import, frame, stores, write_exr_reference

@@ -26,8 +26,9 @@ from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.run import discover_audit
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.errors import AuditError, ImageError
-from stereovar.io.images import read_field, read_image, write_field, write_image
+from stereovar.io.images import read_field, read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field, write_image
 from stereovar.jobs.audit import verdict_job
 
 SMALL = {"width": 64, "height": 40, "n_seeds": 4}
@@ -294,7 +295,7 @@ def test_float32_renders_whose_values_are_all_half_floats_are_not_taken_for_half
 
 
 def test_the_header_says_whether_a_render_is_stored_as_half(tmp_path):
-    from stereovar.io.images import stored_as_half
+    from stereovar.io.headers import stored_as_half
 
     pixels = {np.float16: np.full((4, 6), 0.5, np.float16),
               np.float32: np.full((4, 6), 0.5, np.float32)}
@@ -555,7 +556,7 @@ def numpydoc_sections(func) -> dict:
     [
         "stereovar.io.channels.named_as",
         "stereovar.io.images.read_labels",
-        "stereovar.io.images.stored_as_half",
+        "stereovar.io.headers.stored_as_half",
         "stereovar.audit.page.markdown_text",
         "stereovar.audit.page.markdown_line",
         "stereovar.controls.sensor.normal_counts",

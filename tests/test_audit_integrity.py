@@ -22,8 +22,9 @@ from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import load_config
 from stereovar.errors import AuditError, ConfigError
-from stereovar.io.images import read_field, read_image, write_field, write_image
+from stereovar.io.images import read_field, read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field, write_image
 
 REPO = Path(__file__).resolve().parents[1]
 SCHEMA = REPO / "workflow/schemas/config.schema.yaml"

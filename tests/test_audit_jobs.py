@@ -17,8 +17,9 @@ import yaml
 
 from stereovar.audit.importer import import_record, sha256
 from stereovar.audit.synthetic import write_synthetic_audit
-from stereovar.io.images import read_image, write_image
+from stereovar.io.images import read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_image
 
 from .test_workflow import TINY, copy_workflow
 

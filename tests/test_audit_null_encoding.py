@@ -21,13 +21,17 @@ from stereovar.audit.importer import import_audit, import_record
 from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.audit.verdict import HALF_FLOAT_NULL, null_encoding
 from stereovar.calibration.pipelines import dn_law, exposure_for, integer_roundtrip
-from stereovar.calibration.replicates import SceneFrames, scene_calibration, statistic_rows
+from stereovar.calibration.replicates import scene_calibration
+from stereovar.calibration.scene_frames import SceneFrames
 from stereovar.calibration.synthesis import draw_frames
+from stereovar.calibration.view_statistics import statistic_rows
 from stereovar.errors import AuditError
 from stereovar.estimators.seeds import variance_field
-from stereovar.io.images import linear_to_srgb, read_image, write_image
+from stereovar.io.images import read_image
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import write_tables
+from stereovar.io.transfer import linear_to_srgb
+from stereovar.io.writers import write_image
 from stereovar.jobs.calibration import scene_frames
 from stereovar.jobs.variance import variance_job
 from stereovar.rig import VIEWS

@@ -4,7 +4,8 @@ nothing is called Monte Carlo-specific."""
 
 import pytest
 
-from stereovar.audit.verdict import SPECIFIC, decision, summary_lines, verdict, verdict_rows
+from stereovar.audit.decision import decision
+from stereovar.audit.verdict import SPECIFIC, summary_lines, verdict, verdict_rows
 
 
 def corr_row(scene, method, rho, low, high):

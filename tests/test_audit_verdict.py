@@ -9,21 +9,18 @@ import cv2
 import numpy as np
 import pytest
 
+from stereovar.audit.decision import decision
+from stereovar.audit.flags import EDGE, NULL_OFF, control_flags
 from stereovar.audit.importer import CLIPPED_WARNING, import_audit, import_record
 from stereovar.audit.page import import_flags, page_sections, to_html_page, to_markdown_page
+from stereovar.audit.seeding import seeding_finding
 from stereovar.audit.synthetic import write_synthetic_audit
-from stereovar.audit.verdict import (
-    EDGE,
-    NULL_OFF,
-    SHARED_STREAMS,
-    control_flags,
-    decision,
-    seeding_finding,
-)
 from stereovar.errors import AuditError
-from stereovar.io.images import read_image, write_field, write_image
+from stereovar.io.images import read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field, write_image
 from stereovar.jobs.audit import seeding_job
+from stereovar.statistics.residuals import SHARED_STREAMS
 
 SMALL = {"width": 64, "height": 40, "n_seeds": 6}
 LEFT = "results/audit/synthetic/renders/{frame}/left/spp0/seeds0-5.zarr"

@@ -11,9 +11,9 @@ import yaml
 
 from stereovar import layout
 from stereovar.audit.synthetic import write_synthetic_audit
-from stereovar.io.images import write_field
 from stereovar.io.store import open_dataset
 from stereovar.io.tables import read_rows
+from stereovar.io.writers import write_field
 from stereovar.probe.training import load_matcher
 
 from .test_workflow import SCENES, TINY, copy_workflow, snakemake

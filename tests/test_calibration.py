@@ -9,20 +9,13 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
-from stereovar.calibration.replicates import (
-    SceneFrames,
-    scene_calibration,
-    shipped_stack,
-    statistic_rows,
-    transform_stack,
-)
-from stereovar.calibration.summary import (
-    calibration_table,
-    detectable,
-    difference_interval,
-    headline,
-    rate,
-)
+from stereovar.calibration.nulls import difference_interval
+from stereovar.calibration.rates import detectable, rate
+from stereovar.calibration.replicates import scene_calibration
+from stereovar.calibration.scene_frames import SceneFrames
+from stereovar.calibration.sentences import headline
+from stereovar.calibration.stacks import shipped_stack, transform_stack
+from stereovar.calibration.summary import calibration_table
 from stereovar.calibration.synthesis import (
     camera_law,
     draw_frames,
@@ -30,8 +23,10 @@ from stereovar.calibration.synthesis import (
     planted_pattern,
     variance_fields,
 )
+from stereovar.calibration.view_statistics import statistic_rows
 from stereovar.statistics.fields import AnalysisSettings
-from stereovar.statistics.mitigations import matched_difference, mc_cue_state
+from stereovar.statistics.matched_null import matched_difference
+from stereovar.statistics.mitigations import mc_cue_state
 from stereovar.statistics.warp import WarpPlan
 
 H, W, D = 64, 96, 3.0
@@ -359,7 +354,8 @@ def test_the_claims_level_rule_is_calibrated_on_the_designs():
     baseline far below hold; the table rows count them per design and over the cue-free
     designs together."""
     from stereovar.calibration.claims import calibrated_claims, claim_checks
-    from stereovar.statistics.claims import EXPLAINED, HOLDS, load_claims
+    from stereovar.statistics.claim_rules import EXPLAINED, HOLDS
+    from stereovar.statistics.claims import load_claims
 
     ids = [c["id"] for c in calibrated_claims(load_claims())]
     assert ids == ["rho_all"]
@@ -395,7 +391,8 @@ def test_every_page_quotes_the_margin_the_verdict_uses(replicates, scope):
     few) the scenes' pooled power curve sets the margin, with enough the combined one: the
     matched nulls the verdicts read, the compact table's margin column and the strength the
     margin certifies all come from that one curve."""
-    from stereovar.calibration.summary import compact_table, margin_scope
+    from stereovar.calibration.compact import compact_table
+    from stereovar.calibration.summary import margin_scope
 
     rng = np.random.default_rng(3)
     rows = []

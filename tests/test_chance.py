@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
-from stereovar.calibration.replicates import SceneFrames, scene_calibration
-from stereovar.calibration.summary import Z, calibration_table, matched_nulls, with_differences
+from stereovar.calibration.nulls import matched_nulls, with_differences
+from stereovar.calibration.rates import Z
+from stereovar.calibration.replicates import scene_calibration
+from stereovar.calibration.scene_frames import SceneFrames
+from stereovar.calibration.summary import calibration_table
 from stereovar.calibration.synthesis import smooth_field
 from stereovar.statistics.chance import chance_se
 from stereovar.statistics.fields import AnalysisSettings

@@ -15,15 +15,14 @@ import pytest
 from scipy import stats
 
 from stereovar.statistics.across import combined_interval
-from stereovar.statistics.claims import (
+from stereovar.statistics.claim_rules import (
     EXPLAINED,
     FAILS,
     HOLDS,
     UNTESTABLE,
-    claims_table,
-    load_claims,
     verdict,
 )
+from stereovar.statistics.claims import claims_table, load_claims
 
 Z = stats.norm.ppf(0.975)
 

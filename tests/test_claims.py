@@ -14,18 +14,16 @@ from scipy import stats
 
 from stereovar.errors import ClaimsError
 from stereovar.io.tables import read_rows, write_tables
-from stereovar.statistics.claims import (
-    CLAIMS_PATH,
+from stereovar.statistics.claim_rules import (
     EXPLAINED,
     FAILS,
     HOLDS,
-    STATISTICS,
     UNTESTABLE,
-    claims_table,
-    geometric_t_interval,
-    load_claims,
     verdict,
 )
+from stereovar.statistics.claim_statistics import STATISTICS
+from stereovar.statistics.claims import CLAIMS_PATH, claims_table, load_claims
+from stereovar.statistics.t_intervals import geometric_t_interval
 
 S = 4
 """Scenes of the synthetic runs."""

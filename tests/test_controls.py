@@ -9,22 +9,23 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from stereovar.controls.intensity import intensity_residuals, partial_pair, relative_variance
+from stereovar.controls.intensity import intensity_residuals, relative_variance
 from stereovar.controls.null_warps import flipped_warp, shifted_warp
+from stereovar.controls.partial import partial_pair
 from stereovar.controls.sensor import (
     SensorFrames,
     SensorModel,
     sensor_variance,
     simulated_sensor_variance,
 )
-from stereovar.statistics.claims import (
+from stereovar.statistics.claim_rules import (
     EXPLAINED,
     FAILS,
     HOLDS,
     UNTESTABLE,
-    claims_table,
     verdict,
 )
+from stereovar.statistics.claims import claims_table
 from stereovar.statistics.fields import AnalysisSettings
 from stereovar.statistics.rows import SceneInputs, correlation_rows
 from stereovar.statistics.warp import align_variance

@@ -320,10 +320,11 @@ def test_renders_blender_wrote_audit_to_the_native_verdict(tmp_path):
 
     from stereovar import layout
     from stereovar.audit.verdict import verdict, verdict_rows
-    from stereovar.io.images import read_image, write_field
+    from stereovar.io.images import read_image
     from stereovar.io.renders import LazyRenders
     from stereovar.io.store import open_dataset
     from stereovar.io.tables import read_rows
+    from stereovar.io.writers import write_field
     from stereovar.jobs.common import prepare_scene
     from stereovar.renderers.cycles.settings import cycles_seed
     from stereovar.renderers.quiet import silenced

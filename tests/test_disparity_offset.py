@@ -24,7 +24,7 @@ from stereovar.audit.synthetic import (
     synthetic_frame,
     write_synthetic_audit,
 )
-from stereovar.io.images import write_field
+from stereovar.io.writers import write_field
 from stereovar.jobs.audit import verdict_job
 
 SIGN = -1

@@ -24,7 +24,7 @@ KEY_EXAMPLES = [
     "stereovar.statistics.bootstrap.percentile_interval",  # the block bootstrap's interval
     "stereovar.statistics.bootstrap.tile_sums",
     "stereovar.statistics.bootstrap.bootstrap_replicates",
-    "stereovar.controls.intensity.partial_pair",  # the partial (intensity-controlled) rho
+    "stereovar.controls.partial.partial_pair",  # the partial (intensity-controlled) rho
     "stereovar.controls.intensity.intensity_residuals",
     "stereovar.audit.run.discover_audit",  # what `stereovar audit` calls first
 ]

@@ -11,7 +11,7 @@ import pytest
 from scipy.ndimage import gaussian_filter, shift
 
 from stereovar.calibration.dose_response import dose_rows
-from stereovar.calibration.replicates import SceneFrames
+from stereovar.calibration.scene_frames import SceneFrames
 from stereovar.errors import ConfigError
 from stereovar.statistics.dose_response import dose_findings, dose_table, removal_budgets
 from stereovar.statistics.fields import AnalysisSettings

@@ -1,13 +1,13 @@
 """Coverage of the Monte Carlo-specific difference interval through ``equalise``, by simulation.
 
 The calibration holds the 95% interval of ``partial`` minus its matched null
-(:func:`stereovar.calibration.summary.difference_interval`) to a coverage of 95 +/- 2% of
+(:func:`stereovar.calibration.nulls.difference_interval`) to a coverage of 95 +/- 2% of
 replicates, the estimand being the mean over the same scene's other replicates
 (:func:`stereovar.calibration.summary.calibration_table`). Here a small coloured scene with
 dark pixels is drawn as the calibration draws it (a planted cue of strength 1, about what the
 renders show, and the ``camera`` null; :mod:`stereovar.calibration.synthesis`), passed
 through the transform as the transform job applies it
-(:func:`stereovar.calibration.replicates.transform_stack`) and measured by the same
+(:func:`stereovar.calibration.stacks.transform_stack`) and measured by the same
 statistic rows; the coverage is read from the calibration table.
 
 ``none`` is the check that the simulation itself is sound: the same scene, draws and
@@ -27,9 +27,12 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
-from stereovar.calibration.replicates import SceneFrames, statistic_rows, transform_stack
-from stereovar.calibration.summary import COVERAGE_TARGET, calibration_table
+from stereovar.calibration.rates import COVERAGE_TARGET
+from stereovar.calibration.scene_frames import SceneFrames
+from stereovar.calibration.stacks import transform_stack
+from stereovar.calibration.summary import calibration_table
 from stereovar.calibration.synthesis import draw_frames, planted_pattern, variance_fields
+from stereovar.calibration.view_statistics import statistic_rows
 from stereovar.statistics.bootstrap import BootstrapSettings
 from stereovar.statistics.fields import AnalysisSettings
 

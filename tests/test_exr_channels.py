@@ -23,8 +23,10 @@ from stereovar.audit.synthetic import write_synthetic_audit
 from stereovar.config import load_config
 from stereovar.errors import AuditError, ConfigError, ImageError
 from stereovar.io.channels import field_channel, meaning, render_channels
-from stereovar.io.images import image_size, read_field, read_image, write_field
+from stereovar.io.headers import image_size
+from stereovar.io.images import read_field, read_image
 from stereovar.io.store import open_dataset
+from stereovar.io.writers import write_field
 
 REPO = Path(__file__).resolve().parents[1]
 SCHEMA = REPO / "workflow/schemas/config.schema.yaml"

@@ -354,14 +354,14 @@ def _render(size):
 
 
 def _teaser(size):
-    from stereovar.figures.paper import teaser_figure
+    from stereovar.figures.teaser import teaser_figure
 
     left, right, warped, omega, _ = _fields(size)
     return teaser_figure(left, right, warped, omega, title=AUDIT_TITLE, bins=20)
 
 
 def _rho_vs_spp(size):
-    from stereovar.figures.paper import rho_vs_spp_figure
+    from stereovar.figures.rho_vs_spp import rho_vs_spp_figure
 
     title = "scene_000: rho against SPP (renderer mitsuba, estimator seeds)"
     rows = [r for r in _correlation_rows("small", spps=[32] if size == "small" else
@@ -370,7 +370,7 @@ def _rho_vs_spp(size):
 
 
 def _material_scatter(size):
-    from stereovar.figures.paper import material_scatter_figure
+    from stereovar.figures.material_scatter import material_scatter_figure
 
     left, _, warped, omega, glass = _fields(size)
     title = "scene_000, SPP 32 (renderer mitsuba, estimator seeds)"
@@ -380,7 +380,7 @@ def _material_scatter(size):
 
 
 def _margins(size):
-    from stereovar.figures.paper import margin_distribution_figure
+    from stereovar.figures.margins import margin_distribution_figure
 
     title = "GT margins, normal vs decorrelated (4 scenes, sampled pixels)"
     title += "\nrenderer mitsuba, estimator seeds"

@@ -13,15 +13,14 @@ from matplotlib.collections import PathCollection, QuadMesh
 from matplotlib.colors import LogNorm, to_rgba
 from matplotlib.legend import Legend
 
-from stereovar.figures.paper import (
+from stereovar.figures.material_scatter import (
     GLASS_COLOUR,
     NON_GLASS_COLOUR,
-    REGION_LABELS,
-    REGIONS,
     material_scatter_figure,
-    rho_vs_spp_figure,
-    teaser_figure,
 )
+from stereovar.figures.plotting import REGION_LABELS, REGIONS
+from stereovar.figures.rho_vs_spp import rho_vs_spp_figure
+from stereovar.figures.teaser import teaser_figure
 
 RHO = re.compile(r"\\rho = (-?[0-9.]+)")
 
@@ -509,7 +508,7 @@ def _margin_rows(rng):
 
 
 def test_margin_figure_legends_give_median_and_share_won_by_the_ground_truth():
-    from stereovar.figures.paper import margin_distribution_figure
+    from stereovar.figures.margins import margin_distribution_figure
 
     rows = _margin_rows(np.random.default_rng(0))
     fig = margin_distribution_figure(rows, title="t")
@@ -546,14 +545,14 @@ def test_margin_figure_legends_give_median_and_share_won_by_the_ground_truth():
 
 
 def test_margin_figure_rejects_bad_bins():
-    from stereovar.figures.paper import margin_distribution_figure
+    from stereovar.figures.margins import margin_distribution_figure
 
     with pytest.raises(ValueError, match="bins"):
         margin_distribution_figure([], bins=0)
 
 
 def test_margin_figure_draws_a_single_repeated_value():
-    from stereovar.figures.paper import margin_distribution_figure
+    from stereovar.figures.margins import margin_distribution_figure
 
     rows = [
         {"cost": "variance_cost", "region": "glass", "condition": c, "margin": 2.0}

@@ -11,14 +11,11 @@ from scipy.ndimage import gaussian_filter, shift
 
 pytest.importorskip("bpy")
 
-from stereovar.calibration.replicates import (  # noqa: E402
-    QUANTISED_SHARE,
-    SceneFrames,
-    renders_output_rows,
-    transform_stack,
-)
+from stereovar.calibration.renders import QUANTISED_SHARE, renders_output_rows  # noqa: E402
+from stereovar.calibration.scene_frames import SceneFrames  # noqa: E402
+from stereovar.calibration.stacks import transform_stack  # noqa: E402
 from stereovar.calibration.synthesis import draw_frames  # noqa: E402
-from stereovar.io.images import linear_to_srgb, srgb_to_linear  # noqa: E402
+from stereovar.io.transfer import linear_to_srgb, srgb_to_linear  # noqa: E402
 from stereovar.statistics.fields import AnalysisSettings  # noqa: E402
 from stereovar.transforms import TransformInputs, get_transform, transform_chain  # noqa: E402
 from stereovar.transforms.output import view_png_codes  # noqa: E402

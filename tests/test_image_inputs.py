@@ -18,7 +18,9 @@ from stereovar.audit.sign import CLEARLY_BETTER, MIN_PIXELS, SAME, sign_check
 from stereovar.audit.synthetic import synthetic_frame, write_synthetic_audit
 from stereovar.errors import AuditError, ImageError
 from stereovar.io import images
-from stereovar.io.images import image_size, read_field, read_image, write_image
+from stereovar.io.headers import image_size
+from stereovar.io.images import read_field, read_image
+from stereovar.io.writers import write_image
 from stereovar.renderers.quiet import silenced
 
 SMALL = {"width": 64, "height": 40, "n_seeds": 4}

@@ -5,17 +5,11 @@ import OpenEXR
 import pytest
 
 from stereovar.errors import ImageError
-from stereovar.io.images import (
-    image_size,
-    linear_to_srgb,
-    read_field,
-    read_image,
-    read_pfm,
-    srgb_to_linear,
-    write_field,
-    write_image,
-    write_pfm,
-)
+from stereovar.io.headers import image_size
+from stereovar.io.images import read_field, read_image
+from stereovar.io.pfm import read_pfm, write_pfm
+from stereovar.io.transfer import linear_to_srgb, srgb_to_linear
+from stereovar.io.writers import write_field, write_image
 
 RNG = np.random.default_rng(3)
 IMAGE = (RNG.random((7, 9, 3)) * 3).astype(np.float32)

@@ -20,7 +20,8 @@ from scipy import ndimage, special
 from scipy.interpolate import BSpline
 
 from stereovar.controls import intensity
-from stereovar.controls.intensity import fit_intensity, intensity_residuals, partial_pair
+from stereovar.controls.intensity import fit_intensity, intensity_residuals
+from stereovar.controls.partial import partial_pair
 from stereovar.estimators.seeds import variance_field
 from stereovar.transforms.base import TransformInputs
 from stereovar.transforms.sensor import apply_equalise, camera_coefficients

@@ -109,11 +109,9 @@ def test_a_stub_transform_reaches_eq1_eq3_and_the_mitigation_table(
     tmp_path,
 ):
     from stereovar.jobs.correlation import correlation_job, warp_job
-    from stereovar.jobs.mitigations import (
-        mitigation_scene_job,
-        mitigations_table_job,
-        transform_job,
-    )
+    from stereovar.jobs.mitigation_scene import mitigation_scene_job
+    from stereovar.jobs.mitigations import mitigations_table_job
+    from stereovar.jobs.transform import transform_job
     from stereovar.jobs.variance import variance_job
 
     gt, stores = plane_run
@@ -187,7 +185,7 @@ def test_a_stub_transform_reaches_eq1_eq3_and_the_mitigation_table(
 
 
 def test_missing_reads_are_refused_in_one_line(plane_run, tmp_path):  # noqa: F811
-    from stereovar.jobs.mitigations import transform_job
+    from stereovar.jobs.transform import transform_job
 
     TRANSFORMS.register(
         "stub_needs_albedo",
@@ -254,8 +252,8 @@ def test_shared_seed_couples_the_views_at_zero_disparity(tmp_path, policy, coupl
 
 
 def test_the_table_summarises_its_inputs_exactly():
-    from stereovar.statistics.claims import t_interval
     from stereovar.statistics.mitigations import mitigation_table
+    from stereovar.statistics.t_intervals import t_interval
 
     from .test_across import on_fisher_z
 

@@ -14,9 +14,12 @@ from stereovar.calibration.pipelines import (
     integer_roundtrip,
     shading_gain,
 )
-from stereovar.calibration.replicates import SceneFrames, scene_calibration, statistic_rows
-from stereovar.calibration.summary import MIN_EFFECT, calibration_table
+from stereovar.calibration.replicates import scene_calibration
+from stereovar.calibration.rules import MIN_EFFECT
+from stereovar.calibration.scene_frames import SceneFrames
+from stereovar.calibration.summary import calibration_table
 from stereovar.calibration.synthesis import camera_law, draw_frames
+from stereovar.calibration.view_statistics import statistic_rows
 from stereovar.estimators.seeds import variance_field
 from stereovar.intervention.lift import LIFT_METHOD
 from stereovar.statistics.fields import AnalysisSettings
@@ -84,7 +87,7 @@ def test_the_control_on_brightness_alone_would_call_them_a_cue(coloured_scene, p
     """What the control's colour and position terms are for: on lens shading and white
     balance the intensity-controlled rho with brightness alone is well above the smallest
     cue called; with them it is not."""
-    from stereovar.controls import intensity
+    from stereovar.controls import partial as intensity_control
 
     rng = np.random.default_rng(5)
     frames = draw_pipeline(pipeline, coloured_scene.mean, (0.02, 1e-4), 8, rng)
@@ -95,12 +98,12 @@ def test_the_control_on_brightness_alone_would_call_them_a_cue(coloured_scene, p
         return rows[0]["rho"]
 
     full = partial()
-    original = intensity.partial_pair
+    original = intensity_control.partial_pair
 
     def brightness_only(*args, covariates=None, **kwargs):
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(intensity, "partial_pair", brightness_only)
+    monkeypatch.setattr(intensity_control, "partial_pair", brightness_only)
     alone = partial()
     assert alone > MIN_EFFECT
     assert full < alone / 3
@@ -115,7 +118,7 @@ def test_shading_gain_is_four_at_the_corners_and_one_at_the_centre():
 def test_integer_roundtrip_is_the_imports_decoding():
     """8-bit sRGB: a code value c decodes to sRGB^-1(c / 255) times the full scale, and every
     value encodes to the nearest code."""
-    from stereovar.io.images import srgb_to_linear
+    from stereovar.io.transfer import srgb_to_linear
 
     codes = np.arange(256)
     linear = srgb_to_linear(codes / 255.0) * 2.0
@@ -151,7 +154,7 @@ def test_the_shared_streams_check_fires_on_shared_noise_only(coloured_scene):
     """The calibration's shared-streams check is the audit's: frames whose right view repeats
     the left view's noise (one sampler seed for both) read far above the threshold, frames
     drawn independently about 0."""
-    from stereovar.calibration.replicates import _shared_streams_row
+    from stereovar.calibration.view_statistics import _shared_streams_row
     from stereovar.statistics.residuals import SHARED_STREAMS
 
     rng = np.random.default_rng(8)

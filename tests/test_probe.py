@@ -21,7 +21,7 @@ import torch  # the probe extra, which the set-up installs
 from scipy.ndimage import gaussian_filter
 from torch.nn import functional as F
 
-from stereovar.io.images import linear_to_srgb
+from stereovar.io.transfer import linear_to_srgb
 
 # imported as a module: pytest would collect test_scene and TestSettings by their names
 from stereovar.probe import experiment

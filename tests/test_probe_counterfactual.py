@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from stereovar.io.images import linear_to_srgb
+from stereovar.io.transfer import linear_to_srgb
 from stereovar.probe.inputs import (
     TEST_INPUTS,
     camera_residual,

@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from stereovar.pages.results import conclusion, matched_headline
+from stereovar.pages.conclusion import conclusion
+from stereovar.pages.headline import matched_headline
 from stereovar.statistics.across import combined_interval
-from stereovar.statistics.mitigations import matched_difference
+from stereovar.statistics.matched_null import matched_difference
 
 
 def scenes(rng, n: int):

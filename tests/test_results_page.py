@@ -16,8 +16,9 @@ import pytest
 from stereovar import layout
 from stereovar.io.tables import read_rows, write_tables
 from stereovar.jobs.claims import results_page_job
+from stereovar.pages.controls import CONTROL_GROUPS, INTERVAL_NOTE, REGIONS
+from stereovar.pages.headline import interval_keys
 from stereovar.pages.names import claim_name
-from stereovar.pages.results import CONTROL_GROUPS, INTERVAL_NOTE, REGIONS, interval_keys
 from stereovar.statistics.claims import CLAIMS_COLUMNS, load_claims
 
 from .test_page_captions import REPOSITORY_PATHS
@@ -352,7 +353,7 @@ def check_claims(page: Page, claims: list[dict]) -> None:
 def expected_matched(corr: list[dict], nulls: list[dict]) -> tuple[float, float, float, float]:
     """The Monte Carlo-specific rho over all pixels as the mitigation table computes it
     (scene by scene, then combined): (null, difference, low, high)."""
-    from stereovar.statistics.mitigations import matched_difference
+    from stereovar.statistics.matched_null import matched_difference
 
     return matched_difference(corr, nulls, transform="none", region="all")
 
@@ -667,7 +668,7 @@ def band_share(screenshot: bytes, rect, *, min_height: int = 120) -> float:
 
     from PIL import Image
 
-    from stereovar.pages.results import CLAIMS_BAND
+    from stereovar.pages.claims_table import CLAIMS_BAND
 
     image = np.asarray(Image.open(io.BytesIO(screenshot)).convert("RGB")).astype(int)
     height, width = image.shape[:2]

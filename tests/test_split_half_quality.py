@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter
 
-from stereovar.jobs.mitigations import seed_moments
+from stereovar.jobs.transform import seed_moments
 from stereovar.rig import VIEWS
 from stereovar.statistics.utility import image_quality, split_half_quality
 from stereovar.transforms.sensor import camera_coefficients, camera_noise, equalise_residual
@@ -122,7 +122,8 @@ def test_the_scene_job_grades_sensor_only_by_split_half(plane_run, tmp_path):  #
     sigma^2 / N + a mu + b (one estimate's Monte Carlo sd is 1.5% of it, over 40 simulated
     datasets); the mean of the other seeds as the reference read 2 sigma^2 / N (57% of the
     truth) low. The rows hold every quantity of SCENE_QUANTITIES."""
-    from stereovar.jobs.mitigations import SCENE_QUANTITIES, mitigation_scene_job, transform_job
+    from stereovar.jobs.mitigation_scene import SCENE_QUANTITIES, mitigation_scene_job
+    from stereovar.jobs.transform import transform_job
 
     from .test_architecture import RIG, PlaneRenderer, amplitude
 

@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from stereovar.figures.paper import REGION_LABELS, REGIONS
+from stereovar.figures.plotting import REGION_LABELS, REGIONS
 from stereovar.figures.uncertainty import (
     ASYMPTOTE_LABEL,
     CONTROLS,

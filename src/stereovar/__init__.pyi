@@ -12,10 +12,10 @@ from .estimators.seeds import StreamingVariance as StreamingVariance
 from .estimators.seeds import variance_dataset as variance_dataset
 from .estimators.seeds import variance_field as variance_field
 from .estimators.seeds import variance_from_stores as variance_from_stores
-from .figures.paper import margin_distribution_figure as margin_distribution_figure
-from .figures.paper import material_scatter_figure as material_scatter_figure
-from .figures.paper import rho_vs_spp_figure as rho_vs_spp_figure
-from .figures.paper import teaser_figure as teaser_figure
+from .figures.margins import margin_distribution_figure as margin_distribution_figure
+from .figures.material_scatter import material_scatter_figure as material_scatter_figure
+from .figures.rho_vs_spp import rho_vs_spp_figure as rho_vs_spp_figure
+from .figures.teaser import teaser_figure as teaser_figure
 from .ground_truth import MATERIAL_CLASSES as MATERIAL_CLASSES
 from .ground_truth import compute_ground_truth as compute_ground_truth
 from .ground_truth import summarize_ground_truth as summarize_ground_truth

@@ -21,7 +21,7 @@ from stereovar.preflight import (
     mark_run,
     stored_backends,
 )
-from stereovar.io.renders import set_rerun_arguments
+from stereovar.io.store import set_rerun_arguments
 from stereovar.scenes.references import xml_references
 from stereovar.estimators import ESTIMATORS
 from stereovar.audit.run import (

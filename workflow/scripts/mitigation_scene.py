@@ -1,7 +1,7 @@
 """Snakemake adapter: one scene's residual correlations and image quality."""
 
 from stereovar.jobs.common import run_job
-from stereovar.jobs.mitigations import mitigation_scene_job
+from stereovar.jobs.mitigation_scene import mitigation_scene_job
 
 
 def stores(paths) -> list:

@@ -1,7 +1,7 @@
 """Snakemake adapter: one view's auxiliary passes (albedo, normal) for the denoiser."""
 
 from stereovar.jobs.common import run_job
-from stereovar.jobs.mitigations import aux_job
+from stereovar.jobs.transform import aux_job
 
 run_job(
     snakemake.log[0],

@@ -1,7 +1,7 @@
 """Snakemake adapter: a store transform on one batch of one view's renders."""
 
 from stereovar.jobs.common import run_job
-from stereovar.jobs.mitigations import transform_job
+from stereovar.jobs.transform import transform_job
 
 run_job(
     snakemake.log[0],

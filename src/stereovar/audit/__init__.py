@@ -7,9 +7,11 @@ what changed), from its parts: ``settings`` checks and digests the ``audit:`` se
 ``decoding`` decodes a frame's renders and ground truth, and ``records`` holds what an
 import finds and records; ``ground_truth`` builds the imported ground truth; ``sign``
 settles the disparity convention photometrically and ``offset`` finds a disparity off by a
-pixel or more; ``verdict`` decides whether the data carry the cue, ``strongest`` finds the
-frames and tiles where it is strongest, ``page`` lays the verdict out as one page (with
-``plain`` saying what its numbers mean in plain words) and
+pixel or more; ``verdict`` decides whether the data carry the cue, ``seeding`` whether the
+two views share their random streams, ``flags`` flags the verdict's own numbers and
+``decision`` words the page's opening (a traffic light, how sure, what to do); ``strongest``
+finds the frames and tiles where the cue is strongest, ``page`` lays the verdict out as one
+page (with ``plain`` saying what its numbers mean in plain words) and
 ``summary_schema`` checks its ``summary.json`` against the shipped schema; ``run`` makes an
 audit a workflow run (its discovery, config and targets, which ``stereovar audit`` drives);
 ``export`` writes this project's renders, variance fields and disparity in the same file

@@ -20,14 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import AuditError
-from ..io.images import (
-    image_format,
-    image_size,
-    read_field,
-    read_image,
-    read_labels,
-    stored_as_half,
-)
+from ..io.formats import image_format
+from ..io.headers import image_size, stored_as_half
+from ..io.images import read_field, read_image, read_labels
 from ..rig import VIEWS
 from .generators import (
     FOCAL_AGREEMENT,
@@ -374,7 +369,7 @@ def clipped_fraction(stack: np.ndarray, valid: np.ndarray, scale: float) -> floa
 
 def half_renders(stored: list, stack: np.ndarray) -> bool:
     """Whether a view's renders hold half-float (16-bit) values: as their files' headers
-    say (``stored``: :func:`~stereovar.io.images.stored_as_half` of each file, an EXR
+    say (``stored``: :func:`~stereovar.io.headers.stored_as_half` of each file, an EXR
     channel's pixel type or an NPY's dtype), so float32 renders whose values all happen to
     be half floats are not taken for half; only where no header says (PFM, None) by their
     values (:func:`_half_precision`)."""
@@ -424,7 +419,7 @@ def floored_fraction(stack: np.ndarray, valid: np.ndarray) -> float:
 
 def _render(path, *, channel=None, **options) -> tuple:
     """A render (:func:`~stereovar.io.images.read_image`) and whether its file stores it as
-    half floats (:func:`~stereovar.io.images.stored_as_half`), in one verified read."""
+    half floats (:func:`~stereovar.io.headers.stored_as_half`), in one verified read."""
     return read_image(path, channel=channel, **options), stored_as_half(path, channel=channel)
 
 

@@ -25,9 +25,9 @@ import yaml
 
 from .. import layout
 from ..errors import StereovarError
-from ..io.images import write_field, write_image
 from ..io.renders import LazyRenders
 from ..io.store import atomic_path, load_store
+from ..io.writers import write_field, write_image
 from ..rig import VIEWS
 
 EXPORT_FORMATS = ("exr", "pfm", "npy", "png")

@@ -57,7 +57,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import AuditError, ImageError
-from ..io.images import image_format, image_size, read_field
+from ..io.formats import image_format
+from ..io.headers import image_size
+from ..io.images import read_field
 
 KUBRIC_FILE = re.compile(r"^(depth|rgba|rgb|segmentation|normal|object_coordinates)_\d+\.")
 """A Kubric output's file name (``depth_00000.tiff``, ``rgba_00000.png``, ...)."""

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from ..errors import AuditError, ImageError
-from ..io.images import missing_error, not_regular_error
+from ..io.files import missing_error, not_regular_error
 from .layout import Frame
 from .records import load_record
 from .settings import settings_digest

@@ -36,7 +36,8 @@ from pathlib import Path
 from ..errors import AuditError
 from ..experiment import audit_source
 from ..io.contracts import config_digest
-from ..io.images import image_format, integer_bits
+from ..io.formats import image_format
+from ..io.headers import integer_bits
 from ..io.renders import render_dataset
 from ..io.store import atomic_path, remove_stale_temporaries, write_zarr
 from ..layout import import_record
@@ -250,7 +251,7 @@ def _depth_word(depth: int) -> str:
 
 
 def _bit_depth(bits: list, paths: list, frame: str, view: str) -> int:
-    """The bit depth of one view's renders (:func:`~stereovar.io.images.integer_bits` of
+    """The bit depth of one view's renders (:func:`~stereovar.io.headers.integer_bits` of
     each file, ``bits``): 8 or 16 when every file stores integers of that depth, 0 when every
     one stores floats. A view whose files mix depths is refused (one line naming a file of
     each): its variance would mix the quantisations, and the matched null passes every

@@ -23,7 +23,8 @@ from pathlib import Path
 
 from ..errors import AuditError
 from ..io import hdf5
-from ..io.images import image_format, reading_header, regular_file
+from ..io.files import reading_header, regular_file
+from ..io.formats import image_format
 from ..rig import VIEWS
 from .generators import camera_file
 
@@ -229,7 +230,7 @@ def discover(settings: dict) -> Discovery:
 
 
 def image_format_or_none(path) -> str | None:
-    """:func:`~stereovar.io.images.image_format` of a path, or None for an unknown one."""
+    """:func:`~stereovar.io.formats.image_format` of a path, or None for an unknown one."""
     try:
         return image_format(path)
     except Exception:

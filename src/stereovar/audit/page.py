@@ -5,8 +5,7 @@
 1. banners (an inconclusive sign check the audit went on with, ``audit.sign_check: warn``,
    a sign check won with a high error, and a disparity that seems offset:
    :mod:`stereovar.audit.offset`);
-2. the decision: a traffic light and two or three sentences (what was found, how sure,
-   what to do; :func:`stereovar.audit.verdict.decision`);
+2. the decision: a traffic light and sentences (:func:`stereovar.audit.decision.decision`);
 3. the import's facts: frames, seeds and files, each frame's sign check and valid pixels,
    and every warning and flag as a row of its own;
 4. one thumbnail per frame (a render and the disparity), so the reader sees that the right
@@ -36,8 +35,10 @@ from urllib.parse import quote
 
 from ..io.tables import to_markdown
 from ..provenance import provenance_line
+from .decision import LIGHTS
+from .flags import FLAG_LABELS
 from .importer import WARNING_KINDS
-from .verdict import FLAG_LABELS, LIGHTS, RULE_ITEMS, VERDICT_COLUMNS
+from .verdict import RULE_ITEMS, VERDICT_COLUMNS
 
 FACT_COLUMNS = [
     "frame",

@@ -21,7 +21,8 @@ from .. import layout
 from .. import resources as sizing
 from ..errors import AuditError, ImageError
 from ..experiment import audit_source, ground_truth_store
-from ..io.images import image_size, regular_file
+from ..io.files import regular_file
+from ..io.headers import image_size
 from ..layout import import_record
 from ..rig import VIEWS
 from .hashing import frame_fingerprint

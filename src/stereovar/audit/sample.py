@@ -12,11 +12,11 @@ moved by :data:`PROBE_DISPARITY` pixels, under a camera-law null and a planted c
 strength (as multiples of :data:`REFERENCE_STRENGTH`, the strength the default scenes'
 renders show). Per strength :math:`s`, the Monte Carlo-specific difference of one frame has
 mean :math:`\\delta(s)` and standard error :math:`\\sigma_1` (its interval's half-width over
-:math:`z_{0.975}`, :func:`~stereovar.calibration.summary.difference_interval`).
+:math:`z_{0.975}`, :func:`~stereovar.calibration.nulls.difference_interval`).
 
 **Frames for a power.** Over :math:`F` frames the combined difference has standard error
 :math:`\\sigma_1/\\sqrt F`, and the verdict's rule calls a cue when its interval lies above
-:data:`~stereovar.calibration.summary.MIN_EFFECT` :math:`m`, so
+:data:`~stereovar.calibration.rules.MIN_EFFECT` :math:`m`, so
 
 .. math::
 
@@ -111,8 +111,11 @@ def power_curve(image, *, strengths=STRENGTHS, replicates: int = 8, seed: int = 
     image : numpy.ndarray (H, W, 3)
         One render of the data set, linear.
     """
-    from ..calibration.replicates import NONE, SceneFrames, scene_calibration
-    from ..calibration.summary import Z, difference_interval
+    from ..calibration.nulls import difference_interval
+    from ..calibration.rates import Z
+    from ..calibration.replicates import scene_calibration
+    from ..calibration.scene_frames import SceneFrames
+    from ..calibration.stacks import NONE
     from ..statistics.fields import AnalysisSettings
 
     left = np.maximum(np.nan_to_num(np.asarray(image, dtype=np.float64)), 0.0)
@@ -150,7 +153,7 @@ def power_curve(image, *, strengths=STRENGTHS, replicates: int = 8, seed: int = 
         if not diffs:
             continue
         d_, lo, hi = (np.asarray(x) for x in zip(*diffs, strict=True))
-        from ..calibration.summary import MIN_EFFECT
+        from ..calibration.rules import MIN_EFFECT
 
         out.append(PowerPoint(float(s), float(d_.mean()), float(np.mean((hi - lo) / (2 * Z))),
                               float(np.mean(lo > MIN_EFFECT))))
@@ -172,7 +175,8 @@ def frames_for_power(curve: list[PowerPoint], strength: float, power: float) -> 
     >>> frames_for_power(curve, 0.5, 0.8)[0]  # (1.96 + 0.84)^2 (0.05 / 0.05)^2 = 7.85
     8
     """
-    from ..calibration.summary import MIN_EFFECT, Z
+    from ..calibration.rates import Z
+    from ..calibration.rules import MIN_EFFECT
 
     xs = np.log([p.strength for p in curve])
     delta = float(np.interp(math.log(strength), xs, [p.delta for p in curve]))
@@ -363,7 +367,8 @@ def plan_page(record: dict) -> str:
 
 def power_at(curve: list[PowerPoint], strength: float, frames: int) -> float:
     """The power of ``frames`` frames at ``strength`` (the module's :math:`P(F)`)."""
-    from ..calibration.summary import MIN_EFFECT, Z
+    from ..calibration.rates import Z
+    from ..calibration.rules import MIN_EFFECT
 
     xs = np.log([p.strength for p in curve])
     delta = float(np.interp(math.log(strength), xs, [p.delta for p in curve]))

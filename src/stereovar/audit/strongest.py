@@ -5,7 +5,7 @@ page does the same, each example beside the control that says whether it is extr
 
 1. **frames**, ranked by the intensity-controlled :math:`\\rho` minus its matched null
    (:func:`frame_ranking`: the per-frame :math:`\\Delta_s` of
-   :func:`stereovar.statistics.mitigations.matched_difference`), or by the
+   :func:`stereovar.statistics.matched_null.matched_difference`), or by the
    intensity-controlled :math:`\\rho` alone when the calibration's nulls are missing;
 2. **tiles** of a frame (:data:`TILE` pixels square), ranked by the local
    intensity-controlled correlation (:func:`tile_correlation` of
@@ -17,7 +17,7 @@ page does the same, each example beside the control that says whether it is extr
        \\qquad e_V = \\ln\\sigma_V^2 - \\hat g_V(\\ln\\mu_V),
 
    with :math:`\\hat g_V` the spline of the frame's ``partial`` statistic
-   (:func:`stereovar.controls.intensity.partial_pair` over the frame's :math:`\\Omega`, Eq. 2
+   (:func:`stereovar.controls.partial.partial_pair` over the frame's :math:`\\Omega`, Eq. 2
    and Eq. 3 of paper Sec. 2.2-2.3 on what intensity does not explain);
 3. **the control of each ranked tile** (:func:`rank_tiles`): the tile of the same rank when
    :math:`e_{R\\to L}` is moved by a far circular offset (the ``misaligned`` null of
@@ -197,7 +197,7 @@ def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None, cov
 
     .. math:: e_V = \\ln\\sigma_V^2 - \\hat g_V(\\ln\\mu_V)
 
-    over :math:`\\Omega` (:func:`stereovar.controls.intensity.partial_pair`, the frame's
+    over :math:`\\Omega` (:func:`stereovar.controls.partial.partial_pair`, the frame's
     ``partial`` statistic); without the intensities (a variance store without the seed
     mean), :math:`\\ln\\sigma_V^2` minus its mean over :math:`\\Omega`, no intensity
     control.
@@ -220,7 +220,7 @@ def residual_fields(sigma_left, warped, omega, mu_left=None, mu_warped=None, cov
         NaN outside :math:`\\Omega` or where a field is not finite; ``controlled``: whether
         intensity was removed.
     """
-    from ..controls.intensity import partial_pair
+    from ..controls.partial import partial_pair
     from ..statistics.robust import log_floor
 
     a = np.asarray(sigma_left, dtype=np.float64)
@@ -359,7 +359,7 @@ def frame_ranking(correlations: list[dict], nulls: list[dict] | None = None) -> 
 
     .. math:: \\Delta_s = \\rho_{\\text{partial}, s} - \\bar\\rho_{0, s}
 
-    with its interval (:func:`stereovar.calibration.summary.difference_interval`), for
+    with its interval (:func:`stereovar.calibration.nulls.difference_interval`), for
     frames with a matched null (``transform`` ``none``, region ``all``); a frame without one
     is ranked after them by its intensity-controlled :math:`\\rho` (``statistic``
     ``partial``).
@@ -375,7 +375,7 @@ def frame_ranking(correlations: list[dict], nulls: list[dict] | None = None) -> 
     >>> [r["statistic"] for r in frame_ranking(corr)]
     ['partial', 'partial']
     """
-    from ..calibration.summary import difference_interval
+    from ..calibration.nulls import difference_interval
 
     table = {
         r["scene"]: r

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.images import write_field, write_image
+from ..io.writers import write_field, write_image
 from ..rig import VIEWS
 
 

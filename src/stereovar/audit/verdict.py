@@ -12,6 +12,10 @@ correlates across views wherever intensity does; the part of the variance that i
 not explain (the ``partial`` statistic) is what only Monte Carlo noise carries. The verdict
 rests on its interval, and on whether a variance-matching cost finds the true disparity more
 often than on its matched null.
+
+:mod:`stereovar.audit.seeding` checks whether the two views share their random streams,
+:mod:`stereovar.audit.flags` flags the verdict's own numbers, and
+:mod:`stereovar.audit.decision` turns all three into the page's opening.
 """
 
 from __future__ import annotations
@@ -20,11 +24,11 @@ import math
 
 import numpy as np
 
-from ..calibration.summary import MIN_EFFECT
-from ..statistics.across import combined_correlation_interval, combined_interval, rows_interval
-from ..statistics.claims import t_interval
+from ..calibration.rules import MIN_EFFECT
+from ..statistics.across import combined_interval, rows_interval
+from ..statistics.lift import lift_rows, wta_lift
+from ..statistics.matched_null import matched_difference
 from ..statistics.reliability import corrected_interval
-from ..statistics.residuals import SHARED_STREAMS
 
 STRENGTHS = ((0.5, "strong"), (0.3, "moderate"), (0.1, "weak"), (-math.inf, "negligible"))
 """Words for the intensity-controlled :math:`\\rho` (Cohen's conventions for a correlation)."""
@@ -149,47 +153,6 @@ def _reason(rows, region) -> str:
     return "; ".join(sorted(reasons))
 
 
-def lift_rows(intervention: list[dict], source: str = "render",
-              region: str = "all") -> list[dict]:
-    """Per frame, the :math:`C_\\sigma` winner-take-all accuracy minus chance (normal
-    condition) with its tile-bootstrap interval where the intervention computed one
-    (:func:`stereovar.intervention.lift.wta_lift`), as rows shaped like correlation rows
-    (``scene``, ``region``, ``method`` :data:`~stereovar.intervention.lift.LIFT_METHOD`,
-    ``rho``, ``boot_low``, ``boot_high``), so that they meet their matched null as a
-    correlation does (:func:`stereovar.statistics.mitigations.matched_difference`)."""
-    from ..intervention.lift import LIFT_METHOD
-
-    out = []
-    for r in intervention:
-        if not (r["cost"] == "variance_cost" and r["metric"] == "wta_accuracy"
-                and r["condition"] == "normal" and r["region"] == region
-                and str(r.get("source") or "render") == source
-                and _ok(r["value"], r["chance"])):
-            continue
-        chance = _f(r["chance"])
-        out.append({"scene": r.get("scene"), "region": region, "method": LIFT_METHOD,
-                    "rho": _f(r["value"]) - chance,
-                    "boot_low": _f(r.get("low")) - chance,
-                    "boot_high": _f(r.get("high")) - chance})
-    return out
-
-
-def wta_lift(intervention: list[dict], source: str, region: str = "all") -> tuple:
-    """The :math:`C_\\sigma` winner-take-all accuracy minus chance (normal condition), mean
-    over frames with its 95% interval: the frames' tile-bootstrap intervals combined
-    (:func:`stereovar.statistics.across.combined_interval`); where a frame has none (a
-    region other than ``all``), the Student t interval over frames, none for one frame."""
-    rows = lift_rows(intervention, source, region)
-    if not rows:
-        return math.nan, math.nan, math.nan
-    if all(_ok(r["boot_low"], r["boot_high"]) for r in rows):
-        return combined_interval([r["rho"] for r in rows], [r["boot_low"] for r in rows],
-                                 [r["boot_high"] for r in rows])
-    # regions and conditions the intervention gives no interval: Student t over frames
-    # (none for one frame: a binomial interval over its pixels would be far too narrow)
-    return t_interval([r["rho"] for r in rows])
-
-
 SPECIFIC = "Monte Carlo-specific rho"
 """The label of the verdict's row: the intensity-controlled rho minus its matched null."""
 
@@ -200,10 +163,8 @@ def verdict_rows(
     """:data:`VERDICT_COLUMNS` rows: every statistic of :data:`ROWS` per region with a
     finite value (``all`` always), with ``nulls`` (the calibration's matched nulls) the
     Monte Carlo-specific difference after the intensity-controlled row
-    (:func:`stereovar.statistics.mitigations.matched_difference`), then the intervention's
-    lifts."""
-    from ..statistics.mitigations import matched_difference
-
+    (:func:`stereovar.statistics.matched_null.matched_difference`), then the intervention's
+    lifts (:func:`stereovar.statistics.lift.wta_lift`)."""
     out = []
     for region in ("all", "non_glass", "glass"):
         for method, label, note in ROWS:
@@ -236,7 +197,6 @@ def verdict_rows(
                         "share of pixels above chance (0.10 = 10 pp)"))
         if source == "render" and nulls is not None:
             from ..intervention.lift import LIFT_METHOD
-            from ..statistics.mitigations import matched_difference
 
             null, *diff = matched_difference(lift_rows(intervention), nulls, transform="none",
                                              region="all", method=LIFT_METHOD)
@@ -454,321 +414,3 @@ def as_table(rows: list[dict]) -> list[dict]:
             }
         )
     return out
-
-
-def seeding_summary(rows: list[dict], alignment: str, region: str = "all") -> tuple:
-    """Mean over frames of the residual correlation at one alignment (``zero`` or
-    ``ground_truth``; :func:`stereovar.jobs.audit.seeding_job` rows), with the frames'
-    block-bootstrap intervals combined on Fisher's :math:`z`
-    (:func:`~stereovar.statistics.across.combined_correlation_interval`)."""
-    chosen = [r for r in rows if r["alignment"] == alignment and r["region"] == region]
-    return combined_correlation_interval(
-        [_f(r["rho"]) for r in chosen], [_f(r["low"]) for r in chosen],
-        [_f(r["high"]) for r in chosen],
-    )
-
-
-def seeding_finding(rows: list[dict]) -> dict:
-    """Do the two views share their random streams? From the residual correlation at zero
-    disparity (:func:`seeding_summary`) against :data:`SHARED_STREAMS`.
-
-    Returns
-    -------
-    dict
-        ``shared`` (True, False, or None when undefined), ``zero`` and ``ground_truth``
-        (value, low, high) and ``text``, one plain-language sentence.
-
-    Examples
-    --------
-    >>> rows = [{"alignment": "zero", "region": "all", "rho": 0.3, "low": 0.2, "high": 0.4},
-    ...         {"alignment": "ground_truth", "region": "all", "rho": 0.1, "low": 0.0,
-    ...          "high": 0.2}]
-    >>> seeding_finding(rows)["shared"]
-    True
-    """
-    zero = seeding_summary(rows, "zero")
-    gt = seeding_summary(rows, "ground_truth")
-
-    def iv(t):
-        return _interval(*t)
-
-    if not _ok(zero[0], zero[1]):
-        shared, text = None, (
-            "Whether the two views share their random streams cannot be told on these frames "
-            f"(residual correlation at zero disparity {iv(zero)})."
-        )
-    elif zero[1] > SHARED_STREAMS:
-        shared, text = True, (
-            "The two views share their random streams: the per-seed noise of the left and "
-            f"right renders correlates at zero disparity, {iv(zero)} (at the ground-truth "
-            f"disparity {iv(gt)}), where independent seeds give 0. This is what the same "
-            "sampler seed in both views does (Cycles seed 0, the default of Kubric, "
-            "BlenderProc and Infinigen); a network can match the noise itself."
-        )
-    else:
-        shared, text = False, (
-            "The two views' random streams are independent: the per-seed noise does not "
-            f"correlate across views at zero disparity, {iv(zero)} (at the ground-truth "
-            f"disparity {iv(gt)})."
-        )
-    return {"shared": shared, "zero": zero, "ground_truth": gt, "text": text}
-
-
-def seeding_rows(rows: list[dict]) -> list[dict]:
-    """:data:`VERDICT_COLUMNS` rows of the residual correlation over frames, per region."""
-    out = []
-    for region in ("all", "non_glass", "glass"):
-        for alignment, label in (
-            ("zero", "residual rho at zero disparity"),
-            ("ground_truth", "residual rho at the ground-truth disparity"),
-        ):
-            value, low, high = seeding_summary(rows, alignment, region)
-            if region != "all" and not _ok(value):
-                continue
-            note = "shared random streams" if alignment == "zero" else "seeding"
-            out.append(_row(label, region, value, low, high, note))
-    return out
-
-
-NULL_OFF = 0.1
-"""A null warp is flagged when its 95% interval excludes 0 and its value is at least this
-far from 0."""
-
-EDGE = 0.02
-"""A point estimate within this fraction of its interval's width from an end of the interval
-(or outside it) is flagged: a few bootstrap tiles decide it."""
-
-FLAG_LABELS = {
-    "control": "control off its expected value",
-    "corrected_above_1": "corrected rho above 1",
-    "edge_of_interval": "estimate at the edge of its interval",
-}
-"""Kinds of flags the verdict raises on its own numbers (beside the import's warnings)."""
-
-
-def control_flags(rows: list[dict], correlations: list[dict]) -> list[dict]:
-    """Flags on the verdict's own numbers: a shifted or flipped null warp whose interval is
-    away from 0 (by at least :data:`NULL_OFF`), no warp correlating as much as the warp, a
-    corrected :math:`\\rho` above 1, and a frame's point estimate at the edge of (or outside)
-    its bootstrap interval.
-
-    Parameters
-    ----------
-    rows : list of dict
-        :func:`verdict_rows`.
-    correlations : list of dict
-        The frames' correlation rows (``scene``, ``region``, ``method``, ``rho``,
-        ``boot_low``, ``boot_high``, ``rho_corrected``).
-
-    Returns
-    -------
-    list of dict
-        ``{"kind", "frame", "text"}``, ``kind`` one of :data:`FLAG_LABELS`.
-
-    Examples
-    --------
-    >>> rows = [{"quantity": "null: disparity shifted", "region": "all", "value": 0.368,
-    ...          "low": 0.185, "high": 0.551, "note": ""}]
-    >>> control_flags(rows, [])[0]["kind"]
-    'control'
-    """
-    flags = []
-    for r in rows:
-        if not r["quantity"].startswith("null:") or not _ok(r["value"], r["low"], r["high"]):
-            continue
-        if r["quantity"].startswith("null: no warp"):
-            # smooth fields correlate unwarped when disparities are small: flagged only
-            # when the warp adds nothing
-            warp = _find(rows, "Pearson rho after", r["region"])
-            off = _ok(warp["value"]) and r["value"] >= warp["value"]
-        else:
-            off = (r["low"] > 0 or r["high"] < 0) and abs(r["value"]) >= NULL_OFF
-        if off:
-            flags.append({
-                "kind": "control",
-                "frame": None,
-                "text": (
-                    f"{r['quantity']} ({r['region']}) is {r['value']:.3f} [{r['low']:.3f}, "
-                    f"{r['high']:.3f}], not about 0: the variance fields correlate without the "
-                    "right alignment (smooth or intensity-driven structure, or quantisation), "
-                    "so part of rho is not the cross-view cue; read rho against it"
-                ),
-            })
-    for r in rows:
-        if r["quantity"].startswith("attenuation-corrected") and _ok(r["value"]) and (
-            r["value"] > 1
-        ):
-            flags.append({
-                "kind": "corrected_above_1",
-                "frame": None,
-                "text": (
-                    f"the attenuation-corrected rho ({r['region']}) is {r['value']:.3f}, above "
-                    "1: the split-half reliabilities are underestimated (few seeds, heavy "
-                    "tails); read it as about 1, not as a value"
-                ),
-            })
-    for c in correlations:
-        if c.get("method") not in ("warp", "partial"):
-            continue
-        value, low, high = _f(c.get("rho")), _f(c.get("boot_low")), _f(c.get("boot_high"))
-        if not _ok(value, low, high) or high <= low:
-            continue
-        margin = EDGE * (high - low)
-        if value - low < margin or high - value < margin:
-            what = "Pearson rho" if c["method"] == "warp" else "intensity-controlled rho"
-            flags.append({
-                "kind": "edge_of_interval",
-                "frame": c.get("scene"),
-                "text": (
-                    f"frame {c.get('scene')}, {c['region']}: {what} {value:.3f} lies at the "
-                    f"edge of its bootstrap interval [{low:.3f}, {high:.3f}]: a few tiles "
-                    "decide it; give more frames or a smaller analysis.bootstrap.tile"
-                ),
-            })
-    return flags
-
-
-LIGHTS = {"red": "#c0392b", "amber": "#e6a700", "green": "#2e8b57", "grey": "#808080"}
-
-PROBE_COMMAND = (
-    "stereovar probe --model yourpkg.nets:build --weights model.pt --config audit.yaml "
-    "(your network's factory and weights, this audit's config; docs: Probing your own "
-    "network)."
-)
-"""The command the advice names when no mitigation removes the cue: the probe of the team's
-own network on the audit's frames."""
-"""Traffic-light colours of the decision."""
-
-
-def decision(
-    result: dict, seeding: dict, flags: list[dict], mitigations: list[str], rows=(), *,
-    dose=(),
-) -> dict:
-    """The page's opening: a traffic light and two or three sentences (what was found, how
-    sure, what to do).
-
-    Red: a moderate or strong Monte Carlo-specific cue, a variance-matching cue beyond a
-    camera, or views that share their random streams. Amber: a weak cue, a result that
-    cannot be tested, or a verdict with flags. Green: none of these.
-
-    Parameters
-    ----------
-    result : dict
-        :func:`verdict`.
-    seeding : dict
-        :func:`seeding_finding`.
-    flags : list of dict
-        The import's warnings and :func:`control_flags`.
-    mitigations : list of str
-        :func:`stereovar.statistics.mitigations.mitigation_findings` of the audit's own
-        mitigation table (empty when ``audit.mitigations`` is not set).
-    rows : list of dict
-        :func:`verdict_rows`: the numbers the sentences quote, each with its interval and
-        its control.
-    dose : list of str
-        :func:`stereovar.statistics.dose_response.dose_findings` of the audit's
-        dose-response (empty without ``sensor_only`` in ``audit.mitigations``): where no
-        mitigation removes the cue, the budget and camera that do, or else the probe of the
-        team's own network as the next step.
-
-    Returns
-    -------
-    dict
-        ``light`` (a :data:`LIGHTS` key), ``headline`` and ``sentences`` (how sure, what
-        to do), the two also as ``sure`` and ``do``.
-    """
-    mc, word = result["mc_specific"], result["strength"]
-    strong = mc is True and word in ("strong", "moderate")
-    red = strong or result.get("matching_cue") is True or seeding.get("shared") is True
-    if red:
-        light = "red"
-    elif mc is None or (mc is True) or flags:
-        light = "amber"
-    else:
-        light = "green"
-    tested = result.get("matched_null", True)
-    if mc is True and not tested:
-        found = (
-            f"These renders carry a {word} intensity-controlled cross-view variance cue "
-            "(no matched null: not tested as Monte Carlo-specific)"
-        )
-    elif mc is True:
-        found = f"These renders carry a {word} Monte Carlo-specific cross-view variance cue"
-    elif mc is False:
-        found = "No Monte Carlo-specific cross-view variance cue was detected in these renders"
-    else:
-        found = "Whether these renders carry a Monte Carlo-specific cue cannot be told"
-    if seeding.get("shared") is True:
-        found += ", and the two views share their random streams"
-    headline = found + "."
-    def iv(r):
-        return _interval(r["value"], r["low"], r["high"])
-
-    partial, pearson = _find(rows, "intensity-controlled"), _find(rows, "Pearson rho after")
-    camera = _find(rows, "camera baseline: simulated")
-    specific = _find(rows, SPECIFIC)
-    zero = seeding.get("zero") or (math.nan, math.nan, math.nan)
-    if _ok(specific["value"], specific["low"], specific["high"], specific.get("null")):
-        first = (
-            f"How sure: the Monte Carlo-specific rho is {iv(specific)} (95% interval): the "
-            f"intensity-controlled rho {iv(partial)} minus its matched null "
-            f"{specific['null']:.3f} (camera-law noise drawn on these frames)"
-        )
-    else:
-        first = (
-            f"How sure: the intensity-controlled rho is {iv(partial)} (95% interval), "
-            "where a real camera's noise gives about 0"
-        )
-    sure = (
-        first + "; the raw Pearson rho "
-        f"{iv(pearson)} is beside {iv(camera)} for a simulated camera"
-        + (
-            ", and the residual correlation at zero disparity is "
-            + _interval(*zero)
-            + ", where independent seeds give 0"
-            if seeding.get("shared")
-            else ""
-        )
-        + (
-            f"; {len(flags)} flag{'s' * (len(flags) != 1)} below "
-            f"qualif{'ies' if len(flags) == 1 else 'y'} it."
-            if flags
-            else "; no check raised a flag."
-        )
-    )
-    # a budget and camera measured to remove it first, else one predicted (its line says so)
-    removing = ([line for line in dose if ": removed from" in line]
-                or [line for line in dose if ": predicted removed from" in line
-                    and "but measured" not in line])
-    if mitigations and not mitigations[-1].startswith("No mitigation"):
-        do = "Measured on these renders (audit.mitigations): " + mitigations[-1]
-    elif mitigations:
-        do = ("None of the mitigations measured on these renders removes the Monte "
-              "Carlo-specific part at their own budget; see the Mitigations section. ")
-        if removing:
-            do += "To remove it: " + removing[0]
-        elif dose:
-            do += (dose[0] + " No budget or camera measured removes it, so the next step is "
-                   "to test whether your own network uses it: " + PROBE_COMMAND)
-        else:
-            do += ("Next: add sensor_only to audit.mitigations to find the budget and camera "
-                   "that remove it (the dose-response), or test whether your own network "
-                   "uses it: " + PROBE_COMMAND)
-    elif red or mc is True:
-        do = (
-            "Before training a stereo network on them, measure which mitigation removes the "
-            "cue and at what budget, camera and image quality: set audit.mitigations: "
-            "[denoise, denoise_sensor, equalise, sensor_only] and run the audit again."
-        )
-    elif mc is None:
-        do = ("Nothing can be concluded yet: give the audit more frames or seeds (stereovar "
-              "sample plans how many) or fix what the flags below name, and run it again.")
-    elif flags:
-        do = ("No cue to mitigate was found; check the flags below before relying on that, "
-              "as each can hide one.")
-    else:
-        do = "Nothing needs mitigating for this cue before training."
-    if seeding.get("shared") is True:
-        do += " Render each view with its own sampler seed (Cycles: scene.cycles.seed)."
-    return {"light": light, "headline": headline, "sentences": [sure, do], "sure": sure,
-            "do": do}

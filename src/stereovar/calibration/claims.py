@@ -9,7 +9,7 @@ with no Monte Carlo cue it is a false positive. Here each such claim (kind ``lev
 is decided on every replicate exactly as the table decides it on a run: over the scenes of
 the replicate, the mean :math:`\\rho` with its random-effects interval on Fisher's :math:`z`
 (:func:`stereovar.statistics.across.random_effects_correlation_interval`), for the statistic
-and for the control, and :func:`stereovar.statistics.claims.verdict`.
+and for the control, and :func:`stereovar.statistics.claim_rules.verdict`.
 """
 
 from __future__ import annotations
@@ -17,7 +17,8 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 
-from .replicates import CLAIM_CONTROL, NONE
+from .stacks import NONE
+from .view_statistics import CLAIM_CONTROL
 
 CUE_FREE_EXCLUDED = ("planted", "renders")
 """Design kinds that are not cue-free."""
@@ -50,7 +51,7 @@ def claim_verdicts(rows: list[dict], claim: dict) -> dict:
         ``(kind, strength_factor)`` to a list of verdict strings.
     """
     from ..statistics.across import random_effects_correlation_interval
-    from ..statistics.claims import verdict
+    from ..statistics.claim_rules import verdict
 
     ours_method = claim["statistic"]["method"]
     values: dict = defaultdict(lambda: defaultdict(dict))
@@ -95,8 +96,10 @@ def claim_checks(rows: list[dict], claims=None) -> list[dict]:
     claims : stereovar.statistics.claims.Claims, optional
         The claims file (default: the paper's).
     """
-    from ..statistics.claims import HOLDS, load_claims
-    from .summary import ANY_NULL, LEVEL, meets_level, rate
+    from ..statistics.claim_rules import HOLDS
+    from ..statistics.claims import load_claims
+    from .rates import LEVEL, meets_level, rate
+    from .summary import ANY_NULL
 
     claims = claims or load_claims()
     out = []

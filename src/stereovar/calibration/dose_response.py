@@ -19,11 +19,11 @@ camera term that does not.
 **Prediction.** For each budget multiple :math:`m` (``multiples``, :math:`S = m\\,k\\,s`) and
 camera, :math:`N` frames per view are drawn around the seed mean with the renders' own
 variance field over :math:`m` (their cue included) and passed through what the transform
-ships over disjoint groups of :math:`k = 2` (:func:`~stereovar.calibration.replicates.
+ships over disjoint groups of :math:`k = 2` (:func:`~stereovar.calibration.stacks.
 shipped_stack`, as the mitigation table measures it); the intensity-controlled :math:`\\rho`
 of the :math:`G = N/k` shipped images is read against the same statistic on the matched
 null, camera-law noise at the renders' level over :math:`m` through the same path
-(:func:`~stereovar.calibration.summary.difference_interval`).
+(:func:`~stereovar.calibration.nulls.difference_interval`).
 
 **Verification.** Where the run has renders at :math:`m\\,s` SPP (``spp_xK``: the renders at
 K times the SPP), the same path on those renders against the same null.
@@ -38,14 +38,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..seeding import derive_seed
-from .replicates import SHIPPED, SceneFrames, seed_groups, shipped_stack, statistic_rows
+from .scene_frames import SceneFrames
+from .stacks import SHIPPED, seed_groups, shipped_stack
 from .synthesis import camera_law, draw_frames
+from .view_statistics import statistic_rows
 
 MULTIPLES = (1, 2, 4, 8, 16, 32, 64)
 """Budget multiples of the measured shipped image (2 renders at the run's SPP) predicted."""
 
 GROUP = 2
-"""Renders per shipped image in the measurement (:func:`~stereovar.calibration.replicates.
+"""Renders per shipped image in the measurement (:func:`~stereovar.calibration.stacks.
 seed_groups`)."""
 
 DOSE_COLUMNS = [

@@ -124,13 +124,20 @@ def integer_roundtrip(frames, *, bits: int, transfer: str = "srgb", scale: float
     >>> integer_roundtrip(np.array([0.1, 0.1 + 0.4 / 255, 2.0]), bits=8, transfer="linear")
     array([0.10196079, 0.10196079, 1.        ], dtype=float32)
     """
-    from ..io.images import linear_to_srgb, srgb_to_linear
+    from ..io.transfer import linear_to_srgb, srgb_to_linear
 
     full = float(2 ** int(bits) - 1)
     v = np.clip(np.asarray(frames, dtype=np.float64) / scale, 0.0, 1.0)
     srgb = transfer == "srgb"
     code = np.rint(full * (linear_to_srgb(v) if srgb else v)) / full
     return ((srgb_to_linear(code) if srgb else code) * scale).astype(np.float32)
+
+
+def encoded_frames(frames, encoding: dict | None):
+    """``frames`` through the data's integer encoding, when it has one
+    (:func:`integer_roundtrip` with ``encoding``'s ``bits``, ``transfer`` and ``scale``;
+    ``frames`` unchanged when ``encoding`` is None or empty)."""
+    return frames if not encoding else integer_roundtrip(frames, **encoding)
 
 
 def exposure_for(mean) -> float:
@@ -266,7 +273,7 @@ def dequantised_mean(mean, law, encoding: dict, n: int) -> np.ndarray:
     """
     from scipy.special import ndtri
 
-    from ..io.images import linear_to_srgb, srgb_to_linear
+    from ..io.transfer import linear_to_srgb, srgb_to_linear
 
     mean = np.asarray(mean, dtype=np.float64)
     scale, transfer = float(encoding["scale"]), encoding.get("transfer", "srgb")

@@ -41,11 +41,13 @@ import argparse
 import os
 import shlex
 import sys
+import types
 
-# ``name as name``: re-exported, reached through the package: the constants, Snakemake's
-# runner (replaced here, it is replaced for every command: ``snakemake._run_snakemake``),
-# the run's monitor, its hook and the audit's log file, and the workflow's config.
+# ``name as name``: re-exported, reached through the package: the constants, the run's
+# monitor, its hook and the audit's log file, and the workflow's config. Snakemake's runner,
+# ``_snakemake``, is :class:`_Package`'s.
 from ..errors import StereovarError
+from . import snakemake
 from .audit import _audit_log as _audit_log
 from .audit import _register_audit
 from .completion import _register_completion
@@ -56,10 +58,28 @@ from .scenes import _register_scenes
 from .snakemake import _MONITOR as _MONITOR
 from .snakemake import PROG, _workflow, check_cores, say, split_snakemake_options
 from .snakemake import _project_root as _project_root
-from .snakemake import _snakemake as _snakemake
 from .snakemake import _workflow_config as _workflow_config
 from .workflow import AUDIT_STARTER as AUDIT_STARTER
 from .workflow import _register_workflow
+
+
+class _Package(types.ModuleType):
+    """This package, whose ``_snakemake`` (Snakemake's runner) is
+    :data:`stereovar.cli.snakemake._RUNNER`, read and replaced there: replacing
+    ``stereovar.cli._snakemake`` (a test's stand-in for Snakemake) replaces it for every
+    command (:func:`stereovar.cli.snakemake._run_snakemake`), and no command's module
+    imports the package for it."""
+
+    @property
+    def _snakemake(self):
+        return snakemake._RUNNER
+
+    @_snakemake.setter
+    def _snakemake(self, runner) -> None:
+        snakemake._RUNNER = runner
+
+
+sys.modules[__name__].__class__ = _Package
 
 #: The examples of ``stereovar --help``: command, what it does.
 EXAMPLES = (

@@ -1,9 +1,10 @@
 """Running the workflow: the folder a command works in, the workflow's folder and config,
 Snakemake's own options on a command's line, and Snakemake itself.
 
-Every command runs Snakemake through :func:`_run_snakemake`, which calls
-``stereovar.cli._snakemake`` as the package holds it at call time: replacing that one name
-(a test's stand-in for Snakemake) replaces it for every command.
+Every command runs Snakemake through :func:`_run_snakemake`, which calls :data:`_RUNNER` as
+it is at call time; the package's ``stereovar.cli._snakemake`` is that name, read and
+replaced here, so that replacing it (a test's stand-in for Snakemake) replaces it for every
+command.
 """
 
 from __future__ import annotations
@@ -215,10 +216,13 @@ def _passed_configfiles(snakemake_args) -> list:
 
 
 def _run_snakemake(args: list, root) -> int:
-    """``stereovar.cli._snakemake(args, root)``, looked up on the package when called."""
-    from .. import cli
+    """``stereovar.cli._snakemake(args, root)``: :data:`_RUNNER`, looked up when called."""
+    return _RUNNER(args, root)
 
-    return cli._snakemake(args, root)
+
+#: What :func:`_run_snakemake` runs Snakemake with: :func:`_snakemake`, or what replaced it
+#: as ``stereovar.cli._snakemake`` (the package reads and replaces this name).
+_RUNNER = _snakemake
 
 
 def split_snakemake_options(parser, argv: list) -> tuple:

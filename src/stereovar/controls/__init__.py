@@ -4,6 +4,8 @@
     A Poisson-Gaussian camera on the clean seed mean (the level a real sensor reaches).
 ``intensity``
     The variance-intensity relation removed (partial correlation, relative variance).
+``partial``
+    Both views' residuals of the control, which the ``partial`` statistic correlates.
 ``covariates``
     The intensity control's colour and sensor-position terms (white balance, colour
     matrices, lens-shading correction).

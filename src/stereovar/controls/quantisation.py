@@ -43,7 +43,7 @@ def code_values(bits: int, transfer: str = "srgb", scale: float = 1.0) -> np.nda
     >>> code_values(8, "linear")[[0, 1, 255]].round(6).tolist()
     [0.0, 0.003922, 1.0]
     """
-    from ..io.images import srgb_to_linear
+    from ..io.transfer import srgb_to_linear
 
     full = 2 ** int(bits) - 1
     v = np.arange(full + 1, dtype=np.float64) / full

@@ -237,7 +237,7 @@ def moment_variance_dataset(left_paths, right_paths, *, spp: int | None = None) 
         A store is damaged, or the views differ in shape.
     """
     from ..io.moments import load_moments
-    from ..io.renders import store_error
+    from ..io.store import store_error
 
     left_paths, right_paths = list(left_paths), list(right_paths)
     if len(left_paths) != 1 or len(right_paths) != 1:

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..io.renders import IMAGE_DIMS, iter_renders, store_error
+from ..io.renders import IMAGE_DIMS, iter_renders
+from ..io.store import store_error
 from ..rig import VIEWS
 from .base import VarianceEstimator
 from .subsets import MIN_SPLIT_SEEDS, SeedSubsets, subset_dataset

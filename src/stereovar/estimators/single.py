@@ -475,7 +475,7 @@ def one_render_null(
     :func:`residual_channel_correlation`; :math:`\\tilde v` the single-render field, the
     right one moved by a random offset) go through the same estimator and statistic. Their
     :math:`\\rho_{\\text{partial}}` give the null's mean and standard error, and the chance
-    spread, for :func:`stereovar.calibration.summary.difference_interval`.
+    spread, for :func:`stereovar.calibration.nulls.difference_interval`.
 
     Parameters
     ----------

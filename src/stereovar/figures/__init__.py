@@ -2,9 +2,23 @@
 
 The caller saves the figure; nothing here reads or writes results.
 
-``paper``
-    The paper's figures: the teaser (Fig. 1), :math:`\\rho` versus SPP (Fig. 2), the
-    material scatter (Fig. 3) and the intervention's margin distribution.
+``teaser``
+    The paper's teaser (Fig. 1): both variance fields, the warped right field and their joint
+    histogram.
+``rho_vs_spp``
+    :math:`\\rho` versus SPP per region with its intervals (Fig. 2).
+``material_scatter``
+    The material scatter, glass against non-glass (Fig. 3).
+``margins``
+    The intervention's margin distributions, normal against decorrelated.
+``plotting``
+    What the figure modules share: pyplot on the Agg backend, the regions' labels and
+    colours, the statistics' legend names.
+``fields``
+    Variance fields on a logarithmic colour scale, and the Pearson :math:`\\rho` the figures
+    print.
+``error_bars``
+    The 95% interval of a correlation row as an error bar, and the legend note naming it.
 ``uncertainty``
     :math:`\\rho` against the number of seeds, and every statistic and control per scene
     with its bootstrap interval.

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from .paper import _pyplot
+from .plotting import _pyplot
 
 
 def _f(value) -> float:
@@ -23,7 +23,7 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     (matched nulls, camera pipelines, and all of them together), one row each, with the 5%
     level: blue where its 95% Wilson interval shows the level, orange where the interval
     straddles it (not shown), red where it lies above
-    (:func:`stereovar.calibration.summary.meets_level`).
+    (:func:`stereovar.calibration.rates.meets_level`).
 
     Parameters
     ----------
@@ -81,7 +81,8 @@ def calibration_figure(table: list[dict], *, method: str = "partial", scope: str
     if transforms:
         # beside the axes: the points sit at 0 and 1 across every strength, so no corner is free
         power_ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    from ..calibration.summary import ANY_NULL, meets_level
+    from ..calibration.rates import meets_level
+    from ..calibration.summary import ANY_NULL
 
     # whether the 5% level is shown (the whole interval at or below it), refuted (above it)
     # or not shown (the interval straddles it: too few replicates to tell)

@@ -7,15 +7,14 @@ import math
 import numpy as np
 from matplotlib.colors import LogNorm
 
-from .paper import (
+from .fields import (
     ROBUST_PERCENTILES,
     UNDER_COLOUR,
     VARIANCE_CMAP,
-    _as_2d,
     _fmt_rho,
     _log_limits,
-    _pyplot,
 )
+from .plotting import _as_2d, _pyplot
 
 
 def cross_renderer_figure(fields: dict, *, rho: dict | None = None, title: str = ""):

@@ -1,6 +1,6 @@
 """The estimator validation figure: the moments estimator against N seeds.
 
-Pure like :mod:`stereovar.figures.paper`: rows in (dicts as
+Pure like :mod:`stereovar.figures.rho_vs_spp`: rows in (dicts as
 :func:`stereovar.io.tables.read_rows` gives them), a matplotlib figure out.
 """
 
@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .paper import _finite, _pyplot, _statistic_label
+from .plotting import _finite, _pyplot, _statistic_label
 from .uncertainty import CONTROLS, STATISTICS
 
 FIELD_SERIES = (

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from .paper import _pyplot
+from .plotting import _pyplot
 
 PANELS = (
     ("mc_specific", "Monte Carlo-specific $\\rho$\n(partial $\\rho$ minus its matched null)"),

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from .layout import place_labels, wrap_to_width
-from .paper import _pyplot
+from .plotting import _pyplot
 
 SHIPPED = "shipped"
 """The first panel's column: the Monte Carlo-specific :math:`\\rho` of what the mitigation
@@ -58,7 +58,7 @@ def tradeoff_figure(rows: list[dict]):
     such as the non-glass lift without a material mask, is left out). The first panel is
     the Monte Carlo-specific :math:`\\rho` of what each mitigation ships, with its
     calibration margin as a grey band behind the point and the smallest cue the rules call
-    (:data:`~stereovar.calibration.summary.MIN_EFFECT`) as a red dotted line: the cue is
+    (:data:`~stereovar.calibration.rules.MIN_EFFECT`) as a red dotted line: the cue is
     removed where the whole interval lies inside the band, and remains where it lies above
     the line (:func:`stereovar.statistics.mitigations.mc_cue_state`). Each point is labelled
     by its mitigation where the label
@@ -101,7 +101,7 @@ def tradeoff_figure(rows: list[dict]):
             points.append(((x, y), name, colours(k % 10)))
         ax.axhline(0.0, color="0.5", lw=0.8, ls="--")
         if column == SHIPPED:
-            from ..calibration.summary import MIN_EFFECT
+            from ..calibration.rules import MIN_EFFECT
 
             ax.axhline(MIN_EFFECT, color="#c0392b", lw=0.8, ls=":")
         ax.margins(y=0.25)  # room for the labels above and below the points

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..probe.inputs import TEST_INPUTS
 from ..probe.metrics import planted_factor
-from .paper import _pyplot
+from .plotting import _pyplot
 
 
 def _errorbar(ax, xs, rows, key, **style) -> None:

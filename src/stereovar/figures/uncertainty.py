@@ -1,9 +1,9 @@
 """Figures of the uncertainty and the controls: :math:`\\rho` against the number of seeds, and
 every statistic and control per scene with its bootstrap interval.
 
-Like :mod:`stereovar.figures.paper`, every function here is pure: it takes rows (dicts, as
-:func:`stereovar.io.tables.read_rows` gives them; numbers may be NaN), builds a matplotlib
-figure on the Agg backend and returns it; the caller saves it.
+Like :mod:`stereovar.figures.rho_vs_spp` (Fig. 2), every function here is pure: it takes rows
+(dicts, as :func:`stereovar.io.tables.read_rows` gives them; numbers may be NaN), builds a
+matplotlib figure on the Agg backend and returns it; the caller saves it.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 
+from .error_bars import _bar_extents
 from .layout import wrap_to_width
-from .paper import (
+from .plotting import (
     REGION_LABELS,
     REGIONS,
-    _bar_extents,
     _finite,
     _pyplot,
     _statistic_label,

@@ -13,7 +13,21 @@
 ``tables``
     Result tables as CSV, Markdown, LaTeX and HTML from one list of rows.
 ``images``
-    Image files other tools write and read: OpenEXR, PFM, PNG, NPY and NPZ.
+    Reading image files other tools write: renders, fields and segment ids, whatever the format.
+``formats``
+    The image file formats by extension: OpenEXR, PFM, PNG, NPY, NPZ, HDF5 and TIFF.
+``transfer``
+    The sRGB transfer function of integer images, decoding and encoding.
+``files``
+    Opening a user's files: regular files only, each failure one line.
+``headers``
+    What an image file's header says, no pixel decoded: size, half floats, integer bits.
+``decoders``
+    The pixels of each image format as its library decodes them.
+``pfm``
+    PFM files, read and written by hand.
+``writers``
+    Image and field files written in the format of a path's extension.
 ``channels``
     Which channels of an OpenEXR file hold a render, depth, disparity or a mask.
 ``exr_header``

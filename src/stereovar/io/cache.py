@@ -103,8 +103,7 @@ class RenderCache:
     def get(self, key: str) -> np.ndarray | None:
         """The render stored under ``key`` (float32, (H, W, C)), or None when absent or
         unreadable (logged; the caller renders it again)."""
-        from .renders import read_errors
-        from .store import open_dataset
+        from .store import open_dataset, read_errors
 
         path = self.path(key)
         if not path.exists():

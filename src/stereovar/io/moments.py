@@ -112,8 +112,7 @@ def moments_dataset(
 def load_moments(path) -> xr.Dataset:
     """Read a moment store into memory, checked (one-line :class:`StoreError` with the
     rebuild command when it is missing, incomplete or not a moment store)."""
-    from .renders import store_error
-    from .store import load_store
+    from .store import load_store, store_error
 
     ds = load_store(path, "moment store")
     missing = [v for v in MOMENT_VARIABLES if v not in ds]

@@ -20,14 +20,13 @@ block) at a time.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from ..errors import StoreError
-from .store import ZARR_FORMAT
+from .store import ZARR_FORMAT, read_errors, rebuild_command, store_error
 
 IMAGE_DIMS = ("y", "x", "channel")
 """Dims of one render."""
@@ -104,65 +103,6 @@ def render_dataset(
             "view": ((), view, {"long_name": "stereo view"}),
         },
         attrs=dict(attrs),
-    )
-
-
-def _one_line(text) -> str:
-    text = " ".join(str(text).split())
-    return text if len(text) <= 200 else text[:197] + "..."
-
-
-RERUN_ARGS_ENV = "STEREOVAR_SNAKEMAKE_ARGS"
-"""Environment variable holding the ``--configfile`` and ``--config`` options of the
-Snakemake run a job belongs to (set by ``workflow/rules/inputs/run.smk``)."""
-
-
-def set_rerun_arguments(args: str) -> None:
-    """Record the ``--configfile`` and ``--config`` options of this Snakemake run for the
-    jobs it starts (they inherit the environment), so :func:`rebuild_command` repeats them."""
-    os.environ[RERUN_ARGS_ENV] = str(args)
-
-
-def rebuild_command(path) -> str:
-    """The command that rebuilds the workflow output at ``path`` and nothing else.
-
-    ``stereovar run -j1 <this run's --configfile options> <path> -- --force <its --config
-    options>``: ``stereovar run`` runs the workflow of the installed stereovar (a checkout's
-    or a wheel's, where a bare ``snakemake`` finds no Snakefile) in the current directory,
-    and ``--force`` reruns the one job that writes ``path`` (whether or not the damaged copy
-    is still there) with the same config, so the rebuilt store matches the others. Outside
-    a workflow run the config options are unknown, and the command says to add them.
-    """
-    import shlex
-
-    args = os.environ.get(RERUN_ARGS_ENV)
-    if args is None:
-        files, rest = "--configfile <the config of the run that made it>", ""
-    else:
-        words = shlex.split(args)
-        pairs = [k for k, word in enumerate(words[:-1]) if word == "--configfile"]
-        files = shlex.join([w for k in pairs for w in words[k : k + 2]])
-        rest = shlex.join([w for k, w in enumerate(words) if k not in pairs and k - 1 not in pairs])
-    parts = ("stereovar run -j1", files, shlex.quote(str(path)), "-- --force", rest)
-    return " ".join(p for p in parts if p)
-
-
-def store_error(path, detail, *, what: str = "render store") -> StoreError:
-    """The one-line error for a damaged or incomplete store at ``path``, with the command
-    that rebuilds it (:func:`rebuild_command`)."""
-    return StoreError(
-        f"{what} {path} is damaged or incomplete ({_one_line(detail)}); "
-        f"rebuild it with `{rebuild_command(path)}`"
-    )
-
-
-def read_errors() -> tuple[type[BaseException], ...]:
-    """Exceptions that mean a store could not be read (zarr's own base class when present)."""
-    import zarr.errors
-
-    base = getattr(zarr.errors, "BaseZarrError", None)
-    return (OSError, KeyError, ValueError, TypeError, RuntimeError, IndexError) + (
-        (base,) if base is not None else ()
     )
 
 

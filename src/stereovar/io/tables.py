@@ -172,9 +172,9 @@ def read_rows(path, *, required=()) -> list[dict]:
     StoreError
         The file is missing or unreadable, a row has more or fewer fields than the header
         (a truncated or damaged file), or a required column is missing: one line with the
-        command that rebuilds it (:func:`stereovar.io.renders.store_error`).
+        command that rebuilds it (:func:`stereovar.io.store.store_error`).
     """
-    from .renders import store_error
+    from .store import store_error
 
     def parse(value: str):
         for kind in (int, float):

@@ -52,7 +52,7 @@ def seeding_job(left, right, ground_truth, out, *, analysis=None, controls=None)
     from ..statistics.regions import REGIONS, region_masks, valid_set
     from ..statistics.residuals import residual_correlation
     from .common import view_stack
-    from .correlation import analysis_settings
+    from .settings import analysis_settings
 
     settings, _ = analysis_settings(analysis, controls)
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])
@@ -254,9 +254,9 @@ def verdict_job(
     """Write ``results/audit/{name}/verdict.{md,html}`` and ``summary.json``.
 
     The page (:mod:`stereovar.audit.page`) opens with a traffic light and what to do
-    (:func:`stereovar.audit.verdict.decision`), then what was imported (each frame's
+    (:func:`stereovar.audit.decision.decision`), then what was imported (each frame's
     import record: seeds, files, the sign check, the warnings) with every warning and flag
-    (:func:`stereovar.audit.verdict.control_flags`) as a row of its own and one thumbnail
+    (:func:`stereovar.audit.flags.control_flags`) as a row of its own and one thumbnail
     per frame, then the details: the claims-style rows over the audit's frames with
     intervals, the plain-language verdict, whether the views share their random streams
     (``seeding``: :func:`seeding_job`), the teasers and, with ``mitigations`` (the audit's
@@ -280,6 +280,8 @@ def verdict_job(
     images, and both pages and ``summary.json`` carry the provenance
     (:func:`stereovar.provenance.provenance`: the stereovar version, the date, the SHA-256
     over the imported files' recorded SHA-256s and ``config_digest``, the config's)."""
+    from ..audit.decision import decision
+    from ..audit.flags import control_flags
     from ..audit.page import (
         caption,
         import_flags,
@@ -287,6 +289,7 @@ def verdict_job(
         to_html_page,
         to_markdown_page,
     )
+    from ..audit.seeding import seeding_finding, seeding_rows
     from ..audit.strongest import TILE
     from ..audit.summary_schema import SUMMARY_SCHEMA_VERSION, validate_summary
     from ..audit.verdict import (
@@ -294,10 +297,6 @@ def verdict_job(
         SPECIFIC,
         VERDICT_COLUMNS,
         as_table,
-        control_flags,
-        decision,
-        seeding_finding,
-        seeding_rows,
         summary_lines,
         verdict,
         verdict_rows,
@@ -313,7 +312,7 @@ def verdict_job(
     rows = verdict_rows(corr, iv, null_rows) + seeding_rows(residual)
     calibrated = ""
     if calibration:
-        from ..calibration.summary import VERDICT_COVERAGE_SHOWN, headline
+        from ..calibration.sentences import VERDICT_COVERAGE_SHOWN, headline
 
         calibrated = headline(read_rows(calibration), shown=VERDICT_COVERAGE_SHOWN)
     result = verdict(rows)

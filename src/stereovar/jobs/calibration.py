@@ -28,7 +28,7 @@ def scene_frames(variance, ground_truth, aux=None):
     none."""
     import numpy as np
 
-    from ..calibration.replicates import SceneFrames
+    from ..calibration.scene_frames import SceneFrames
     from ..io.store import load_store
 
     v = load_store(variance, "variance store", ["mean", "variance", "finite"])
@@ -104,24 +104,20 @@ def calibration_scene_job(
     (:func:`stereovar.calibration.replicates.scene_calibration`) to one CSV, and with
     ``renders`` (each view's render stores) what every transform that reads the seed mean
     ships, measured on the renders themselves
-    (:func:`stereovar.calibration.replicates.renders_shipped_rows`). ``intervention`` (its
+    (:func:`stereovar.calibration.renders.renders_shipped_rows`). ``intervention`` (its
     config section) sets the variance-matching cost's window and disparities as the
     intervention scans the renders. ``outputs`` (chain label to the writer a generator's
     renders pass through) with ``output_renders`` (each view's render stores of that
     generator) adds what the generator ships, measured on its renders
-    (:func:`stereovar.calibration.replicates.renders_output_rows`); each label must be one of
+    (:func:`stereovar.calibration.renders.renders_output_rows`); each label must be one of
     ``transforms``, so that its matched null is drawn through the same chain."""
     import dataclasses
 
-    from ..calibration.replicates import (
-        CALIBRATION_COLUMNS,
-        renders_output_rows,
-        renders_shipped_rows,
-        scene_calibration,
-    )
+    from ..calibration.renders import renders_output_rows, renders_shipped_rows
+    from ..calibration.replicates import CALIBRATION_COLUMNS, scene_calibration
     from ..io.tables import write_tables
     from ..transforms import transform_chain
-    from .correlation import analysis_settings
+    from .settings import analysis_settings
 
     settings, camera = analysis_settings(analysis, controls)
     cal = {**DEFAULTS, **dict(calibration or {})}
@@ -216,19 +212,14 @@ def matching_scan(scene, intervention=None):
 
 def calibration_table_job(rows, outputs: dict, *, nulls, figure=None) -> list[dict]:
     """``results/tables/calibration.csv`` (every check), ``calibration.md`` (one row per
-    transform and statistic, :func:`stereovar.calibration.summary.compact_table`), the
+    transform and statistic, :func:`stereovar.calibration.compact.compact_table`), the
     matched nulls and the figure from every scene's replicates
     (:func:`stereovar.calibration.summary.calibration_table`, and the claims table's level
     rule decided on them, :func:`stereovar.calibration.claims.claim_checks`)."""
     from ..calibration.claims import claim_checks
-    from ..calibration.summary import (
-        CALIBRATION_TABLE_COLUMNS,
-        COMPACT_COLUMNS,
-        NULL_COLUMNS,
-        calibration_table,
-        compact_table,
-        headline,
-    )
+    from ..calibration.compact import COMPACT_COLUMNS, compact_table
+    from ..calibration.sentences import headline
+    from ..calibration.summary import CALIBRATION_TABLE_COLUMNS, NULL_COLUMNS, calibration_table
     from ..io.tables import read_rows, write_tables
 
     replicates = [r for path in rows for r in read_rows(path)]

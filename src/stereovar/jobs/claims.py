@@ -342,14 +342,15 @@ def results_page_job(
     import json
     from pathlib import Path
 
-    from ..calibration.summary import headline
+    from ..calibration.sentences import headline
     from ..io.store import write_file
     from ..io.tables import read_rows
     from ..layout import snakemake_report
     from ..links import docs_page
     from ..pages.html import relative_link
     from ..pages.results import page_sections, to_html_page
-    from ..statistics.claims import KINDS, load_claims
+    from ..statistics.claim_rules import KINDS
+    from ..statistics.claims import load_claims
 
     captions = dict(captions or {})
     claim_rows = read_rows(claims, required=["claim", "verdict"])

@@ -39,7 +39,7 @@ def dose_response_scene_job(
     from ..calibration.synthesis import channel_correlation
     from ..io.tables import write_tables
     from .calibration import _sorted_stack, scene_frames
-    from .correlation import analysis_settings
+    from .settings import analysis_settings
 
     settings, _ = analysis_settings(analysis or {}, controls or {})
     scene = scene_frames(variance, ground_truth)

@@ -120,7 +120,8 @@ def estimator_check_job(
     from ..seeding import derive_seed
     from ..statistics.agreement import field_agreement, split_half_reliability
     from ..statistics.rows import correlation_rows
-    from .correlation import align, analysis_settings, scene_inputs
+    from .correlation import align, scene_inputs
+    from .settings import analysis_settings
 
     settings, sensor = analysis_settings(analysis, controls)
     gt = load_store(ground_truth, "ground-truth store", ["disparity", "valid", "glass"])

@@ -60,7 +60,7 @@ def _estimate(attrs) -> str:
 
 def teaser_figure_job(variance, warped, out) -> None:
     """Fig. 1: sigma_L^2, sigma_R^2, the warped field and their joint histogram over Omega."""
-    from ..figures.paper import teaser_figure
+    from ..figures.teaser import teaser_figure
     from ..io.store import load_store
 
     v = load_store(variance, "variance store")
@@ -74,7 +74,7 @@ def teaser_figure_job(variance, warped, out) -> None:
 def rho_vs_spp_figure_job(correlations, out) -> None:
     """Fig. 2: rho against SPP per region with bootstrap intervals, and the robust statistics
     (Spearman, log-Pearson) beside Pearson."""
-    from ..figures.paper import rho_vs_spp_figure
+    from ..figures.rho_vs_spp import rho_vs_spp_figure
     from ..io.tables import read_rows
     from ..statistics.registry import PRIMARY_METHOD
 
@@ -89,7 +89,7 @@ def rho_vs_spp_figure_job(correlations, out) -> None:
 
 def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
     """Fig. 3: (sigma_L^2, warped sigma_R^2) over Omega, glass against non-glass."""
-    from ..figures.paper import material_scatter_figure
+    from ..figures.material_scatter import material_scatter_figure
     from ..io.store import load_store
 
     v = load_store(variance, "variance store")
@@ -107,7 +107,7 @@ def material_scatter_figure_job(variance, warped, ground_truth, out) -> None:
 
 def margin_figure_job(margins, out) -> None:
     """The intervention's GT-margin distributions per region, normal against decorrelated."""
-    from ..figures.paper import margin_distribution_figure
+    from ..figures.margins import margin_distribution_figure
     from ..io.tables import read_rows
 
     rows = [r for path in margins for r in read_rows(path)]

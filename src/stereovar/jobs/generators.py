@@ -53,16 +53,9 @@ def generators_table_job(
     keeps each profile's calibration table (a ``profile`` column, then
     :data:`~stereovar.calibration.summary.CALIBRATION_TABLE_COLUMNS`).
     """
-    from ..calibration.summary import (
-        CALIBRATION_TABLE_COLUMNS,
-        LEVEL,
-        NOT_SHOWN,
-        calibration_table,
-        false_positive_text,
-        meets_level,
-        replicates_to_show,
-        worst_false_positive,
-    )
+    from ..calibration.rates import LEVEL, NOT_SHOWN, meets_level, replicates_to_show
+    from ..calibration.sentences import false_positive_text, worst_false_positive
+    from ..calibration.summary import CALIBRATION_TABLE_COLUMNS, calibration_table
     from ..generators import GeneratorProfile
     from ..io.tables import read_rows, write_tables
     from ..statistics.generators import (

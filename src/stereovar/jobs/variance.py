@@ -16,8 +16,7 @@ def variance_job(left, right, out, *, estimator="seeds", allow_mixed_backends=Fa
     """
     from ..estimators import get_estimator
     from ..io.contracts import render_provenance, variance_store
-    from ..io.renders import read_errors, store_error
-    from ..io.store import open_dataset, write_dataset
+    from ..io.store import open_dataset, read_errors, store_error, write_dataset
     from ..preflight import check_backends, stored_backends
     from ..rig import VIEWS
 

@@ -17,7 +17,7 @@ unless it is :class:`markupsafe.Markup` (a caption rendered by
 
 Filters: ``caption`` (reStructuredText to HTML, :func:`~stereovar.pages.captions.caption_markup`),
 ``cell`` (a table cell's text, numbers to significant digits), ``significant``
-(:func:`stereovar.pages.results.significant`). Globals: ``docs_page``
+(:func:`stereovar.pages.numbers.significant`). Globals: ``docs_page``
 (:func:`stereovar.links.docs_page`) and ``table_css``.
 """
 
@@ -78,7 +78,7 @@ def environment():
     from ..io.tables import _PAGE_CSS
     from ..links import docs_page
     from .captions import caption_markup
-    from .results import significant
+    from .numbers import significant
 
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("stereovar.pages", "templates"),

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..io.images import linear_to_srgb
+from ..io.transfer import linear_to_srgb
 
 __all__ = [
     "LEFT_KEPT",

@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration.replicates import SceneFrames, camera_residual_variance, render_strength
+from ..calibration.law import camera_residual_variance, render_strength
+from ..calibration.scene_frames import SceneFrames
 from ..calibration.synthesis import camera_law, draw_frames, planted_pattern, variance_fields
 
 __all__ = ["planted_views", "renders_law", "renders_strength"]

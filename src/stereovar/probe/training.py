@@ -30,7 +30,7 @@ import numpy as np
 import torch
 
 from ..errors import ConfigError, MatcherFileError
-from ..io.images import file_kind, open_regular
+from ..io.files import file_kind, open_regular
 from .convergence import PlateauSettings, fixed_frames, train_to_plateau
 from .network import MatchingNet, border, predict_matcher
 

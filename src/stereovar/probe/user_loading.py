@@ -22,7 +22,7 @@ from pathlib import Path
 import torch
 
 from ..errors import StereovarError
-from ..io.images import file_kind
+from ..io.files import file_kind
 
 __all__ = [
     "FACTORY_FORMAT",
@@ -178,7 +178,7 @@ def check_weights_file(weights) -> Path:
     ModelError
         One line: the path does not exist, cannot be looked at, is a directory (naming the
         weights files inside it, if any), or is a named pipe, a device or a socket
-        (:func:`stereovar.io.images.file_kind`).
+        (:func:`stereovar.io.files.file_kind`).
     """
     path = Path(weights)
     try:

@@ -12,7 +12,7 @@ A team's network is a PyTorch module built by a factory it names
     \\ \\text{or}\\ \\mathbb R^{B \\times H \\times W},
 
 with :math:`L, R` the sRGB-encoded display images (linear radiance clipped to [0, 1], then
-:func:`stereovar.io.images.linear_to_srgb`) and :math:`\\hat d \\ge 0` in the conventional
+:func:`stereovar.io.transfer.linear_to_srgb`) and :math:`\\hat d \\ge 0` in the conventional
 sign: the right pixel of left pixel :math:`x` is at :math:`x - \\hat d`. Frames of the
 other sign (:math:`s = +1`, the paper's) are mirrored, both views, before the network and
 its output mirrored back, which turns :math:`x + d` into :math:`x' - d`.
@@ -69,7 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..io.images import linear_to_srgb
+from ..io.transfer import linear_to_srgb
 from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import valid_set

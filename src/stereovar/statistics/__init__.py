@@ -41,6 +41,10 @@ interval, and the tables built from the per-scene rows.
     Every statistic and control across scenes, with combined intervals.
 ``cross_renderer``
     Each scene's statistics from every renderer, side by side.
+``matched_null``
+    A statistic minus its matched null (camera-law noise on the same frames), over scenes.
+``lift``
+    The :math:`C_\\sigma` winner-take-all lift over chance across frames.
 ``mitigations``
     The mitigation table: cue, controls and image-quality cost per mitigation.
 ``utility``
@@ -49,6 +53,12 @@ interval, and the tables built from the per-scene rows.
     What a seed-mean mitigation ships over its budget and the camera, and what removes it.
 ``generators``
     The generator table: each generator profile's cue against its own matched null.
+``t_intervals``
+    Student-t intervals of a mean over scenes, and of a geometric mean of ratios.
+``claim_rules``
+    The verdict rules of a claim: holds, does not hold, explained by a control, not testable.
+``claim_statistics``
+    The statistics a claim can be tested on, each with its interval over scenes.
 ``claims``
     The claims table: which of the paper's quantitative claims hold.
 

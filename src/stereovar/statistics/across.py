@@ -347,7 +347,7 @@ def rows_interval(rows) -> tuple[float, float, float]:
 def _chance_se(rows) -> float:
     """The standard error of the mean over scenes when each scene's is the larger of its
     bootstrap's and its chance standard error (``chance_se``, the statistics that report it;
-    :func:`stereovar.calibration.summary.difference_interval`'s term):
+    :func:`stereovar.calibration.nulls.difference_interval`'s term):
     :math:`\\sqrt{\\sum_s \\max(\\mathrm{se}_{b,s}, \\mathrm{se}_{c,s})^2}/S`; NaN when no
     scene reports a chance term."""
     if not rows or not any(math.isfinite(float(r.get("chance_se", math.nan))) for r in rows):

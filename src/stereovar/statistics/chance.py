@@ -8,7 +8,7 @@ whose structure is larger than a tile it makes an interval too narrow under the 
 that the views are independent. :func:`chance_se` computes the standard error of
 :math:`\\rho` under that hypothesis from the two fields' own autocovariances over every lag
 (Bartlett 1935), so the chance term of a Monte Carlo-specific difference
-(:func:`stereovar.calibration.summary.difference_interval`) follows the structure of the
+(:func:`stereovar.calibration.nulls.difference_interval`) follows the structure of the
 fields measured: about :math:`1/\\sqrt n` for white noise, more for structured fields.
 """
 

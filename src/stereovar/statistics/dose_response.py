@@ -7,7 +7,7 @@ per transform, camera, budget multiple and kind (``predicted`` from the
 
 - ``mc_specific``: the intensity-controlled :math:`\\rho` of what ships minus the same on its
   matched null at the same budget and camera, per scene
-  (:func:`stereovar.calibration.summary.difference_interval`; a predicted point averages its
+  (:func:`stereovar.calibration.nulls.difference_interval`; a predicted point averages its
   replicates' differences and bounds, the interval one measurement would have), combined over
   scenes (:func:`stereovar.statistics.across.combined_interval`);
 - ``mc_cue``: :func:`~stereovar.statistics.mitigations.mc_cue_state` against the transform's
@@ -64,7 +64,7 @@ COMPACT_COLUMNS = [
 
 def _scene_difference(rows: list[dict], nulls: list[dict]) -> tuple[float, float, float]:
     """One scene's difference from its null (mean over replicates of each bound)."""
-    from ..calibration.summary import difference_interval
+    from ..calibration.nulls import difference_interval
 
     null = [_f(r["rho"]) for r in nulls if math.isfinite(_f(r["rho"]))]
     if not null:
@@ -105,7 +105,7 @@ def dose_table(rows: list[dict], nulls: list[dict] | None = None, *, spp: int) -
     ('predicted', 0.2, 'remains', 2.0, 20.0)
     """
     from ..calibration.dose_response import GROUP
-    from ..calibration.replicates import SHIPPED
+    from ..calibration.stacks import SHIPPED
     from .across import combined_interval
 
     groups = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))

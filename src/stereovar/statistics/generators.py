@@ -148,8 +148,8 @@ def generator_rows(profile, rows: list[dict], *, generator_spp: int, matched: st
 def shipped_columns(replicates: list[dict], nulls: list[dict], chain: str | None) -> dict:
     """A profile's shipped columns and ``quantised_share`` (all pixels) from its
     calibration rows: the ``renders`` rows through ``chain``
-    (:func:`stereovar.calibration.replicates.renders_output_rows`) against the nulls through
-    the same chain (:func:`~stereovar.statistics.mitigations.matched_difference`).
+    (:func:`stereovar.calibration.renders.renders_output_rows`) against the nulls through
+    the same chain (:func:`~stereovar.statistics.matched_null.matched_difference`).
 
     Examples
     --------
@@ -162,10 +162,11 @@ def shipped_columns(replicates: list[dict], nulls: list[dict], chain: str | None
     >>> out["output"], out["shipped_mc_cue"], out["quantised_share"]
     ('8-bit PNG, AgX', 'not testable', 0.95)
     """
-    from ..calibration.replicates import QUANTISED_SHARE
+    from ..calibration.renders import QUANTISED_SHARE
     from ..controls.quantisation import FIXED_SHARE
     from ..transforms import CHAIN
-    from .mitigations import equivalence_margin, matched_difference, mc_cue_state
+    from .matched_null import matched_difference
+    from .mitigations import equivalence_margin, mc_cue_state
 
     nan = math.nan
     out = {c: nan for c in GENERATOR_COLUMNS if c.startswith("shipped_")}

@@ -8,7 +8,8 @@ column family:
   (:func:`stereovar.statistics.across.combined_interval`; conditional on the scenes run);
 - Table 3 (the :math:`C_\\sigma` lift over chance, the :math:`C_\\epsilon` shuffle effect):
   Student t over scenes, or for one scene a Wilson interval over its pixels
-  (:func:`stereovar.audit.verdict.wta_lift`; :func:`stereovar.statistics.claims.t_interval`);
+  (:func:`stereovar.statistics.lift.wta_lift`;
+  :func:`stereovar.statistics.t_intervals.t_interval`);
 - image quality: the mean over scenes with a Student t interval.
 
 The Monte Carlo-specific part of the cue (``mc_specific``) is the intensity-controlled
@@ -27,7 +28,7 @@ that merely covers 0 is no evidence of removal).
 A transform that builds its images from the seed mean (``sensor_only``, ``equalise``) hides
 the seed mean's Monte Carlo noise from Eq. 1 over its :math:`N` outputs;
 ``shipped_mc_specific`` is the same difference measured on what it ships, over disjoint seed
-groups (:func:`stereovar.calibration.replicates.shipped_stack`); where it is measured,
+groups (:func:`stereovar.calibration.stacks.shipped_stack`); where it is measured,
 ``mc_cue`` is its verdict.
 """
 
@@ -38,7 +39,9 @@ import math
 import numpy as np
 
 from .across import rows_interval
-from .claims import t_interval
+from .lift import wta_lift
+from .matched_null import matched_difference
+from .t_intervals import t_interval
 
 MITIGATION_COLUMNS = [
     "mitigation",
@@ -121,7 +124,7 @@ def _f(value) -> float:
 
 def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
     """The verdict on a Monte Carlo-specific difference's 95% interval: ``remains`` (above
-    :data:`~stereovar.calibration.summary.MIN_EFFECT`, the smallest cue the rules call),
+    :data:`~stereovar.calibration.rules.MIN_EFFECT`, the smallest cue the rules call),
     ``reversed`` (below its negative), ``removed`` (inside :math:`(-\\delta, \\delta)`, the
     equivalence margin: two one-sided tests), ``inconclusive`` (covers 0 but reaches past the
     margin, or no margin), or ``n/a`` (no interval).
@@ -135,7 +138,7 @@ def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
     >>> mc_cue_state(0.02, 0.08, 0.02)  # above 0, not above the smallest cue called
     'inconclusive'
     """
-    from ..calibration.summary import MIN_EFFECT
+    from ..calibration.rules import MIN_EFFECT
 
     if not (math.isfinite(low) and math.isfinite(high)):
         return "n/a"
@@ -146,67 +149,6 @@ def mc_cue_state(low: float, high: float, margin: float = math.nan) -> str:
     if math.isfinite(margin) and margin > 0 and -margin < low and high < margin:
         return "removed"
     return "inconclusive"
-
-
-def matched_difference(corr, nulls, *, transform, region, method="partial"):
-    """The statistic minus its matched null through the same transform, per scene, combined
-    over scenes.
-
-    .. math::
-
-        \\Delta_s = \\rho_s - \\bar\\rho_{0,s}, \\qquad
-        \\bar\\Delta = \\frac1S \\sum_s \\Delta_s
-
-    with each scene's interval from its bootstrap interval, the null mean's standard error
-    and the fields' own chance standard error
-    (:func:`stereovar.calibration.summary.difference_interval`), combined over scenes
-    (:func:`stereovar.statistics.across.combined_interval`).
-
-    Parameters
-    ----------
-    corr : list of dict
-        The row's correlation rows (``scene``, ``region``, ``method``, ``rho``,
-        ``boot_low``, ``boot_high``).
-    nulls : list of dict
-        :data:`stereovar.calibration.summary.NULL_COLUMNS` rows.
-    transform : str
-        The calibration transform matched to the row (``none`` for renders as rendered).
-
-    Returns
-    -------
-    null, diff, low, high : float
-        The scenes' mean null and the combined difference; NaN when no scene has both.
-    """
-    from ..calibration.summary import difference_interval
-    from .across import combined_interval
-
-    table = {
-        r["scene"]: r
-        for r in nulls
-        if (r["transform"], r["region"], r["method"]) == (transform, region, method)
-    }
-    null_values, diffs, lows, highs = [], [], [], []
-    for r in corr:
-        if (r["region"], r["method"]) != (region, method) or r["scene"] not in table:
-            continue
-        null = table[r["scene"]]
-        d = difference_interval(
-            r["rho"],
-            r["boot_low"],
-            r["boot_high"],
-            null["null_rho"],
-            null["null_se"],
-            r.get("chance_se", math.nan),
-        )
-        if not all(math.isfinite(x) for x in d):
-            continue
-        null_values.append(_f(null["null_rho"]))
-        diffs.append(d[0])
-        lows.append(d[1])
-        highs.append(d[2])
-    if not diffs:
-        return (math.nan,) * 4
-    return (float(np.mean(null_values)), *combined_interval(diffs, lows, highs))
 
 
 def equivalence_margin(nulls, transform: str = "none", method="partial",
@@ -260,7 +202,7 @@ def mitigation_table(
         and ``aux_spp`` (the auxiliary pass's; 0 by default),
         ``correlation`` (its scenes' correlation rows), ``intervention`` (its scenes'
         intervention rows; may be empty) and ``scene_rows`` (its scenes' mitigation rows,
-        :data:`stereovar.jobs.mitigations.MITIGATION_SCENE_COLUMNS`), and optionally
+        :data:`stereovar.jobs.mitigation_scene.MITIGATION_SCENE_COLUMNS`), and optionally
         ``calibration_transform``: the transform whose matched null applies (``none`` by
         default, for renders as rendered).
     nulls : list of dict, optional
@@ -277,7 +219,6 @@ def mitigation_table(
         One row per mitigation and region: ``all``, and each other region that a scene's
         correlation rows define.
     """
-    from ..audit.verdict import wta_lift
     from .regions import REGIONS
 
     out = []

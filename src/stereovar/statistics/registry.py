@@ -371,7 +371,7 @@ def _trimmed(values, settings):
 
 
 def _partial(values, settings):
-    from ..controls.intensity import partial_pair
+    from ..controls.partial import partial_pair
 
     covariates = values[4:]
     half = len(covariates) // 2
@@ -494,7 +494,7 @@ def flipped_pair(fields: AlignedFields):
     chance=True,
 )
 def partial_pair(fields: AlignedFields):
-    """Intensity-controlled correlation (:func:`stereovar.controls.intensity.partial_pair`),
+    """Intensity-controlled correlation (:func:`stereovar.controls.partial.partial_pair`),
     with each view's chromaticity and sensor position
     (:func:`stereovar.statistics.fields.control_covariates`)."""
     covariates = fields["control_covariates"] if "control_covariates" in fields else ()

@@ -143,7 +143,7 @@ def apply_view_png(inputs: TransformInputs, *, view_transform: str, bits: int = 
 
     Non-finite render values are NaN in the output, as every transform leaves them.
     """
-    from ..io.images import srgb_to_linear
+    from ..io.transfer import srgb_to_linear
 
     render = np.asarray(inputs.render, dtype=np.float32)
     codes = view_png_codes(render, view_transform=view_transform, bits=bits)
