@@ -276,6 +276,35 @@ def test_denoise_nonfinite_pixels_replaced_and_kept_nan():
     assert np.isfinite(via_transform).sum() == via_transform.size - 4
 
 
+def test_a_repeated_denoise_is_the_first_ones_image_without_running_oidn(monkeypatch):
+    pyoidn = pytest.importorskip("pyoidn")
+    from stereovar.transforms import denoise
+
+    _, noisy, albedo, normal = structured_scene(shape=(24, 40))
+    monkeypatch.setattr(denoise, "_MEMO", type(denoise._MEMO)())
+    first, _ = denoise_image(noisy, albedo=albedo, normal=normal)
+
+    def no_oidn(*args, **kwargs):
+        raise AssertionError("OIDN ran again for a call it has answered")
+
+    with monkeypatch.context() as m:
+        m.setattr(denoise, "_filter", no_oidn)
+        again, _ = denoise_image(noisy.copy(), albedo=albedo, normal=normal)
+        again[0, 0, 0] = -1.0  # the caller's copy, not the kept one
+        assert_array_equal(denoise_image(noisy, albedo=albedo, normal=normal)[0], first)
+    assert_array_equal(first, pyoidn.denoise(noisy, albedo, normal, hdr=True))
+    changed = noisy.copy()
+    changed[3, 5, 1] += 0.5
+    other, _ = denoise_image(changed, albedo=albedo, normal=normal)  # a new image: OIDN runs
+    assert_array_equal(other, pyoidn.denoise(changed, albedo, normal, hdr=True))
+    colour_only, _ = denoise_image(noisy)  # other inputs, another network
+    assert_array_equal(colour_only, pyoidn.denoise(noisy, hdr=True))
+    assert len(denoise._MEMO) == 3
+    monkeypatch.setattr(denoise, "MEMO_BYTES", 2 * first.nbytes)
+    denoise_image(noisy, quality="balanced")
+    assert sum(v.nbytes for v in denoise._MEMO.values()) <= 2 * first.nbytes
+
+
 def test_denoise_normal_needs_albedo():
     pytest.importorskip("pyoidn")
     _, noisy, _, normal = structured_scene(shape=(16, 16))

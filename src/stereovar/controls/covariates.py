@@ -109,9 +109,10 @@ regions, whose pixels every replicate of the calibration shares."""
 _POSITION_CACHE: OrderedDict = OrderedDict()
 
 
-def _position_block(position, degree: int) -> tuple[np.ndarray, list]:
-    """The centred position columns of a pixel set and their degrees, kept for the next call
-    on the same pixels (the same coordinates, by a digest of their bytes)."""
+def _position_block(position, degree: int) -> tuple[np.ndarray, list, np.ndarray]:
+    """The centred position columns of a pixel set, their degrees and their Gram matrix,
+    kept for the next call on the same pixels (the same coordinates, by a digest of their
+    bytes)."""
     x = np.ascontiguousarray(position[0], dtype=np.float64)
     y = np.ascontiguousarray(position[1], dtype=np.float64)
     key = (degree, x.size, hashlib.blake2b(x.tobytes() + y.tobytes(), digest_size=16).digest())
@@ -119,7 +120,7 @@ def _position_block(position, degree: int) -> tuple[np.ndarray, list]:
     if hit is None:
         z, deg = _total_degree(_unit(x), _unit(y), degree)
         z -= z.mean(axis=0)
-        hit = (z, deg)
+        hit = (z, deg, z.T @ z)
         _POSITION_CACHE[key] = hit
         while len(_POSITION_CACHE) > POSITION_CACHE_SIZE:
             _POSITION_CACHE.popitem(last=False)
@@ -162,14 +163,21 @@ def design(colour, position, quantisation=None, *, colour_degree=COLOUR_DEGREES[
         c, cdeg = _total_degree(_unit(np.asarray(colour[0], float)),
                                 _unit(np.asarray(colour[1], float)), colour_degree)
         c -= c.mean(axis=0)
-    p, pdeg = (np.empty((n, 0)), []) if position is None else (
+    p, pdeg, pp = (np.empty((n, 0)), [], np.empty((0, 0))) if position is None else (
         _position_block(position, position_degree))
     q, qdeg = np.empty((n, 0)), []
     if quantisation is not None:
         q = _quantisation_block(quantisation, quantisation_degree)
         qdeg = [1] + list(range(1, quantisation_degree + 1))
     columns = np.concatenate([c, p, q], axis=1)
-    gram = columns.T @ columns
+    # Z'Z by blocks: the position block's own (most of the columns) is the pixel set's, kept
+    cq = np.concatenate([c, q], axis=1)
+    cross = cq.T @ p
+    inner = cq.T @ cq
+    k = c.shape[1]
+    order = np.r_[0:k, cq.shape[1]:cq.shape[1] + p.shape[1], k:cq.shape[1]]  # c, p, q
+    gram = np.block([[inner, cross], [cross.T, pp]])
+    gram = gram[np.ix_(order, order)] if q.shape[1] else gram
     blocks = (cdeg, list(pdeg), qdeg)
     degrees = np.zeros((3, columns.shape[1]), dtype=int)
     start = 0
@@ -307,11 +315,12 @@ def fit_control(log_variance, log_intensity, *, colour=None, position=None,
     >>> bool(np.std(fit.residuals) < 0.005), fit.colour_degree > 0
     (True, True)
     """
-    from .intensity import fit_intensity
+    from .intensity import intensity_fitter
 
     y = np.asarray(log_variance, dtype=np.float64).reshape(-1)
     x = np.asarray(log_intensity, dtype=np.float64).reshape(-1)
-    first = fit_intensity(y, x)
+    fit_intensity = intensity_fitter(x)  # every round bins the same intensities
+    first = fit_intensity(y)
     if quantisation is not None and not (np.asarray(quantisation) > 0).any():
         quantisation = None  # float frames, or no pixel between two codes
     if (colour is None and position is None and quantisation is None) or not np.isfinite(
@@ -335,7 +344,7 @@ def fit_control(log_variance, log_intensity, *, colour=None, position=None,
     for _ in range(rounds):
         beta = _solve(gram, z.T @ (y - spline_part))
         poly = z @ beta
-        fit = fit_intensity(y - poly, x)
+        fit = fit_intensity(y - poly)
         spline_part = y - poly - fit.residuals
         rss = float(fit.residuals @ fit.residuals)
         if dq and previous - rss <= BACKFIT_TOLERANCE * rss:

@@ -24,8 +24,6 @@ import numpy as np
 from scipy.interpolate import BSpline
 from scipy.linalg import LinAlgError, solveh_banded
 
-from ..statistics.robust import log_floor
-
 BINS = 4096
 """Equal-width bins of :math:`\\ln\\mu` over a region's range whose moments the fits read
 (fewer for a region of under 16 384 pixels: one per 4 pixels, at least 256). Knots sit on bin
@@ -43,13 +41,13 @@ MIN_PIXELS = 5
 
 MIN_RESIDUAL_VARIANCE = 1e-3
 """Least variance of a view's control residuals (in :math:`\\ln\\sigma^2`) for
-:func:`partial_pair` to have anything to correlate. Eq. 1 from :math:`N` independent renders
-leaves its own estimation noise, :math:`\\psi_1(C(N-1)/2) \\approx 2/(C(N-1))` (above
-:math:`10^{-3}` for :math:`C = 3` channels up to :math:`N \\approx 670`); a field the control
+:func:`stereovar.controls.partial.partial_pair` to have anything to correlate. Eq. 1 from :math:`N`
+independent renders leaves its own estimation noise, :math:`\\psi_1(C(N-1)/2) \\approx 2/(C(N-1))`
+(above :math:`10^{-3}` for :math:`C = 3` channels up to :math:`N \\approx 670`); a field the control
 explains more closely is a function of the seed mean it reads (``equalise``'s output:
 :math:`(N-1)/N\\,(a\\bar\\mu^+ + b)`, residual variance 1e-13 to 2e-5), whose residuals are
-round-off and a few pixels off the law, so :math:`\\rho` would be a heavy-tailed remainder
-whose bootstrap interval covers 71-84% of replicates (``tests/test_equalise_coverage.py``)."""
+round-off and a few pixels off the law, so :math:`\\rho` would be a heavy-tailed remainder whose
+bootstrap interval covers 71-84% of replicates (``tests/test_equalise_coverage.py``)."""
 
 PENALTY = 1e-12
 """Weight of the second-difference penalty on the spline coefficients, relative to the mean
@@ -107,12 +105,24 @@ class _BinMoments(NamedTuple):
     centred: np.ndarray  # (n,) y - its bin's mean
 
 
-def _bin_moments(x: np.ndarray, y: np.ndarray) -> _BinMoments:
+class _Bins(NamedTuple):
+    """What the binning of :math:`x` alone gives (:func:`_bins`): shared by every fit on the
+    same intensities (the rounds of :func:`stereovar.controls.covariates.fit_control`)."""
+
+    low: float
+    high: float
+    bins: int
+    occupied: np.ndarray
+    counts: np.ndarray
+    powers: np.ndarray
+    index: np.ndarray
+    local: np.ndarray
+
+
+def _bins(x: np.ndarray) -> _Bins:
     """Bin :math:`x` into equal bins over :math:`[\\min x, \\max x]` (:data:`BINS`) and sum,
-    per bin, :math:`v^k` (:math:`k \\le 6`), :math:`\\tilde y v^k` (:math:`k \\le 3`) and
-    :math:`\\tilde y^2`, with :math:`v \\in [-1, 1]` the position in the bin and
-    :math:`\\tilde y` the log variance minus its bin's mean (which keeps the sums small, so
-    a residual sum of squares near the float32 floor of an Eq. 1 field is still resolved)."""
+    per bin, :math:`v^k` (:math:`k \\le 6`), with :math:`v \\in [-1, 1]` the position in
+    the bin."""
     low, high = float(x.min()), float(x.max())
     bins = int(min(BINS, max(256, x.size // 4)))
     pos = x - low
@@ -130,9 +140,6 @@ def _bin_moments(x: np.ndarray, y: np.ndarray) -> _BinMoments:
         return np.bincount(index, weights, minlength=bins)[occupied]
 
     counts = counts[occupied]
-    means = np.zeros(bins)
-    means[occupied] = sums(y) / counts
-    centred = y - means[index]
     square = local * local
     cube = square * local
     product = np.empty_like(local)
@@ -140,6 +147,26 @@ def _bin_moments(x: np.ndarray, y: np.ndarray) -> _BinMoments:
     powers[0], powers[1], powers[2], powers[3] = counts, sums(local), sums(square), sums(cube)
     for k, (p, q) in zip((4, 5, 6), ((square, square), (square, cube), (cube, cube)), strict=True):
         powers[k] = sums(np.multiply(p, q, out=product))
+    return _Bins(low, high, bins, occupied, counts, powers, index, local)
+
+
+def _bin_moments(x: np.ndarray, y: np.ndarray, binned: _Bins | None = None) -> _BinMoments:
+    """Bin :math:`x` (:func:`_bins`, or ``binned`` from an earlier call on the same
+    :math:`x`) and sum, per bin, :math:`\\tilde y v^k` (:math:`k \\le 3`) and
+    :math:`\\tilde y^2`, with :math:`\\tilde y` the log variance minus its bin's mean (which
+    keeps the sums small, so a residual sum of squares near the float32 floor of an Eq. 1
+    field is still resolved)."""
+    low, high, bins, occupied, counts, powers, index, local = binned or _bins(x)
+
+    def sums(weights):
+        return np.bincount(index, weights, minlength=bins)[occupied]
+
+    means = np.zeros(bins)
+    means[occupied] = sums(y) / counts
+    centred = y - means[index]
+    square = local * local
+    cube = square * local
+    product = np.empty_like(local)
     cross = np.zeros((4, occupied.size))  # row 0, the sum of y - mean, is 0 in every bin
     for r, p in zip((1, 2, 3), (local, square, cube), strict=True):
         cross[r] = sums(np.multiply(centred, p, out=product))
@@ -315,7 +342,7 @@ def fit_intensity(log_variance, log_intensity, *, intervals: int | None = None) 
     :math:`1, 2, 4, \\ldots` up to :data:`MAX_INTERVALS` and
     :data:`MIN_PIXELS_PER_INTERVAL` pixels per interval, stopping after two doublings
     that do not lower the score. The intensity control, not in the paper; Eq. 3 (paper
-    Sec. 2.3) on the residuals of both views is :func:`partial_pair`.
+    Sec. 2.3) on the residuals of both views is :func:`stereovar.controls.partial.partial_pair`.
 
     Why this shape. Whatever :math:`\\hat g` misses of the true conditional mean is a
     function of :math:`\\mu`, which both views share once aligned, so the two views'
@@ -367,10 +394,21 @@ def fit_intensity(log_variance, log_intensity, *, intervals: int | None = None) 
         # one intensity (to 1e-9, below float32's resolution): its mean is the conditional mean
         residuals = y - y.mean()
         return IntensityFit(residuals, 0, n * float(residuals @ residuals) / (n - 1) ** 2)
-    moments = _bin_moments(x, y)
+    return _fit_binned(y, x, intervals)
+
+
+def _fit_binned(y, x, intervals, binned: _Bins | None = None, levels: dict | None = None):
+    """:func:`fit_intensity` on finite :math:`x` with a spread, reusing ``binned``
+    (:func:`_bins` of ``x``) and ``levels`` (resolution to :func:`_level`, filled here) from
+    earlier fits on the same :math:`x`."""
+    n = y.size
+    moments = _bin_moments(x, y, binned)
+    levels = {} if levels is None else levels
     best, since_best = None, 0
     for k in _resolutions(n, intervals):
-        level = _level(moments, k)
+        level = levels.get(k)
+        if level is None:
+            level = levels[k] = _level(moments, k)
         beta, rss = _fit(moments, level)
         score = n * rss / max(n - beta.size, 1) ** 2
         if best is None or score < best[0]:
@@ -383,6 +421,37 @@ def fit_intensity(log_variance, log_intensity, *, intervals: int | None = None) 
     return IntensityFit(_evaluate(moments, level, beta), beta.size - 3, float(score))
 
 
+def intensity_fitter(log_intensity):
+    """:func:`fit_intensity` as a function of the log variance alone, for many fits on the
+    same intensities: the binning of :math:`\\ln\\mu` and each resolution's knots are
+    computed once (the same numbers as separate calls).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> log_mu = rng.uniform(-3, 0, 2000)
+    >>> fit = intensity_fitter(log_mu)
+    >>> for shift in (0.0, 0.5):
+    ...     y = np.log(0.01 * np.exp(log_mu) + 1e-4) + shift + rng.normal(0, 0.1, 2000)
+    ...     assert np.array_equal(fit(y).residuals, fit_intensity(y, log_mu).residuals)
+    """
+    x = np.asarray(log_intensity, dtype=np.float64).reshape(-1)
+    state: dict = {}
+
+    def fit(log_variance) -> IntensityFit:
+        y = np.asarray(log_variance, dtype=np.float64).reshape(-1)
+        spread = x.max() - x.min() > 1e-9 * max(1.0, float(np.abs(x).max())) if x.size else False
+        if (y.shape != x.shape or x.size < MIN_PIXELS or not spread
+                or not (np.isfinite(x).all() and np.isfinite(y).all())):
+            return fit_intensity(y, x)
+        if "bins" not in state:
+            state["bins"], state["levels"] = _bins(x), {}
+        return _fit_binned(y, x, None, state["bins"], state["levels"])
+
+    return fit
+
+
 def intensity_residuals(log_variance, log_intensity, *, intervals: int | None = None):
     """Residuals of :math:`\\ln\\sigma^2` after its conditional mean given :math:`\\ln\\mu`.
 
@@ -393,8 +462,9 @@ def intensity_residuals(log_variance, log_intensity, *, intervals: int | None = 
 
     with :math:`\\hat g` the least-squares cubic spline whose number of knots
     generalised cross-validation chooses (:func:`fit_intensity`, which also reports the
-    resolution). The intensity control, not in the paper; :func:`partial_pair` correlates
-    the two views' residuals by Eq. 3 (paper Sec. 2.3).
+    resolution). The intensity control, not in the paper;
+    :func:`stereovar.controls.partial.partial_pair` correlates the two views' residuals by
+    Eq. 3 (paper Sec. 2.3).
 
     Parameters
     ----------
@@ -433,97 +503,6 @@ def intensity_residuals(log_variance, log_intensity, *, intervals: int | None = 
     True
     """
     return fit_intensity(log_variance, log_intensity, intervals=intervals).residuals
-
-
-def partial_pair(
-    a, b, mu_a, mu_b, *, intervals: int | None = None, covariates=None
-) -> tuple[np.ndarray, np.ndarray]:
-    """The intensity-controlled pair of one region: each view's residuals.
-
-    .. math::
-
-        \\rho_{\\text{partial}} = \\mathrm{corr}\\bigl(e_L, e_{R\\to L}\\bigr)\\big|_{\\Omega},
-        \\qquad e_V = \\ln\\sigma_V^2 - \\hat g_V(\\ln \\mu_V)
-
-    with :math:`\\hat g_V \\approx \\mathrm E[\\ln\\sigma_V^2 \\mid \\ln\\mu_V]` the
-    :func:`intensity_residuals` spline of view :math:`V` on the region (its resolution chosen
-    from the view's data, :func:`fit_intensity`), :math:`\\mu` the RGB mean of the seed mean
-    and both logarithms floored at the smallest positive value
-    (:func:`stereovar.statistics.robust.log_floor`). It is Eq. 3 (paper Sec. 2.3) on what
-    intensity does not explain; the control itself is not in the paper. The right-view
-    arguments are already warped into the left view (Eq. 2, Sec. 2.2); the registered
-    statistic ``partial`` (:mod:`stereovar.statistics.registry`) correlates the pair.
-
-    Parameters
-    ----------
-    a, b : numpy.ndarray, shape (n,)
-        :math:`\\sigma_L^2` and :math:`\\hat\\sigma_{R\\to L}^2` over the region.
-    mu_a, mu_b : numpy.ndarray, shape (n,)
-        The intensities :math:`\\mu_L` and :math:`\\hat\\mu_{R\\to L}` at the same pixels.
-    intervals : int, keyword-only, optional
-        Fixed number of knot intervals for both views (default: chosen per view; without
-        ``covariates`` only).
-    covariates : tuple of two tuples of numpy.ndarray (n,), keyword-only, optional
-        Each view's chromaticity (two arrays, or none), the variance its integer encoding
-        implies (one array, after the chromaticity, or none) and its position :math:`(x, y)`
-        on its own sensor (:func:`stereovar.statistics.fields.control_covariates`): the
-        control then removes them too (:func:`stereovar.controls.covariates.fit_control`).
-
-    Returns
-    -------
-    e_a, e_b : numpy.ndarray, shape (n,)
-        The residuals :math:`e_L` and :math:`e_{R\\to L}`.
-
-    Examples
-    --------
-    Twelve pixels at three intensities, four each. With three distinct values of
-    :math:`\\ln\\mu` the conditional mean is each level's mean, so a residual is the log
-    variance minus its level's mean. A camera's variance :math:`\\sigma^2 = 0.01\\mu +
-    10^{-4}` is a function of :math:`\\mu`: the two views' fields correlate perfectly, yet
-    nothing is left once intensity is removed.
-
-    >>> import numpy as np
-    >>> mu = np.repeat([0.2, 0.5, 0.9], 4)
-    >>> camera = 0.01 * mu + 1e-4
-    >>> round(float(np.corrcoef(camera, 2 * camera)[0, 1]), 12)
-    1.0
-    >>> e_l, e_r = partial_pair(camera, 2 * camera, mu, mu)
-    >>> bool(np.isnan(e_l).all() and np.isnan(e_r).all())  # nothing left to correlate
-    True
-
-    A Monte Carlo structure :math:`z` with mean 0 at every intensity survives whole
-    (:math:`e_L = z`). With :math:`e_R = z + w` and :math:`w \\perp z`,
-    :math:`\\rho_{\\text{partial}} = \\lVert z\\rVert / \\lVert z + w\\rVert
-    = \\sqrt{0.6 / 0.72} = \\sqrt{5/6}`:
-
-    >>> z = np.tile([0.3, -0.3, 0.1, -0.1], 3)
-    >>> w = np.tile([0.1, 0.1, -0.1, -0.1], 3)
-    >>> e_l, e_r = partial_pair(0.01 * mu * np.exp(z), 0.03 * mu * np.exp(z + w), mu, mu)
-    >>> bool(np.allclose(e_l, z) and np.allclose(e_r, z + w))
-    True
-    >>> bool(np.isclose(np.corrcoef(e_l, e_r)[0, 1], np.sqrt(5 / 6)))
-    True
-    """
-    la, _ = log_floor(a)
-    lb, _ = log_floor(b)
-    lma, _ = log_floor(mu_a)
-    lmb, _ = log_floor(mu_b)
-    if covariates is not None and intervals is None:
-        from .covariates import fit_control
-
-        out = []
-        for y, x, side in ((la, lma, covariates[0]), (lb, lmb, covariates[1])):
-            rest = side[:-2]  # chromaticity (2), then the quantisation variance, if given
-            colour = tuple(rest[:2]) if len(rest) >= 2 else None
-            quantisation = rest[2] if len(rest) == 3 else None
-            out.append(fit_control(y, x, colour=colour, position=tuple(side[-2:]),
-                                   quantisation=quantisation).residuals)
-    else:
-        out = [intensity_residuals(la, lma, intervals=intervals),
-               intensity_residuals(lb, lmb, intervals=intervals)]
-    if any(np.nanvar(e) < MIN_RESIDUAL_VARIANCE for e in out if np.isfinite(e).any()):
-        return np.full(np.shape(a), np.nan), np.full(np.shape(b), np.nan)
-    return out[0], out[1]
 
 
 def relative_variance(variance, intensity) -> np.ndarray:
