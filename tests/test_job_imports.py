@@ -1,0 +1,47 @@
+"""A workflow job imports what it computes with: without dask, unless asked for
+(``STEREOVAR_DASK``, set to 0 by the Snakefile), reading its stores the same numbers."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import xarray as xr
+
+from stereovar.io.store import write_dataset
+
+READ = """
+import json, sys
+import stereovar.jobs
+import numpy as np
+from stereovar.io.store import load_store
+ds = load_store(sys.argv[1], "variance store")
+print(json.dumps({"dask": sys.modules.get("dask") is not None,
+                  "sum": float(ds["variance"].values.sum()), "first": float(ds["variance"][0, 1])}))
+"""
+
+
+def _read(store, dask_setting):
+    env = {k: v for k, v in os.environ.items() if k != "STEREOVAR_DASK"}
+    if dask_setting is not None:
+        env["STEREOVAR_DASK"] = dask_setting
+    out = subprocess.run([sys.executable, "-c", READ, str(store)], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def test_a_workflow_job_reads_its_stores_without_dask_and_gets_the_same_numbers(tmp_path):
+    values = np.random.default_rng(0).gamma(2.0, 0.1, (6, 9))
+    store = tmp_path / "v.zarr"
+    coords = {"y": np.arange(6), "x": np.arange(9)}  # as every store has
+    write_dataset(xr.Dataset({"variance": (("y", "x"), values)}, coords=coords), store)
+    job = _read(store, "0")  # as the Snakefile sets it for its jobs
+    free = _read(store, None)
+    assert not job["dask"]
+    assert free["dask"]  # xarray imports it where it is installed and not refused
+    assert job["sum"] == free["sum"] == float(values.sum())
+    assert job["first"] == float(values[0, 1])
+    assert _read(store, "1")["dask"]  # asked for
