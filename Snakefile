@@ -25,7 +25,7 @@ export_install_requirement(os.environ)
 # in the last bit) and spins on cores other jobs use. Set it before a run to override.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # The jobs read every store numpy-backed: without dask, which xarray would otherwise import
-# in each of them (stereovar.jobs). Set STEREOVAR_DASK=1 before a run to keep it.
+# in each of them (stereovar). Set STEREOVAR_DASK=1 before a run to keep it.
 os.environ.setdefault("STEREOVAR_DASK", "0")
 
 

@@ -4,9 +4,11 @@ An *empty job* of a kind is what Snakemake's ``script:`` directive runs for it, 
 first computation: a fresh Python process, Snakemake's preamble (the imports that unpickle
 its ``snakemake`` object), the adapter script in ``workflow/scripts/`` with its imports, and
 the imports the job function makes as it starts (the ``import`` statements of its body,
-read from the source). The job function itself is not called: ``stereovar.jobs.common.run_job``
-is replaced by one that makes those imports and returns. The environment is a workflow
-job's (``STEREOVAR_DASK=0``, ``OPENBLAS_NUM_THREADS=1``; see ``Snakefile``).
+read from the source), and, for a kind that reads stores (its imports hold xarray), reading
+one small store (:func:`stereovar.io.store.load_store`: 180x320 float32 with its
+coordinates). Neither the adapter's ``run_job`` call nor the job function runs. The
+environment is a workflow job's (``STEREOVAR_DASK=0``, ``OPENBLAS_NUM_THREADS=1``; see
+``Snakefile``).
 
 Each kind's CPU time (user + system, the least of ``--repeats`` runs) is printed beside the
 named baseline measured in the same run, **the bare preamble**: a Python process that makes
@@ -29,6 +31,7 @@ import resource
 import statistics
 import subprocess
 import sys
+import tempfile
 import textwrap
 from pathlib import Path
 
@@ -41,41 +44,18 @@ PREAMBLE = "import sys, pickle\nfrom snakemake.logging import logger\nimport sna
 """What Snakemake's Python preamble imports to unpickle the ``snakemake`` object
 (``snakemake.script.PythonScript.generate_preamble``)."""
 
-STUB = textwrap.dedent(
-    '''
-    class _Stub:
-        """Stands in for the snakemake object: every attribute, item and call is a stub."""
-        def __getattr__(self, name): return _Stub()
-        def __getitem__(self, key): return _Stub()
-        def __call__(self, *a, **k): return _Stub()
-        def __iter__(self): return iter(())
-        def __len__(self): return 0
-        def __int__(self): return 0
-        def __float__(self): return 0.0
-        def __index__(self): return 0
-        def __bool__(self): return False
-        def __str__(self): return "stub"
-        def __fspath__(self): return "stub"
-        def keys(self): return []
-        def items(self): return []
-        def get(self, key, default=None): return default
-    snakemake = _Stub()
-    '''
-)
-
-EMPTY_RUN_JOB = textwrap.dedent(
+BODY_IMPORTS = textwrap.dedent(
     '''
     import ast, importlib, inspect, textwrap
-    import stereovar.jobs.common as _common
 
     def _body_imports(job):
-        """Import what ``job``'s body imports, as it would on its first line."""
+        """Import what ``job``'s body imports, as it does on its first lines."""
         module = inspect.getmodule(job)
         tree = ast.parse(textwrap.dedent(inspect.getsource(job)))
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom):
-                name = "." * node.level + (node.module or "")
-                base = importlib.util.resolve_name(name, module.__package__)
+                base = importlib.util.resolve_name("." * node.level + (node.module or ""),
+                                                   module.__package__)
                 target = importlib.import_module(base)
                 for alias in node.names:
                     if not hasattr(target, alias.name):
@@ -83,11 +63,6 @@ EMPTY_RUN_JOB = textwrap.dedent(
             elif isinstance(node, ast.Import):
                 for alias in node.names:
                     importlib.import_module(alias.name)
-
-    def _empty_run_job(log_path, job, **kwargs):
-        _body_imports(job)
-
-    _common.run_job = _empty_run_job
     '''
 )
 
@@ -98,27 +73,49 @@ def kinds(repo: Path) -> list[str]:
 
 
 def adapter_code(repo: Path, kind: str) -> str:
-    """The adapter script of ``kind`` with its ``from stereovar.jobs.common import run_job``
-    left to the empty ``run_job`` already installed."""
-    source = (repo / "workflow" / "scripts" / f"{kind}.py").read_text()
-    tree = ast.parse(source)
-    keep = [
-        node for node in tree.body
-        if not (isinstance(node, ast.ImportFrom) and node.module == "stereovar.jobs.common"
-                and [a.name for a in node.names] == ["run_job"])
-    ]
-    return "from stereovar.jobs.common import run_job\n" + ast.unparse(
-        ast.Module(body=keep, type_ignores=[]))
+    """The imports of ``kind``'s adapter script, then those of the job function it passes
+    to ``run_job`` (its second argument), without calling either."""
+    tree = ast.parse((repo / "workflow" / "scripts" / f"{kind}.py").read_text())
+    imports = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call)
+             and getattr(n.func, "id", None) == "run_job"]
+    if len(calls) != 1 or len(calls[0].args) < 2:
+        raise SystemExit(f"workflow/scripts/{kind}.py: no single run_job(log, job, ...) call")
+    job = ast.unparse(calls[0].args[1])
+    return (ast.unparse(ast.Module(body=imports, type_ignores=[])) + f"\n_body_imports({job})\n"
+            + READ_STORE)
 
 
-def child_cpu(code: str, repo: Path, repeats: int) -> float:
-    """The least user + system CPU time of ``repeats`` fresh processes running ``code``."""
+READ_STORE = """
+if "xarray" in sys.modules:
+    from stereovar.io.store import load_store
+    load_store(sys.argv[1], "store")
+"""
+
+
+def small_store(folder: Path) -> Path:
+    """A variance-store-like Zarr store (180x320 float32, coordinates y and x)."""
+    import numpy as np
+    import xarray as xr
+
+    path = folder / "small.zarr"
+    values = np.random.default_rng(0).gamma(2.0, 0.1, (180, 320)).astype(np.float32)
+    coords = {"y": np.arange(180), "x": np.arange(320)}
+    xr.Dataset({"variance": (("y", "x"), values)}, coords=coords).to_zarr(
+        path, mode="w", zarr_format=2, consolidated=True)
+    return path
+
+
+def child_cpu(code: str, repo: Path, repeats: int, *args) -> float:
+    """The least user + system CPU time of ``repeats`` fresh processes running ``code``
+    (with ``args`` in ``sys.argv[1:]``)."""
     env = {**os.environ, "STEREOVAR_DASK": "0", "OPENBLAS_NUM_THREADS": "1",
            "PYTHONPATH": str(repo / "src")}
     times = []
     for _ in range(repeats):
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-c", code], check=True, cwd=repo, env=env,
+        subprocess.run([sys.executable, "-c", code, *map(str, args)], check=True, cwd=repo,
+                       env=env,
                        stdout=subprocess.DEVNULL)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         times.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
@@ -133,14 +130,15 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
     repo = args.repo.resolve()
+    store = small_store(Path(tempfile.mkdtemp()))
     baseline = child_cpu(PREAMBLE, repo, args.repeats)
     print(f"baseline (bare preamble: python + Snakemake's preamble imports): {baseline:.3f} "
           "CPU-s")
     print(f"{'job kind':<28} {'CPU-s':>6} {'x baseline':>10}  budget {BUDGET}")
     results = {}
     for kind in args.kinds or kinds(repo):
-        code = PREAMBLE + STUB + EMPTY_RUN_JOB + adapter_code(repo, kind)
-        results[kind] = cpu = child_cpu(code, repo, args.repeats)
+        code = PREAMBLE + BODY_IMPORTS + adapter_code(repo, kind)
+        results[kind] = cpu = child_cpu(code, repo, args.repeats, store)
         flag = "" if cpu <= BUDGET else "  over"
         print(f"{kind:<28} {cpu:6.3f} {cpu / baseline:10.1f}{flag}")
     values = list(results.values())

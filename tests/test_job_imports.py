@@ -1,5 +1,6 @@
 """A workflow job imports what it computes with: without dask, unless asked for
-(``STEREOVAR_DASK``, set to 0 by the Snakefile), reading its stores the same numbers."""
+(``STEREOVAR_DASK``, set to 0 by the Snakefile), reading its stores the same numbers,
+whichever stereovar module it imports first."""
 
 from __future__ import annotations
 
@@ -15,8 +16,7 @@ from stereovar.io.store import write_dataset
 
 READ = """
 import json, sys
-import stereovar.jobs
-import numpy as np
+from stereovar.io.contracts import config_digest  # a job's first import (the claims job's)
 from stereovar.io.store import load_store
 ds = load_store(sys.argv[1], "variance store")
 print(json.dumps({"dask": sys.modules.get("dask") is not None,

@@ -13,9 +13,21 @@ is imported from its module, e.g. ``stereovar.statistics.bootstrap``.
 The Mitsuba-only names ``load_mitsuba``, ``select_variant``, ``load_scene``,
 ``render_view`` and ``MitsubaScene`` live in :mod:`stereovar.renderers.mitsuba`; their old
 top-level names still resolve, with a :class:`DeprecationWarning`, until the next release.
+
+A workflow job runs without dask: the ``Snakefile`` sets ``STEREOVAR_DASK=0`` for its jobs,
+and importing the package before xarray then marks dask absent, so that xarray, which reads
+every store numpy-backed here, does not import it (about 0.3 CPU-s a job,
+``bench/job_overhead.py``). Set ``STEREOVAR_DASK=1`` before a run to keep it.
 """
 
+import os as _os
+import sys as _sys
+
 __version__ = "0.1.0"
+
+if (_os.environ.get("STEREOVAR_DASK") == "0"
+        and not {"dask", "xarray"} & set(_sys.modules)):  # xarray decides at its import
+    _sys.modules["dask"] = None  # importlib.util.find_spec("dask") is then None
 
 # Public API for notebooks, imported on first use so that `import stereovar` stays cheap.
 _API = {

@@ -14,15 +14,4 @@ counterfactual inputs), ``generators`` (the generator table and figure), ``dose_
 (what a seed-mean mitigation ships over its budget and the camera) and ``audit`` (an audit's
 import, verdict page and export). Import the module you need, e.g.
 ``from stereovar.jobs.render import render_job``.
-
-A workflow job runs without dask: the workflow sets ``STEREOVAR_DASK=0`` for its jobs
-(``Snakefile``), and importing this package then marks dask absent, so
-xarray, which reads every store numpy-backed here, does not import it (about 0.4 CPU-s a
-job; ``bench/job_overhead.py``). Set ``STEREOVAR_DASK=1`` to keep it.
 """
-
-import os as _os
-import sys as _sys
-
-if _os.environ.get("STEREOVAR_DASK") == "0" and "dask" not in _sys.modules:
-    _sys.modules["dask"] = None  # importlib.util.find_spec("dask") is then None
