@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
+from scipy.special import ndtr, ndtri
 
 from ..errors import AuditError
 
@@ -183,7 +183,7 @@ def frames_for_power(curve: list[PowerPoint], strength: float, power: float) -> 
     se = float(np.interp(math.log(strength), xs, [p.se for p in curve]))
     if delta <= MIN_EFFECT or se <= 0:
         return None, 0.0
-    frames = max(1, math.ceil(((Z + float(stats.norm.ppf(power))) * se / (delta - MIN_EFFECT))
+    frames = max(1, math.ceil(((Z + float(ndtri(power))) * se / (delta - MIN_EFFECT))
                               ** 2))
     return frames, power_at(curve, strength, frames)
 
@@ -375,7 +375,7 @@ def power_at(curve: list[PowerPoint], strength: float, frames: int) -> float:
     se = float(np.interp(math.log(strength), xs, [p.se for p in curve]))
     if se <= 0:
         return float(delta > MIN_EFFECT)
-    return float(stats.norm.cdf(math.sqrt(frames) * (delta - MIN_EFFECT) / se - Z))
+    return float(ndtr(math.sqrt(frames) * (delta - MIN_EFFECT) / se - Z))
 
 
 __all__ = [

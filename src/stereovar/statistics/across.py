@@ -16,8 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
-from scipy.special import ndtri
+from scipy.special import ndtri, stdtrit
 
 from .regions import REGIONS
 from .registry import METHODS
@@ -150,7 +149,7 @@ def random_effects_interval(values, *, level=0.95) -> tuple[float, float, float]
     mean = float(x.mean())
     if x.size < 2:
         return mean, math.nan, math.nan
-    half = float(stats.t.ppf(0.5 + level / 2, x.size - 1)) * float(x.std(ddof=1))
+    half = float(stdtrit(x.size - 1, 0.5 + level / 2)) * float(x.std(ddof=1))
     half /= math.sqrt(x.size)
     return mean, mean - half, mean + half
 
@@ -325,7 +324,7 @@ def random_effects_correlation_interval(values, *, level=0.95) -> tuple[float, f
     mean = float(x.mean())
     if x.size < 2:
         return mean, math.nan, math.nan
-    half = float(stats.t.ppf(0.5 + level / 2, x.size - 1)) * float(z.std(ddof=1))
+    half = float(stdtrit(x.size - 1, 0.5 + level / 2)) * float(z.std(ddof=1))
     half /= math.sqrt(x.size)
     if half == 0:  # scenes that agree: exactly their value, not tanh(atanh(mean))
         return mean, mean, mean

@@ -12,7 +12,6 @@ the disagreement is the reference's noise.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from .bootstrap import BootstrapSettings, draw_counts, percentile_interval, tile_labels
 from .reliability import spearman_brown
@@ -83,6 +82,8 @@ def field_agreement(
     dict
         :data:`AGREEMENT_KEYS`.
     """
+    from scipy import stats  # only the estimator checks pay its import
+
     settings = settings or BootstrapSettings()
     a = np.asarray(estimate, np.float64)
     b = np.asarray(reference, np.float64)
@@ -121,6 +122,8 @@ def split_half_reliability(halves, mask) -> dict:
     dict
         ``reliability_spearman``, ``reliability_pearson``.
     """
+    from scipy import stats  # only the estimator checks pay its import
+
     h = np.asarray(halves, np.float64)
     keep = np.asarray(mask, bool) & np.isfinite(h).all(axis=0)
     x, y = h[0][keep], h[1][keep]
