@@ -18,7 +18,7 @@ with the ratio to it and the budget :data:`BUDGET`.
 Usage::
 
     .venv/bin/python bench/job_overhead.py                 # every kind, this checkout
-    .venv/bin/python bench/job_overhead.py --repo /path/to/other/checkout   # its scripts
+    .venv/bin/python bench/job_overhead.py --against /tmp/before   # beside an older checkout
     .venv/bin/python bench/job_overhead.py --kinds warp correlation --repeats 7
 """
 
@@ -126,25 +126,38 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repo", type=Path, default=REPO,
                         help="the checkout whose scripts and package are measured")
+    parser.add_argument("--against", type=Path,
+                        help="another checkout (e.g. an earlier commit's), measured beside "
+                             "each kind in the same run")
     parser.add_argument("--kinds", nargs="*", help="job kinds (default: every script)")
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
     repo = args.repo.resolve()
+    other = args.against.resolve() if args.against else None
     store = small_store(Path(tempfile.mkdtemp()))
     baseline = child_cpu(PREAMBLE, repo, args.repeats)
     print(f"baseline (bare preamble: python + Snakemake's preamble imports): {baseline:.3f} "
           "CPU-s")
-    print(f"{'job kind':<28} {'CPU-s':>6} {'x baseline':>10}  budget {BUDGET}")
-    results = {}
+    head = f"{'job kind':<28} {'CPU-s':>6} {'x baseline':>10}"
+    print(head + (f" {'against':>8} {'ratio':>6}" if other else "") + f"  budget {BUDGET}")
+    results, before = {}, {}
     for kind in args.kinds or kinds(repo):
-        code = PREAMBLE + BODY_IMPORTS + adapter_code(repo, kind)
-        results[kind] = cpu = child_cpu(code, repo, args.repeats, store)
-        flag = "" if cpu <= BUDGET else "  over"
-        print(f"{kind:<28} {cpu:6.3f} {cpu / baseline:10.1f}{flag}")
+        results[kind] = cpu = child_cpu(PREAMBLE + BODY_IMPORTS + adapter_code(repo, kind),
+                                        repo, args.repeats, store)
+        line = f"{kind:<28} {cpu:6.3f} {cpu / baseline:10.1f}"
+        if other and (other / "workflow" / "scripts" / f"{kind}.py").exists():
+            before[kind] = was = child_cpu(
+                PREAMBLE + BODY_IMPORTS + adapter_code(other, kind), other, args.repeats, store)
+            line += f" {was:8.3f} {cpu / was:6.2f}"
+        print(line + ("" if cpu <= BUDGET else "  over"))
     values = list(results.values())
     print(f"median {statistics.median(values):.3f} CPU-s, largest {max(values):.3f} "
           f"({max(results, key=results.get)}), {sum(v > BUDGET for v in values)} of "
           f"{len(values)} kinds over {BUDGET}")
+    if before:
+        print(f"against {other}: median {statistics.median(before.values()):.3f} CPU-s, "
+              f"largest {max(before.values()):.3f}; the sum over the kinds "
+              f"{sum(results[k] for k in before) / sum(before.values()):.2f}x")
     return 0
 
 
