@@ -29,6 +29,8 @@ from ..statistics.across import combined_interval, rows_interval
 from ..statistics.lift import lift_rows, wta_lift
 from ..statistics.matched_null import matched_difference
 from ..statistics.reliability import corrected_interval
+from ..statistics.values import all_finite as _ok
+from ..statistics.values import as_float as _f
 
 STRENGTHS = ((0.5, "strong"), (0.3, "moderate"), (0.1, "weak"), (-math.inf, "negligible"))
 """Words for the intensity-controlled :math:`\\rho` (Cohen's conventions for a correlation)."""
@@ -91,17 +93,6 @@ ROWS = (
 )
 """Correlation rows of the verdict: method (``corrected``: the warp row corrected), label,
 note."""
-
-
-def _f(value) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
-
-
-def _ok(*values) -> bool:
-    return all(math.isfinite(_f(v)) for v in values)
 
 
 def correlation_summary(rows: list[dict], method: str, region: str) -> tuple:

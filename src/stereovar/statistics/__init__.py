@@ -53,6 +53,8 @@ interval, and the tables built from the per-scene rows.
     What a seed-mean mitigation ships over its budget and the camera, and what removes it.
 ``generators``
     The generator table: each generator profile's cue against its own matched null.
+``values``
+    Table cells read as numbers (NaN where missing or unreadable).
 ``t_intervals``
     Student-t intervals of a mean over scenes, and of a geometric mean of ratios.
 ``claim_rules``

@@ -15,17 +15,8 @@ import math
 
 from .across import combined_interval
 from .t_intervals import t_interval
-
-
-def _f(value) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
-
-
-def _ok(*values) -> bool:
-    return all(math.isfinite(_f(v)) for v in values)
+from .values import all_finite as _ok
+from .values import as_float as _f
 
 
 def lift_rows(intervention: list[dict], source: str = "render",

@@ -14,13 +14,7 @@ import math
 import numpy as np
 
 from .across import combined_interval
-
-
-def _f(value) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
+from .values import as_float as _f
 
 
 def matched_difference(corr, nulls, *, transform, region, method="partial"):
