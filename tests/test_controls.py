@@ -258,3 +258,44 @@ def test_claims_table_gives_the_verdict_the_inputs_imply():
     assert claims["rho (all) = 0.754"]["verdict"] == EXPLAINED
     assert claims["real sensors carry rho = 0"]["verdict"] == FAILS
     assert claims["rho invariant to SPP within 0.2%"]["verdict"] == UNTESTABLE
+
+
+def test_covariate_columns_by_blocks_equal_the_joined_matrix():
+    """The control's candidate columns stay in blocks (chromaticity, position,
+    quantisation); their products, their Gram matrix and any selection equal those of the
+    joined matrix, built here column by column from the Legendre polynomials."""
+    from numpy.polynomial import legendre
+
+    from stereovar.controls.covariates import design
+
+    rng = np.random.default_rng(3)
+    n = 500
+    colour = (rng.uniform(0.5, 1.5, n), rng.uniform(0.5, 1.5, n))
+    position = (rng.uniform(0, 63, n), rng.uniform(0, 31, n))
+    q = np.where(rng.random(n) < 0.2, 0.0, rng.uniform(1e-6, 1e-4, n))
+    columns, degrees, gram = design(colour, position, q, colour_degree=2, position_degree=2)
+
+    def unit(v):
+        return (2 * v - (v.min() + v.max())) / (v.max() - v.min())
+
+    def total(u, v, d):
+        return [legendre.legval(u, np.eye(d + 1)[i]) * legendre.legval(v, np.eye(d + 1)[t - i])
+                for t in range(1, d + 1) for i in range(t + 1)]
+
+    logs = np.log(np.where(q > 0, q, q[q > 0].min()))
+    joined = np.column_stack(
+        total(unit(colour[0]), unit(colour[1]), 2) + total(unit(position[0]), unit(position[1]), 2)
+        + [(q <= 0).astype(float)] + [legendre.legval(unit(logs), np.eye(4)[k]) for k in (1, 2, 3)])
+    joined -= joined.mean(axis=0)
+    assert columns.shape == joined.shape == (n, 5 + 5 + 4)
+    assert degrees.tolist() == [[1, 1, 2, 2, 2] + [0] * 9, [0] * 5 + [1, 1, 2, 2, 2] + [0] * 4,
+                                [0] * 10 + [1, 1, 2, 3]]
+    np.testing.assert_allclose(gram, joined.T @ joined, rtol=1e-10, atol=1e-9)
+    y, beta = rng.normal(size=n), rng.normal(size=14)
+    np.testing.assert_allclose(columns.rmatvec(y), joined.T @ y, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(columns.matvec(beta), joined @ beta, rtol=1e-10, atol=1e-10)
+    for use in (np.r_[0:2, 5:8], np.r_[1, 3, 9, 10, 12]):  # leading columns, then any
+        part = columns.take(use)
+        np.testing.assert_allclose(part.matvec(beta[use]), joined[:, use] @ beta[use],
+                                   rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(part.rmatvec(y), joined[:, use].T @ y, rtol=1e-10, atol=1e-10)

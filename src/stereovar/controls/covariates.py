@@ -129,6 +129,52 @@ def _position_block(position, degree: int) -> tuple[np.ndarray, list, np.ndarray
     return hit
 
 
+class Columns:
+    """Candidate columns of :math:`h_c`, :math:`h_p` and :math:`h_q`, kept as their three
+    blocks (never joined into one array as large as the region times every column: the
+    position block is shared between calls, :func:`_position_block`).
+
+    Parameters
+    ----------
+    blocks : sequence of numpy.ndarray (n, p_b)
+    """
+
+    def __init__(self, blocks):
+        self.blocks = [b for b in blocks if b.shape[1]]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        n = self.blocks[0].shape[0] if self.blocks else 0
+        return n, sum(b.shape[1] for b in self.blocks)
+
+    def take(self, use: np.ndarray) -> Columns:
+        """The columns at ``use`` (increasing): a block's leading columns stay a view."""
+        out, start = [], 0
+        use = np.asarray(use)
+        for b in self.blocks:
+            mine = use[(use >= start) & (use < start + b.shape[1])] - start
+            start += b.shape[1]
+            if mine.size == 0:
+                continue
+            prefix = mine.size and mine[-1] == mine.size - 1
+            out.append(b[:, : mine.size] if prefix else b[:, mine])
+        return Columns(out)
+
+    def rmatvec(self, y: np.ndarray) -> np.ndarray:
+        """:math:`Z^\\top y`."""
+        if not self.blocks:
+            return np.empty(0)
+        return np.concatenate([b.T @ y for b in self.blocks])
+
+    def matvec(self, beta: np.ndarray) -> np.ndarray:
+        """:math:`Z \\beta`."""
+        out, start = np.zeros(self.shape[0]), 0
+        for b in self.blocks:
+            out += b @ beta[start : start + b.shape[1]]
+            start += b.shape[1]
+        return out
+
+
 def design(colour, position, quantisation=None, *, colour_degree=COLOUR_DEGREES[-1],
            position_degree=POSITION_DEGREES[-1],
            quantisation_degree=QUANTISATION_DEGREES[-1]):
@@ -148,7 +194,8 @@ def design(colour, position, quantisation=None, *, colour_degree=COLOUR_DEGREES[
 
     Returns
     -------
-    columns : numpy.ndarray (n, p)
+    columns : Columns
+        :math:`Z`, (n, p), in the order chromaticity, position, quantisation.
     degrees : numpy.ndarray (3, p)
         Each column's degree in the chromaticity, position and quantisation terms (0 in the
         others).
@@ -169,7 +216,6 @@ def design(colour, position, quantisation=None, *, colour_degree=COLOUR_DEGREES[
     if quantisation is not None:
         q = _quantisation_block(quantisation, quantisation_degree)
         qdeg = [1] + list(range(1, quantisation_degree + 1))
-    columns = np.concatenate([c, p, q], axis=1)
     # Z'Z by blocks: the position block's own (most of the columns) is the pixel set's, kept
     cq = np.concatenate([c, q], axis=1)
     cross = cq.T @ p
@@ -179,17 +225,19 @@ def design(colour, position, quantisation=None, *, colour_degree=COLOUR_DEGREES[
     gram = np.block([[inner, cross], [cross.T, pp]])
     gram = gram[np.ix_(order, order)] if q.shape[1] else gram
     blocks = (cdeg, list(pdeg), qdeg)
-    degrees = np.zeros((3, columns.shape[1]), dtype=int)
+    degrees = np.zeros((3, gram.shape[0]), dtype=int)
     start = 0
     for term, block in enumerate(blocks):
         degrees[term, start:start + len(block)] = block
         start += len(block)
+    columns = Columns([c, p, q])
     # a term the region holds constant (a grey scene's chromaticity, float frames'
     # quantisation) has nothing to fit
     diagonal = np.diag(gram)
     keep = diagonal > 1e-12 * max(float(diagonal.max(initial=0.0)), 1e-300)
     if not keep.all():
-        columns, degrees, gram = columns[:, keep], degrees[:, keep], gram[np.ix_(keep, keep)]
+        kept = np.flatnonzero(keep)
+        columns, degrees, gram = columns.take(kept), degrees[:, kept], gram[np.ix_(kept, kept)]
     return columns, degrees, gram
 
 
@@ -219,6 +267,12 @@ def _solve(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return solve(ridged, rhs, assume_a="pos", check_finite=False)
 
 
+def _gram(columns: Columns) -> np.ndarray:
+    """:math:`Z^\\top Z` of columns kept by blocks."""
+    joined = np.concatenate(columns.blocks, axis=1) if columns.blocks else np.empty((0, 0))
+    return joined.T @ joined
+
+
 def choose_degrees(residuals, columns, degrees, *, spline_df: int = 0, gram=None):
     """The degrees of :math:`h_c`, :math:`h_p` and :math:`h_q` that minimise the generalised
     cross-validation score of the polynomials fitted to ``residuals``.
@@ -245,8 +299,9 @@ def choose_degrees(residuals, columns, degrees, *, spline_df: int = 0, gram=None
 
     y = np.asarray(residuals, dtype=np.float64)
     n = y.size
-    gram = columns.T @ columns if gram is None else gram
-    rhs = columns.T @ y
+    columns = columns if isinstance(columns, Columns) else Columns([np.asarray(columns)])
+    gram = _gram(columns) if gram is None else gram
+    rhs = columns.rmatvec(y)
     yy = float(y @ y)
     best = None
     grids = [sorted({0, *row.tolist()}) for row in np.asarray(degrees).reshape(3, -1)]
@@ -333,7 +388,7 @@ def fit_control(log_variance, log_intensity, *, colour=None, position=None,
     use = np.flatnonzero((degrees <= np.asarray(chosen)[:, None]).all(axis=0))
     if not use.size:
         return ControlFit(first.residuals, first.intervals, 0, 0, first.gcv)
-    z = columns[:, use] if use.size < columns.shape[1] else columns
+    z = columns.take(use) if use.size < columns.shape[1] else columns
     gram = full_gram[np.ix_(use, use)]
     spline_part = y - first.residuals
     fit = first
@@ -342,8 +397,8 @@ def fit_control(log_variance, log_intensity, *, colour=None, position=None,
     rounds = BACKFIT_ROUNDS if dq == 0 else QUANTISED_BACKFIT_ROUNDS
     previous = np.inf
     for _ in range(rounds):
-        beta = _solve(gram, z.T @ (y - spline_part))
-        poly = z @ beta
+        beta = _solve(gram, z.rmatvec(y - spline_part))
+        poly = z.matvec(beta)
         fit = fit_intensity(y - poly)
         spline_part = y - poly - fit.residuals
         rss = float(fit.residuals @ fit.residuals)
