@@ -113,6 +113,8 @@ DEFAULTS = {
     "probe": {
         "conditions": ["none", "sensor_only"],
         "planted": [1],
+        "planted_series": {},
+        "mitigations": ["denoise"],
         "architectures": ["mccnn", "costvolume"],
         "folds": 2,
         "train_seeds": 3,
@@ -123,7 +125,7 @@ DEFAULTS = {
         "seed": 0,
         "device": "cpu",
         "training": {
-            "steps": 300,
+            "steps": 400,
             "check_every": 50,
             "patience": 2,
             "min_delta": 0.002,
@@ -141,7 +143,7 @@ DEFAULTS = {
             "threads": 1,
         },
         "costvolume": {
-            "steps": 300,
+            "steps": 400,
             "check_every": 50,
             "patience": 2,
             "min_delta": 0.002,

@@ -98,13 +98,46 @@ def test_planted_conditions_and_their_names():
         "render": {"renderer": "mitsuba", "spp": 4},
         "scenes": ["a", "b"],
         "mitigations": {"names": []},
-        "probe": {"conditions": ["none", "sensor_only"], "planted": [0.5, 2]},
+        "probe": {"conditions": ["none", "sensor_only"], "planted": [0.5, 2], "mitigations": []},
     }
     names = [c.name for c in probe_conditions(cfg)]
     assert names == ["none", "sensor_only", "planted_x0.5", "planted_x2"]
     assert [planted_factor(n) for n in names] == [None, None, 0.5, 2.0]
     cfg["probe"]["planted"] = [0]
     with pytest.raises(ConfigError, match="probe.planted"):
+        probe_conditions(cfg)
+
+
+def test_an_architectures_planted_series_and_the_judged_mitigations():
+    """probe.planted_series: factors one architecture trains beside probe.planted;
+    probe.mitigations: conditions trained with their own twin (the control too)."""
+    cfg = {
+        "render": {"renderer": "mitsuba", "spp": 4},
+        "scenes": ["a", "b"],
+        "mitigations": {"names": []},
+        "probe": {"planted": [1], "planted_series": {"costvolume": [1, 2, 8], "mccnn": [4]},
+                  "architectures": ["mccnn", "costvolume"], "mitigations": ["denoise"]},
+    }
+    conditions = {c.name: c for c in probe_conditions(cfg)}
+    assert list(conditions) == ["none", "sensor_only", "denoise", "planted_x1", "planted_x2",
+                                "planted_x8", "planted_x4"]
+    trains = {name: [a for a in ("mccnn", "costvolume") if c.trains(a)]
+              for name, c in conditions.items()}
+    assert trains["planted_x1"] == ["mccnn", "costvolume"]  # probe.planted: every one
+    assert trains["planted_x2"] == trains["planted_x8"] == ["costvolume"]
+    assert trains["planted_x4"] == ["mccnn"]
+    assert conditions["denoise"].variants == ("main", "twin")
+    assert conditions["sensor_only"].variants == ("main",)  # not judged: the control alone
+    cfg["probe"]["mitigations"] = ["sensor_only"]
+    assert probe_conditions(cfg)[1].variants == ("main", "twin")
+    cfg["probe"]["architectures"] = ["mccnn"]  # a series of an architecture not trained
+    assert "planted_x8" not in {c.name for c in probe_conditions(cfg)}
+    cfg["probe"]["mitigations"] = ["none"]
+    with pytest.raises(ConfigError, match="probe.mitigations.*baseline") as info:
+        probe_conditions(cfg)
+    assert "\n" not in str(info.value)
+    cfg["probe"]["mitigations"] = ["blur"]
+    with pytest.raises(ConfigError, match="'probe.mitigations': unknown mitigation 'blur'"):
         probe_conditions(cfg)
 
 
@@ -132,3 +165,20 @@ def test_channel_correlation_of_renders_and_of_independent_noise():
         stack = mean + 0.05 * (np.sqrt(rho) * shared + np.sqrt(1 - rho) * own)
         # 12 800 pixel variances of 8 draws: the estimate is good to a few hundredths
         assert experiment.channel_correlation(stack) == pytest.approx(rho, abs=0.05)
+
+
+def test_the_verdict_names_the_networks_the_cap_stopped():
+    from stereovar.jobs.probe import _caveats
+
+    def row(arch, training, variant, networks, at_cap):
+        return {"architecture": arch, "training": training, "variant": variant,
+                "networks": networks, "at_cap": at_cap}
+
+    trained = [row("mccnn", "none", "main", 6, 2), row("mccnn", "none", "twin", 6, 0),
+               row("costvolume", "planted_x4", "main", 6, 1),
+               row("costvolume", "none", "main", 6, 0)]
+    text = _caveats(trained, None)
+    assert "3 of the 18 networks stopped at the step cap" in text
+    assert "mccnn none 2 of 6; costvolume planted_x4 1 of 6" in text
+    assert "costvolume none" not in text
+    assert _caveats([row("mccnn", "none", "main", 6, 0)], None) == ""

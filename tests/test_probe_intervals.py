@@ -242,14 +242,17 @@ def test_rows_reject_incomplete_tables():
 # --- the verdict and the figure ---------------------------------------------------------------
 
 
-def signal_table(rng, dids, *, seeds=4, tiles=30, architectures=("costvolume", "mccnn")):
+def signal_table(rng, dids, *, seeds=4, tiles=30, architectures=("costvolume", "mccnn"),
+                 control_twin=False):
     """A tile table whose main networks lose ``dids[condition]`` more accuracy to the shuffle
-    than their twins (and than the sensor_only networks); every network on every tile."""
+    than their twins (and than the sensor_only networks); every network on every tile
+    (``control_twin``: the sensor_only networks have twins too, as ``probe.mitigations``
+    trains them)."""
     rows = []
     for arch in architectures:
         for tested, did in dids.items():
             nets = [(tested, MAIN)] + ([(tested, TWIN), (CONTROL, MAIN)] if tested != CONTROL
-                                       else [])
+                                       else [(CONTROL, TWIN)] if control_twin else [])
             n = rng.integers(100, 256, tiles)
             for network, variant in nets:
                 extra = did if (network, variant) == (tested, MAIN) else 0.0
@@ -300,6 +303,31 @@ def test_verdict_per_architecture_with_power_and_the_primary_on_top(signal_rows)
     (shared,) = v["mitigations"]
     assert shared["condition"] == "shared_seed" and shared["status"] == "still uses"
     assert v["claim"]["answer"] == "no" and v["control"] == "cue-blind twin"
+
+
+def test_mitigations_are_judged_against_none_and_a_seed_mean_one_is_not_testable():
+    """probe.mitigations: each mitigation's DiD against its own twin is judged against none's
+    (none relies on the cue by 0.08, the mitigations by 0). sensor_only builds every image
+    from one seed mean, which the shuffle cannot reach: its row says so instead of a status;
+    without its twin the control is no mitigation row."""
+    dids = {"none": 0.08, CONTROL: 0.0, "denoise": 0.0}
+    twinned = probe_rows(signal_table(np.random.default_rng(12), dids, seeds=6,
+                                      architectures=("costvolume",), control_twin=True))
+    shuffled = {r["tested"]: r for r in twinned if r["test_input"] == "shuffled"}
+    assert math.isnan(shuffled[CONTROL]["did_sensor"])
+    v = probe_verdict(twinned)
+    assert v["uses_cue"] is True
+    control, denoise = v["mitigations"]
+    assert denoise["condition"] == "denoise" and denoise["did"] == shuffled["denoise"]["did"]
+    assert denoise["reduced"] and denoise["difference_high"] < 0  # 0.08 less than none's
+    assert denoise["status"] == mitigation_status(shuffled["denoise"], shuffled["none"],
+                                                  v["mde"])["status"]
+    assert control["condition"] == CONTROL and control["status"] == "not testable"
+    assert not control["removes"] and "seed mean" in control["reason"]
+    assert "sensor_only" in v["paragraph"] and "not testable" in v["paragraph"]
+    plain = probe_rows(signal_table(np.random.default_rng(12), dids, seeds=6,
+                                    architectures=("costvolume",)))
+    assert [m["condition"] for m in probe_verdict(plain)["mitigations"]] == ["denoise"]
 
 
 def test_mitigation_status_rules():

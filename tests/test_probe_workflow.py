@@ -34,7 +34,10 @@ TINY_PROBE = {
     "analysis": {"bootstrap": {"tile": 8}},
     "mitigations": {"names": []},
     "probe": {
-        "planted": [2],
+        "planted": [],
+        "planted_series": {"costvolume": [2]},  # the architecture's own dose-response
+        # judged: the control trains with its own twin; it ships one seed mean: not testable
+        "mitigations": ["sensor_only"],
         "architectures": ["costvolume"],  # MC-CNN: the audit's probe, test_audit_workflow.py
         "folds": 2,
         "train_seeds": 2,
@@ -46,7 +49,8 @@ TINY_PROBE = {
     },
 }
 CONDITIONS = ("none", "sensor_only", "planted_x2")
-VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main",), "planted_x2": ("main", "twin")}
+VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main", "twin"),
+            "planted_x2": ("main", "twin")}
 ARCHS = ("costvolume",)
 INPUTS = ("normal", "shuffled", "camera", "camera_shuffled", "clean", "conflict")
 
@@ -158,8 +162,8 @@ def test_the_table_pools_the_tiles_of_every_fold(probe_run):
             per_seed.append(part.hits.sum() / part.n.sum())
         assert row["accuracy"] == pytest.approx(np.mean(per_seed), abs=1e-12)
         if row["tested"] == "sensor_only":
-            assert math.isnan(row["did"])
-        elif row["test_input"] == "shuffled":
+            assert math.isnan(row["did_sensor"])  # the control against itself
+        if row["test_input"] == "shuffled":  # every condition against its own twin
             assert row["did_low"] <= row["did"] <= row["did_high"]
         # both scenes' held-out tiles pooled
         assert set(own.scene) == set(TINY_PROBE["scenes"])
@@ -168,6 +172,13 @@ def test_the_table_pools_the_tiles_of_every_fold(probe_run):
         (a, c, v) for a in ARCHS for c in CONDITIONS for v in VARIANTS[c]
     }
     assert all(r["networks"] == 4 for r in trained)  # 2 folds x 2 training seeds
+    for r in trained:  # each network's steps and how it stopped
+        assert len(r["each"].split(", ")) == 4
+        if r["variant"] == "main":
+            assert r["plateau"] + r["at_cap"] == 4
+            assert r["each"].count(" cap") == r["at_cap"]
+        else:
+            assert r["plateau"] == r["at_cap"] == 0  # a twin trains its network's steps
 
 
 def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
@@ -185,6 +196,19 @@ def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
     assert verdict["claim"]["answer"] == ("yes" if verdict["uses_cue"] else "no")
     assert set(verdict["architectures"]) == set(ARCHS)
     assert verdict["architectures"]["costvolume"]["did"] == pytest.approx(shuffle["did"])
+    # the mitigation row (probe.mitigations: sensor_only against its own twin, judged against
+    # none) and the planted dose-response of the architecture's own series
+    cv = verdict["architectures"]["costvolume"]
+    (mitigation,) = cv["mitigations"]
+    sensor = next(r for r in table if (r["architecture"], r["tested"], r["test_input"],
+                                       r["region"]) == ("costvolume", "sensor_only", "shuffled",
+                                                        verdict["region"]))
+    assert mitigation["condition"] == "sensor_only"
+    assert mitigation["did"] == pytest.approx(sensor["did"])
+    assert mitigation["status"] == "not testable" and "seed mean" in mitigation["reason"]
+    assert [p["factor"] for p in cv["power"]] == [2.0]
+    assert cv["detected_from_factor"] == (2.0 if cv["power"][0]["detected"] else None)
+    assert "sensor_only" in cv["paragraph"] and "x2" in cv["paragraph"]
     assert (root / layout.probe_figure()).stat().st_size > 0
 
 

@@ -19,7 +19,7 @@ rule probe_planted:
         PROBE_PLANTED,
     params:
         scenes=SCENES,
-        factors=PROBE["planted"],
+        factors=sorted({c.factor for c in PROBE_CONDITIONS.values() if c.planted}),
     log:
         f"logs/{PROBE_SOURCE}/probe/planted.log",
     resources:
@@ -70,15 +70,18 @@ rule probe_train:
         "../scripts/probe_train.py"
 
 
-# The control's networks of one architecture and fold: no twin.
-use rule probe_train as probe_train_control with:
-    output:
-        [
-            layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", "main", "{fold}", j)
-            for j in PROBE_SEEDS
-        ],
-    wildcard_constraints:
-        condition=re.escape(PROBE_CONTROL),
+# The control's networks of one architecture and fold: no twin (unless probe.mitigations
+# judges the control as a mitigation; probe_train then trains it with its twin).
+if PROBE_CONTROL_UNTWINNED:
+
+    use rule probe_train as probe_train_control with:
+        output:
+            [
+                layout.probe_network(PROBE_SOURCE, "{condition}", "{arch}", "main", "{fold}", j)
+                for j in PROBE_SEEDS
+            ],
+        wildcard_constraints:
+            condition=re.escape(PROBE_CONTROL),
 
 
 # Every network of the condition, its twins and the control's for one architecture and fold,

@@ -305,11 +305,36 @@ def test_job(
     return len(rows)
 
 
+def _stopped(meta: dict) -> str:
+    """How a network's training ended: ``plateau`` (its stop rule), ``cap`` (the step cap
+    first) or ``matched`` (a twin: its network's steps to the best check)."""
+    if meta.get("matched_steps"):
+        return "matched"
+    return "cap" if "cap" in meta and int(meta["steps"]) >= int(meta["cap"]) else "plateau"
+
+
+def _each(meta: dict) -> str:
+    """One network as ``fold/seed: steps (best step)``, with ``cap`` where the cap stopped it.
+
+    Examples
+    --------
+    >>> _each({"fold": 1, "seed": 2, "steps": 300, "best_step": 250, "cap": 300})
+    'f1/s2: 300 (250) cap'
+    >>> _each({"fold": 0, "seed": 0, "steps": 250, "best_step": 150, "cap": 600})
+    'f0/s0: 250 (150)'
+    """
+    best = meta.get("best_step")
+    out = f"f{meta.get('fold', 0)}/s{meta.get('seed', 0)}: {int(meta['steps'])}"
+    out += f" ({best})" if best is not None and not meta.get("matched_steps") else ""
+    return out + (" cap" if _stopped(meta) == "cap" else "")
+
+
 def training_rows(networks) -> list[dict]:
     """One row per (architecture, condition, variant): the networks trained, the optimiser
     steps each took to its plateau (mean, min, max), the best step, how many stopped at the
-    step cap before a plateau (``at_cap``; a twin trains its network's steps, never counted),
-    the best validation accuracy and the seconds of training, from each network's record."""
+    step cap before a plateau (``at_cap``; a twin trains its network's steps, never counted)
+    and how many on it (``plateau``), each network's steps and best step (``each``), the best
+    validation accuracy and the seconds of training, from each network's record."""
     from ..probe.training import load_matcher
 
     groups: dict = {}
@@ -317,7 +342,7 @@ def training_rows(networks) -> list[dict]:
         _, record = load_matcher(path)
         meta = record["meta"]
         key = (meta.get("architecture", "mccnn"), meta["condition"], meta.get("variant", "main"))
-        groups.setdefault(key, []).append(meta)
+        groups.setdefault(key, []).append({**meta, "seed": int(record.get("seed", 0))})
     rows = []
     for (arch, condition, variant), metas in groups.items():
         steps = [int(m["steps"]) for m in metas]
@@ -336,6 +361,9 @@ def training_rows(networks) -> list[dict]:
                 "steps_max": max(steps),
                 "best_step_mean": float(np.mean([m.get("best_step") or 0 for m in metas])),
                 "at_cap": capped,
+                "plateau": sum(1 for m in metas if _stopped(m) == "plateau"),
+                "each": ", ".join(_each(m) for m in sorted(
+                    metas, key=lambda m: (int(m.get("fold", 0)), int(m.get("seed", 0))))),
                 "validation_accuracy": float(np.nanmean(best)) if np.isfinite(best).any()
                 else math.nan,
                 "seconds_mean": float(np.mean([m["seconds"] for m in metas])),
@@ -417,10 +445,13 @@ def _caveats(trained: list[dict], n_seeds) -> str:
     capped = sum(int(r["at_cap"]) for r in mains)
     if capped:
         total = sum(int(r["networks"]) for r in mains)
+        named = "; ".join(
+            f"{r['architecture']} {r['training']} {int(r['at_cap'])} of {int(r['networks'])}"
+            for r in mains if int(r["at_cap"]))
         out += (
             f" {capped} of the {total} networks stopped at the step cap before a plateau of "
-            "validation accuracy (results/tables/probe_training.*): raise probe.training.steps "
-            "and probe.costvolume.steps to train them to one."
+            f"validation accuracy ({named}; results/tables/probe_training.*): raise "
+            "probe.training.steps and probe.costvolume.steps to train them to one."
         )
     if n_seeds:
         out += (

@@ -36,7 +36,9 @@ __all__ = [
     "planted_factor",
     "planted_name",
     "probe_conditions",
+    "probe_mitigations",
     "probe_runs",
+    "ships_one_seed_mean",
 ]
 
 CONTROL = "sensor_only"
@@ -48,6 +50,12 @@ TWIN = "twin"
 ARCHITECTURES = ("mccnn", "costvolume")
 """The probe's networks: MC-CNN fast (:mod:`~stereovar.probe.network`) and a small end-to-end
 cost-volume network (:mod:`~stereovar.probe.costvolume`)."""
+
+DEFAULT_MITIGATIONS = ("denoise",)
+"""The mitigation the default probe judges: the denoiser, which teams ship and which leaves
+a Monte Carlo-specific cue in the data (docs/mitigations.md); ``sensor_only``, which the
+dose-response names as the remedy, builds its images from one seed mean, which the probe's
+shuffle cannot reach (:func:`ships_one_seed_mean`)."""
 
 _PLANTED = re.compile(r"^planted_x(?P<factor>[0-9]+(?:\.[0-9]+)?)$")
 
@@ -67,15 +75,23 @@ def planted_name(factor: float) -> str:
 class ProbeCondition:
     """One training condition: its ``name``, the :class:`~stereovar.mitigations.MitigationRun`
     whose renders it reads (``none``'s for a planted cue), the planted ``factor`` (None for a
-    mitigation) and whether it trains a cue-blind ``twin``."""
+    mitigation), whether it trains a cue-blind ``twin`` (every condition but the control,
+    and the control too where ``probe.mitigations`` judges it) and the ``architectures`` that
+    train it (None: every one of ``probe.architectures``)."""
 
     name: str
     run: MitigationRun
     factor: float | None = None
+    twinned: bool | None = None
+    architectures: tuple[str, ...] | None = None
 
     @property
     def twin(self) -> bool:
-        return self.name != CONTROL
+        return self.name != CONTROL if self.twinned is None else bool(self.twinned)
+
+    def trains(self, arch: str) -> bool:
+        """Whether networks of architecture ``arch`` train on this condition."""
+        return self.architectures is None or arch in self.architectures
 
     @property
     def variants(self) -> tuple[str, ...]:
@@ -113,8 +129,8 @@ def probe_runs(config: dict) -> list[MitigationRun]:
         ``spp_xK``): an audit's renders are given.
     """
     probe = config.get("probe", {})
-    names = probe.get("conditions") or default_conditions(config)
-    names = list(dict.fromkeys([NONE, CONTROL, *names]))
+    listed = probe.get("conditions") or default_conditions(config)
+    names = list(dict.fromkeys([NONE, CONTROL, *listed, *probe_mitigations(config)]))
     render = config["render"]
     source = render["renderer"]
     runs = []
@@ -123,11 +139,11 @@ def probe_runs(config: dict) -> list[MitigationRun]:
             m = resolve_mitigation(name)
         except ConfigError as err:
             raise ConfigError(
-                str(err).replace("'mitigations.names'", "'probe.conditions'")
+                str(err).replace("'mitigations.names'", f"'{_key_of(name, listed)}'")
             ) from None
         if is_audit(source) and m.kind not in ("baseline", "transform"):
             raise ConfigError(
-                f"config key 'probe.conditions': {name!r} renders the scenes anew, and an "
+                f"config key '{_key_of(name, listed)}': {name!r} renders the scenes anew, and an "
                 "audit's renders are given; use store transforms only"
             )
         spp = int(render["spp"]) * m.spp_factor
@@ -135,9 +151,16 @@ def probe_runs(config: dict) -> list[MitigationRun]:
     return runs
 
 
+def _key_of(name: str, listed) -> str:
+    """The config key that asked for condition ``name``."""
+    return "probe.conditions" if name in listed else "probe.mitigations"
+
+
 def probe_conditions(config: dict) -> list[ProbeCondition]:
     """Every training condition of the probe: the mitigation conditions of :func:`probe_runs`,
-    then one planted cue per factor of ``probe.planted`` (read from ``none``'s renders).
+    then one planted cue per factor of ``probe.planted`` (read from ``none``'s renders, for
+    every architecture) and of ``probe.planted_series`` (an architecture's own dose-response:
+    trained by that architecture only).
 
     Raises
     ------
@@ -147,23 +170,71 @@ def probe_conditions(config: dict) -> list[ProbeCondition]:
     Examples
     --------
     >>> cfg = {"render": {"renderer": "mitsuba", "spp": 8}, "scenes": ["a", "b"],
-    ...        "mitigations": {"names": []}, "probe": {"planted": [1, 4]}}
-    >>> [(c.name, c.run.name, c.factor, c.variants) for c in probe_conditions(cfg)]
+    ...        "mitigations": {"names": []},
+    ...        "probe": {"planted": [1], "planted_series": {"costvolume": [1, 4]},
+    ...                  "mitigations": ["sensor_only"]}}
+    >>> [(c.name, c.factor, c.variants, c.architectures) for c in probe_conditions(cfg)]
     ... # doctest: +NORMALIZE_WHITESPACE
-    [('none', 'none', None, ('main', 'twin')), ('sensor_only', 'sensor_only', None, ('main',)),
-     ('planted_x1', 'none', 1.0, ('main', 'twin')), ('planted_x4', 'none', 4.0, ('main', 'twin'))]
+    [('none', None, ('main', 'twin'), None), ('sensor_only', None, ('main', 'twin'), None),
+     ('planted_x1', 1.0, ('main', 'twin'), None),
+     ('planted_x4', 4.0, ('main', 'twin'), ('costvolume',))]
+
+    With ``probe.mitigations: []`` the control trains without a twin:
+
+    >>> cfg["probe"]["mitigations"] = []
+    >>> probe_conditions(cfg)[1].variants
+    ('main',)
     """
     runs = probe_runs(config)
-    out = [ProbeCondition(run.name, run) for run in runs]
+    judged = set(probe_mitigations(config))
+    out = [ProbeCondition(run.name, run, twinned=run.name != CONTROL or run.name in judged)
+           for run in runs]
     none = runs[0]
-    for factor in config.get("probe", {}).get("planted") or []:
-        if not float(factor) > 0:
+    probe = config.get("probe", {})
+    everyone = [float(f) for f in probe.get("planted") or []]
+    series = {str(a): [float(f) for f in fs] for a, fs in
+              (probe.get("planted_series") or {}).items()}
+    archs = tuple(probe.get("architectures") or ARCHITECTURES)
+    for arch in series:
+        if arch not in ARCHITECTURES:
             raise ConfigError(
-                f"config key 'probe.planted': {factor!r} is not a positive multiple of the "
+                f"config key 'probe.planted_series': {arch!r} is no probe architecture; use "
+                + " or ".join(ARCHITECTURES)
+            )
+    for factor in dict.fromkeys([*everyone, *(f for fs in series.values() for f in fs)]):
+        if not factor > 0:
+            key = "probe.planted" if factor in everyone else "probe.planted_series"
+            raise ConfigError(
+                f"config key {key!r}: {factor!r} is not a positive multiple of the "
                 "renders' strength; list factors above 0 (strength 0 is the 'none' condition)"
             )
-        out.append(ProbeCondition(planted_name(factor), none, float(factor)))
+        trained = None if factor in everyone else tuple(
+            a for a in archs if factor in series.get(a, ()))
+        if trained == ():
+            continue  # a series of an architecture the probe does not train
+        out.append(ProbeCondition(planted_name(factor), none, factor, architectures=trained))
     return list({c.name: c for c in out}.values())
+
+
+def probe_mitigations(config: dict) -> list[str]:
+    """``probe.mitigations``: the mitigations whose networks the verdict judges against
+    ``none`` (each trains with its own cue-blind twin; the control ``sensor_only`` too when
+    listed), :data:`DEFAULT_MITIGATIONS` when the key is absent.
+
+    Examples
+    --------
+    >>> probe_mitigations({"probe": {}}), probe_mitigations({"probe": {"mitigations": []}})
+    (['denoise'], [])
+    """
+    names = config.get("probe", {}).get("mitigations")
+    names = list(DEFAULT_MITIGATIONS) if names is None else list(names)
+    for name in names:
+        if name == NONE:
+            raise ConfigError(
+                "config key 'probe.mitigations': 'none' is the baseline every mitigation is "
+                "judged against; list mitigations only (sensor_only, denoise, ...)"
+            )
+    return list(dict.fromkeys(names))
 
 
 def check_probe(config: dict, n_seeds: int) -> None:
@@ -186,6 +257,28 @@ def check_probe(config: dict, n_seeds: int) -> None:
                 f"(torch {torch.__version__}); set probe.device: cpu, or run on a machine "
                 "with a GPU and a CUDA build of PyTorch"
             )
+
+
+def ships_one_seed_mean(name: str) -> bool:
+    """Whether mitigation ``name`` builds every image of a scene from the one seed mean of its
+    renders (``sensor_only``, ``equalise``): the Monte Carlo noise left in that mean is in
+    every image and in the reference mean of the probe's counterfactuals, so the residual
+    shuffle reaches only the per-image noise added to it, and the probe cannot measure a
+    reliance on what remains of the cue.
+
+    Examples
+    --------
+    >>> ships_one_seed_mean("sensor_only"), ships_one_seed_mean("denoise")
+    (True, False)
+    >>> ships_one_seed_mean("none"), ships_one_seed_mean("planted_x2")
+    (False, False)
+    """
+    from ..transforms import TRANSFORMS, transform_chain
+
+    parts = str(name).split("+")
+    if not all(p in TRANSFORMS.names() for p in parts):
+        return False  # none, a seed policy, spp_xK, a planted cue
+    return any({"seed_mean", "seed_var"} & set(t.reads) for t in transform_chain(name))
 
 
 def planted_factor(name: str) -> float | None:

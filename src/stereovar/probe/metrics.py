@@ -369,8 +369,8 @@ def _rows_of(part, architecture, tested, region, inputs, ni, strengths, level) -
             f"probe tiles of {architecture!r}, {tested!r}, region {region!r}, have no main "
             f"network trained on {tested!r}"
         )
-    if tested == CONTROL:
-        arms["twin"] = None  # the control has no twin; its own networks are the sensor arm
+    # the control has a twin only where probe.mitigations judges it; its own networks are
+    # the sensor arm either way (did_sensor is not defined for it)
     factor = planted_factor(tested)
     n_pixels = arms["main"][1]["n"][0].sum(axis=1)
     rows = []

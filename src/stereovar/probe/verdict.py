@@ -27,8 +27,12 @@ equivalence margin): a mitigation :math:`m` **removes** the reliance when
 networks and renders: the variances add, Welch–Satterthwaite degrees of freedom) and
 :math:`\\mathrm{DiD}_m` is equivalent to 0 within :math:`\\pm\\mathrm{MDE}` (two one-sided
 tests: its 90 % interval inside the margin); it **still uses** the cue when its DiD interval
-is above 0 and the reduction is not shown; otherwise the answer is **not determined**. The
-``sensor_only`` network is a second control (``did_sensor``).
+is above 0 and the reduction is not shown; otherwise the answer is **not determined**. A
+mitigation that builds every image of a scene from its one seed mean (``sensor_only``,
+``equalise``) is **not testable**: the Monte Carlo noise left in that mean is in every image
+and in the counterfactuals' reference mean, so the shuffle reaches only the noise added per
+image and the DiD is 0 by construction. The ``sensor_only`` network is a second control
+(``did_sensor``).
 
 Importing this module pulls in numpy and scipy (t quantiles).
 """
@@ -38,9 +42,22 @@ from __future__ import annotations
 import math
 
 from ..layout import NONE
+from .conditions import ships_one_seed_mean
 from .metrics import CONTROL, INTERVAL_METHOD, PRIMARY_ARCHITECTURE, planted_factor, t_quantile
 
 __all__ = ["mitigation_status", "probe_verdict"]
+
+NOT_TESTABLE = "not testable"
+"""The status of a mitigation whose images share one seed mean (:data:`SEED_MEAN_REASON`)."""
+
+SEED_MEAN_REASON = (
+    "every image of a scene is built from its one seed mean, whose Monte Carlo noise is also "
+    "in the counterfactuals' reference mean: the residual shuffle reaches only the noise "
+    "added per image, so its DiD is 0 by construction and says nothing about the cue left "
+    "in the seed mean"
+)
+"""Why such a mitigation's DiD does not test it
+(:func:`~stereovar.probe.conditions.ships_one_seed_mean`)."""
 
 TWIN_CONTROL = "cue-blind twin"
 """The primary control: the same renders with the right residual drawn again each step."""
@@ -232,12 +249,14 @@ def _architecture_verdict(rows, architecture, region, control) -> dict:
         parts.append(f"Planted cue (DiD per strength factor): {points}; {said}.")
     mitigations = []
     for tested in dict.fromkeys(r["tested"] for r in rows if r["architecture"] == architecture):
-        if tested in (NONE, control) or math.isfinite(planted_factor(tested)):
+        if tested == NONE or math.isfinite(planted_factor(tested)):
             continue
         row = _find(rows, architecture, tested, "shuffled", region)
-        if row is None:
-            continue
+        if row is None or (tested == control and not _finite(row["did"])):
+            continue  # the control without a twin (probe.mitigations does not judge it)
         cmp = mitigation_status(row, shuffle, mde)
+        if ships_one_seed_mean(tested):
+            cmp.update(status=NOT_TESTABLE, reason=SEED_MEAN_REASON)
         mitigations.append({
             "condition": tested, "did": row["did"], "did_low": row["did_low"],
             "did_high": row["did_high"], "uses_cue": _above(row, "did"),
@@ -251,7 +270,7 @@ def _architecture_verdict(rows, architecture, region, control) -> dict:
             + "; ".join(
                 f"{m['condition']} {_fmt(m['did'], m['did_low'], m['did_high'])}, "
                 f"{_fmt(m['difference'], m['difference_low'], m['difference_high'])}: "
-                f"{m['status']}"
+                f"{m['status']}" + (f" ({m['reason']})" if m.get("reason") else "")
                 for m in mitigations
             )
             + "."
@@ -281,9 +300,9 @@ def probe_verdict(
         ``mde``, ``not_detectable_below`` where no reliance is detected, ``did_sensor``
         [...], ``pulled_vs_twin`` [...], ``power`` (the planted series), ``detected_from_factor``,
         ``renders_strength_detected``, ``mitigations`` (``status``: removes, still uses, not
-        determined), ``paragraph``); the primary architecture's keys at the top level;
-        ``region``, ``control``, ``second_control``, ``interval``, ``paragraph`` (every
-        architecture's) and ``claim``.
+        determined, or not testable with its ``reason``), ``paragraph``); the primary
+        architecture's keys at the top level; ``region``, ``control``, ``second_control``,
+        ``interval``, ``paragraph`` (every architecture's) and ``claim``.
 
     Examples
     --------

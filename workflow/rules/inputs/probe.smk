@@ -28,6 +28,8 @@ PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
 PROBE_PLANTED = layout.probe_planted(PROBE_SOURCE)
 PROBE_ANY_PLANTED = any(c.planted for c in PROBE_CONDITIONS.values())
 PROBE_TWINNED = [name for name, c in PROBE_CONDITIONS.items() if c.twin]
+# the control trains without a twin unless probe.mitigations judges it
+PROBE_CONTROL_UNTWINNED = PROBE_CONTROL in PROBE_CONDITIONS and PROBE_CONTROL not in PROBE_TWINNED
 # wildcard patterns: the conditions, those with a twin, the architectures
 PROBE_CONDITION_PATTERN = "|".join(map(re.escape, PROBE_CONDITIONS)) or "none"
 PROBE_TWINNED_PATTERN = "|".join(map(re.escape, PROBE_TWINNED)) or "none"
@@ -108,12 +110,18 @@ def probe_test_inputs(wildcards):
     }
 
 
+def probe_pairs():
+    """(condition, architecture) of every network family: an architecture's own planted
+    series (``probe.planted_series``) is trained by that architecture only."""
+    return [(c, a) for c in PROBE_CONDITIONS for a in PROBE_ARCHS
+            if PROBE_CONDITIONS[c].trains(a)]
+
+
 def probe_tile_files():
     """Every test job's tile table."""
     return [
         layout.probe_tiles(PROBE_SOURCE, c, a, f)
-        for c in PROBE_CONDITIONS
-        for a in PROBE_ARCHS
+        for c, a in probe_pairs()
         for f in range(PROBE_FOLDS)
     ]
 
@@ -123,8 +131,7 @@ def probe_network_files():
     return sorted(
         {
             path
-            for c in PROBE_CONDITIONS
-            for a in PROBE_ARCHS
+            for c, a in probe_pairs()
             for f in range(PROBE_FOLDS)
             for path in probe_networks(c, a, f)
         }
