@@ -181,4 +181,9 @@ def test_the_verdict_names_the_networks_the_cap_stopped():
     assert "3 of the 18 networks stopped at the step cap" in text
     assert "mccnn none 2 of 6; costvolume planted_x4 1 of 6" in text
     assert "costvolume none" not in text
+    assert "collapsed" not in text
     assert _caveats([row("mccnn", "none", "main", 6, 0)], None) == ""
+    collapsed = {**row("costvolume", "none", "main", 6, 0), "collapsed": 2}
+    text = _caveats([collapsed], None)
+    assert ("2 networks never predicted a validation pixel within 1 px (costvolume none 2 of 6)"
+            in text)

@@ -174,6 +174,7 @@ def test_the_table_pools_the_tiles_of_every_fold(probe_run):
     assert all(r["networks"] == 4 for r in trained)  # 2 folds x 2 training seeds
     for r in trained:  # each network's steps and how it stopped
         assert len(r["each"].split(", ")) == 4
+        assert 0 <= r["collapsed"] <= (4 if r["variant"] == "main" else 0)
         if r["variant"] == "main":
             assert r["plateau"] + r["at_cap"] == 4
             assert r["each"].count(" cap") == r["at_cap"]

@@ -333,8 +333,9 @@ def training_rows(networks) -> list[dict]:
     """One row per (architecture, condition, variant): the networks trained, the optimiser
     steps each took to its plateau (mean, min, max), the best step, how many stopped at the
     step cap before a plateau (``at_cap``; a twin trains its network's steps, never counted)
-    and how many on it (``plateau``), each network's steps and best step (``each``), the best
-    validation accuracy and the seconds of training, from each network's record."""
+    and how many on it (``plateau``), how many never predicted a validation pixel within 1 px
+    (``collapsed``: a learning rate too high), each network's steps and best step (``each``),
+    the best validation accuracy and the seconds of training, from each network's record."""
     from ..probe.training import load_matcher
 
     groups: dict = {}
@@ -362,6 +363,8 @@ def training_rows(networks) -> list[dict]:
                 "best_step_mean": float(np.mean([m.get("best_step") or 0 for m in metas])),
                 "at_cap": capped,
                 "plateau": sum(1 for m in metas if _stopped(m) == "plateau"),
+                "collapsed": sum(1 for m, b in zip(metas, best, strict=True)
+                                 if not m.get("matched_steps") and b == 0),
                 "each": ", ".join(_each(m) for m in sorted(
                     metas, key=lambda m: (int(m.get("fold", 0)), int(m.get("seed", 0))))),
                 "validation_accuracy": float(np.nanmean(best)) if np.isfinite(best).any()
@@ -452,6 +455,15 @@ def _caveats(trained: list[dict], n_seeds) -> str:
             f" {capped} of the {total} networks stopped at the step cap before a plateau of "
             f"validation accuracy ({named}; results/tables/probe_training.*): raise "
             "probe.training.steps and probe.costvolume.steps to train them to one."
+        )
+    collapsed = [r for r in mains if int(r.get("collapsed", 0))]
+    if collapsed:
+        named = "; ".join(f"{r['architecture']} {r['training']} {int(r['collapsed'])} of "
+                          f"{int(r['networks'])}" for r in collapsed)
+        out += (
+            f" {sum(int(r['collapsed']) for r in collapsed)} networks never predicted a "
+            f"validation pixel within 1 px ({named}): they collapsed rather than converged; "
+            "lower probe.training.learning_rate or probe.costvolume.learning_rate."
         )
     if n_seeds:
         out += (
