@@ -105,8 +105,9 @@ def variance_field(images, *, dim: str = "seed"):
     if stack.ndim != 4 or stack.shape[0] == 0:
         raise ValueError(f"images must have shape (N, H, W, C) with N >= 1, got {stack.shape}")
     mean = stack.mean(axis=0)
-    variance = ((stack - mean) ** 2).mean(axis=0).mean(axis=-1)
-    return mean, variance
+    deviations = stack - mean
+    np.square(deviations, out=deviations)  # in place: one stack-sized temporary, not two
+    return mean, deviations.mean(axis=0).mean(axis=-1)
 
 
 def _as_image(image) -> np.ndarray:

@@ -23,6 +23,7 @@ from ..errors import ConfigError
 from ..seeding import derive_seed
 from ..statistics.bootstrap import tile_labels
 from ..statistics.regions import region_masks, valid_set
+from .folds import fold_scenes
 from .inputs import (
     STRATA,
     TEST_INPUTS,
@@ -79,30 +80,6 @@ class TestSettings:
     tile: int = 16
     seed: int = 0
     inputs: tuple = TEST_INPUTS
-
-
-def fold_scenes(scenes, folds: int) -> list[tuple[list[str], list[str]]]:
-    """``(training scenes, held-out scenes)`` of each fold.
-
-    Raises
-    ------
-    ValueError
-        Fewer than 2 folds, or more folds than scenes.
-
-    Examples
-    --------
-    >>> fold_scenes(["a", "b", "c"], 2)
-    [(['b'], ['a', 'c']), (['a', 'c'], ['b'])]
-    """
-    scenes = list(scenes)
-    folds = int(folds)
-    if folds < 2 or folds > len(scenes):
-        raise ValueError(
-            f"probe.folds is {folds} with {len(scenes)} scenes; cross-validation needs "
-            "2 <= folds <= scenes (add scenes or frames, or lower probe.folds)"
-        )
-    held = [[s for i, s in enumerate(scenes) if i % folds == f] for f in range(folds)]
-    return [([s for s in scenes if s not in held[f]], held[f]) for f in range(folds)]
 
 
 def scored_disparity(ground_truth_left, *, sign: int) -> np.ndarray:

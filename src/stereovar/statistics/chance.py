@@ -14,7 +14,10 @@ fields measured: about :math:`1/\\sqrt n` for white noise, more for structured f
 
 from __future__ import annotations
 
+import hashlib
 import math
+from collections import OrderedDict
+from typing import NamedTuple
 
 import numpy as np
 from scipy import fft
@@ -28,9 +31,48 @@ each, ``tests/test_chance.py``): standard error over the spread of :math:`\\hat\
 pattern under white noise (:math:`\\rho` 0.27), where a share of 0.25 gave 1.36 on the last."""
 
 
-def _flip(lags: np.ndarray) -> np.ndarray:
-    """A lag array at :math:`-h` (circular indexing of the padded grid)."""
-    return np.roll(lags[::-1, ::-1], (1, 1), axis=(0, 1))
+PAIRS_CACHE_SIZE = 8
+"""Regions whose pair counts are kept (:func:`_pairs`): the calibration measures every
+replicate of a scene on the same few pixel sets."""
+
+_PAIRS_CACHE: OrderedDict = OrderedDict()
+
+
+class _Pairs(NamedTuple):
+    """The lags a region's sum runs over: the padded grid, the flat positions of the lags
+    :math:`h` used and of :math:`-h`, and :math:`P(h)` there."""
+
+    padded: tuple[int, int]
+    used: np.ndarray
+    negated: np.ndarray
+    count: np.ndarray
+
+
+def _pairs(index: np.ndarray, shape: tuple[int, int]) -> _Pairs:
+    """:math:`P(h)` of a region and the lags with :math:`P(h) \\ge`
+    :data:`MIN_PAIR_SHARE` :math:`n`, kept for the next call on the same pixels (by a
+    digest of their positions)."""
+    h, w = shape
+    key = (h, w, index.size, hashlib.blake2b(np.ascontiguousarray(index, dtype=np.int64)
+                                             .tobytes(), digest_size=16).digest())
+    hit = _PAIRS_CACHE.get(key)
+    if hit is not None:
+        _PAIRS_CACHE.move_to_end(key)
+        return hit
+    padded = (fft.next_fast_len(2 * h - 1, real=True), fft.next_fast_len(2 * w - 1, real=True))
+    mask = np.zeros(h * w)
+    mask[index] = 1.0
+    fm = fft.rfft2(mask.reshape(h, w), s=padded)
+    pairs = fft.irfft2(fm * np.conj(fm), s=padded)
+    # pair counts are integers up to rounding
+    rows, cols = np.nonzero(pairs >= max(MIN_PAIR_SHARE * index.size, 1.0) - 0.5)
+    used = rows * padded[1] + cols
+    negated = ((-rows) % padded[0]) * padded[1] + (-cols) % padded[1]  # the lag -h
+    hit = _Pairs(padded, used, negated, np.rint(pairs.reshape(-1)[used]))
+    _PAIRS_CACHE[key] = hit
+    while len(_PAIRS_CACHE) > PAIRS_CACHE_SIZE:
+        _PAIRS_CACHE.popitem(last=False)
+    return hit
 
 
 def chance_se(a, b, index, shape) -> float:
@@ -106,33 +148,32 @@ def chance_se(a, b, index, shape) -> float:
     if n < 3:
         return math.nan
     h, w = (int(s) for s in shape)
-    padded = (fft.next_fast_len(2 * h - 1, real=True), fft.next_fast_len(2 * w - 1, real=True))
-    grids = np.zeros((3, h * w))
+    pairs = _pairs(index, (h, w))
+    grids = np.zeros((2, h * w))
     grids[0, index] = a - a.mean()
     grids[1, index] = b - b.mean()
-    grids[2, index] = 1.0
-    spectra = fft.rfft2(grids.reshape(3, h, w), s=padded)
-    fa, fb, fm = spectra
+    fa, fb = fft.rfft2(grids.reshape(2, h, w), s=pairs.padded)
 
-    def lags(x, y):  # sum over u of x(u + h) y(u)
-        return fft.irfft2(x * np.conj(y), s=padded)
+    def lags(x, y):  # sum over u of x(u + h) y(u), at every lag of the padded grid
+        return fft.irfft2(x * np.conj(y), s=pairs.padded).reshape(-1)
 
-    s_aa, s_bb, s_ab, pairs = lags(fa, fa), lags(fb, fb), lags(fa, fb), lags(fm, fm)
-    var_a, var_b = float(s_aa[0, 0]) / n, float(s_bb[0, 0]) / n
+    s_aa, s_bb, s_ab = lags(fa, fa), lags(fb, fb), lags(fa, fb)
+    var_a, var_b = float(s_aa[0]) / n, float(s_bb[0]) / n
     if not (var_a > 0 and var_b > 0):
         return math.nan
-    use = pairs >= max(MIN_PAIR_SHARE * n, 1.0) - 0.5  # pair counts are integers up to rounding
-    count = np.where(use, np.rint(pairs), 1.0)
+    count = pairs.count
     scale = math.sqrt(var_a * var_b)
-    r_aa = s_aa / count / var_a
-    r_bb = s_bb / count / var_b
-    r_ab = s_ab / count / scale
-    r_ba = _flip(s_ab) / count / scale
-    rho = float(s_ab[0, 0]) / n / scale
+    rho = float(s_ab[0]) / n / scale
+    r_aa = s_aa[pairs.used] / count / var_a
+    r_bb = s_bb[pairs.used] / count / var_b
+    r_ab = s_ab[pairs.used] / count / scale
+    r_ba = s_ab[pairs.negated] / count / scale
     term = (
         r_aa * r_bb + r_ab * r_ba
         + rho * rho * (r_ab * r_ab + 0.5 * r_aa * r_aa + 0.5 * r_bb * r_bb)
         - 2.0 * rho * (r_aa * r_ab + r_ba * r_bb)
     )
-    total = float(np.sum(np.where(use, count * term, 0.0))) / (n * n)
+    grid = np.zeros(s_ab.size)  # summed over the whole grid, as the full-grid sum adds
+    grid[pairs.used] = count * term
+    total = float(np.sum(grid)) / (n * n)
     return math.sqrt(max(total, 0.0))

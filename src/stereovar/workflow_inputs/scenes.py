@@ -4,6 +4,7 @@ which of those the generator can write), and the files a scene spec reads.
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path
 
@@ -42,10 +43,25 @@ def scene_inputs(scene: str, xml_references) -> dict:
     any of them reruns the scene: ``{"spec"[, "xml", "xml_files"]}``."""
     spec = Path(scene_spec_path(scene))
     inputs = {"spec": str(spec)}
-    if spec.is_file():
-        data = yaml.safe_load(spec.read_text()) or {}
-        if isinstance(data, dict) and isinstance(data.get("mitsuba_xml"), str):
-            xml = spec.parent / data["mitsuba_xml"]
-            inputs["xml"] = str(xml)
-            inputs["xml_files"] = [str(p) for p in xml_references(xml)]
+    try:
+        stat = spec.stat()
+    except OSError:
+        return inputs
+    reference = _xml_reference(str(spec), stat.st_mtime_ns, stat.st_size)
+    if reference is not None:
+        xml = spec.parent / reference
+        inputs["xml"] = str(xml)
+        inputs["xml_files"] = [str(p) for p in xml_references(xml)]
     return inputs
+
+
+@functools.lru_cache(maxsize=256)
+def _xml_reference(path: str, mtime_ns: int, size: int) -> str | None:
+    """The ``mitsuba_xml`` a scene spec names, or None: read once per version of the file
+    (its modification time and size are part of the key), with libyaml where PyYAML has it
+    (every job of a scene asks, each time the workflow is read)."""
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    with open(path, encoding="utf-8") as fh:
+        data = yaml.load(fh, Loader=loader) or {}
+    reference = data.get("mitsuba_xml") if isinstance(data, dict) else None
+    return reference if isinstance(reference, str) else None

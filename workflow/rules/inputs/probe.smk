@@ -39,7 +39,7 @@ PROBE_ARCH_PATTERN = "|".join(PROBE_ARCHS) or "mccnn"
 def probe_folds():
     """(training scenes, held-out scenes) of every fold; a config error when the scenes
     cannot fill ``probe.folds`` folds."""
-    from stereovar.probe.experiment import fold_scenes
+    from stereovar.probe.folds import fold_scenes
     from stereovar.errors import ConfigError
 
     try:
