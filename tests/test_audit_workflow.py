@@ -111,7 +111,7 @@ def test_synthetic_truth_is_recovered_by_the_corrected_rho(tmp_path, tree_snapsh
              "planted": [], "architectures": ["mccnn"],
              "training": {"steps": 8, "crops": 2, "crop_rows": 8, "crop_cols": 24}}
     # one replicate of each design through the denoiser: its rows run at half the cost
-    calibration = {"denoised_replicates": 1}
+    calibration = {"replicates": 4, "denoised_replicates": 1, "pipeline_replicates": 2}
     (root / "audit.yaml").write_text(yaml.safe_dump({"audit": settings, "probe": probe,
                                                      "calibration": calibration}))
     proc = subprocess.run(

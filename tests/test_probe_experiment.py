@@ -187,3 +187,35 @@ def test_the_verdict_names_the_networks_the_cap_stopped():
     text = _caveats([collapsed], None)
     assert ("2 networks never predicted a validation pixel within 1 px (costvolume none 2 of 6)"
             in text)
+
+
+def test_the_training_table_counts_each_network_once_by_how_it_stopped(monkeypatch):
+    """A network that never predicted a validation pixel within 1 px is ``collapsed``, not
+    on a plateau and not at the cap, however many steps it ran; a twin is none of the three."""
+    import stereovar.probe.training as training
+    from stereovar.jobs.probe import training_rows
+
+    def record(seed, steps, accuracies, *, variant="main", matched=False):
+        checks = [[50 * (i + 1), a] for i, a in enumerate(accuracies)]
+        meta = {"condition": "none", "architecture": "costvolume", "variant": variant,
+                "fold": 0, "steps": steps, "cap": 400, "seconds": 1.0,
+                "best_step": checks[-1][0] if checks else None, "validation": checks}
+        if matched:
+            meta["matched_steps"] = steps
+        return {"seed": seed, "meta": meta}
+
+    records = {
+        "plateau": record(0, 200, [0.5, 0.7, 0.7, 0.7]),
+        "cap": record(1, 400, [0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.92, 0.95]),
+        "collapsed early": record(2, 150, [0.0, 0.0, 0.0]),
+        "collapsed at the cap": record(3, 400, [0.0] * 8),
+        "twin": record(0, 200, [], variant="twin", matched=True),
+    }
+    monkeypatch.setattr(training, "load_matcher", lambda path: (None, records[path]))
+    rows = {r["variant"]: r for r in training_rows(list(records))}
+    main = rows["main"]
+    assert (main["networks"], main["plateau"], main["at_cap"], main["collapsed"]) == (4, 1, 1, 2)
+    assert main["each"] == ("f0/s0: 200 (200), f0/s1: 400 (400) cap, "
+                            "f0/s2: 150 (150) collapsed, f0/s3: 400 (400) collapsed")
+    twin = rows["twin"]
+    assert (twin["plateau"], twin["at_cap"], twin["collapsed"]) == (0, 0, 0)

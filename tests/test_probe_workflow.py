@@ -176,8 +176,9 @@ def test_the_table_pools_the_tiles_of_every_fold(probe_run):
         assert len(r["each"].split(", ")) == 4
         assert 0 <= r["collapsed"] <= (4 if r["variant"] == "main" else 0)
         if r["variant"] == "main":
-            assert r["plateau"] + r["at_cap"] == 4
+            assert r["plateau"] + r["at_cap"] + r["collapsed"] == 4  # each counted once
             assert r["each"].count(" cap") == r["at_cap"]
+            assert r["each"].count(" collapsed") == r["collapsed"]
         else:
             assert r["plateau"] == r["at_cap"] == 0  # a twin trains its network's steps
 

@@ -306,15 +306,30 @@ def test_job(
 
 
 def _stopped(meta: dict) -> str:
-    """How a network's training ended: ``plateau`` (its stop rule), ``cap`` (the step cap
-    first) or ``matched`` (a twin: its network's steps to the best check)."""
+    """How a network's training ended: ``matched`` (a twin: its network's steps to the best
+    check), ``collapsed`` (no validation pixel within 1 px at any check: the stop rule saw
+    no gain, not a plateau), ``cap`` (the step cap first) or ``plateau`` (its stop rule).
+
+    Examples
+    --------
+    >>> _stopped({"steps": 150, "cap": 400, "validation": [[50, 0.0], [100, 0.0], [150, 0.0]]})
+    'collapsed'
+    >>> _stopped({"steps": 150, "cap": 400, "validation": [[50, 0.6], [100, 0.7], [150, 0.7]]})
+    'plateau'
+    >>> _stopped({"steps": 400, "cap": 400, "validation": [[200, 0.6], [400, 0.7]]})
+    'cap'
+    """
     if meta.get("matched_steps"):
         return "matched"
+    checks = [a for _, a in meta.get("validation") or []]
+    if checks and max(checks) == 0:
+        return "collapsed"
     return "cap" if "cap" in meta and int(meta["steps"]) >= int(meta["cap"]) else "plateau"
 
 
 def _each(meta: dict) -> str:
-    """One network as ``fold/seed: steps (best step)``, with ``cap`` where the cap stopped it.
+    """One network as ``fold/seed: steps (best step)``, with ``cap`` where the cap stopped it
+    and ``collapsed`` where it never predicted a validation pixel within 1 px (:func:`_stopped`).
 
     Examples
     --------
@@ -326,15 +341,17 @@ def _each(meta: dict) -> str:
     best = meta.get("best_step")
     out = f"f{meta.get('fold', 0)}/s{meta.get('seed', 0)}: {int(meta['steps'])}"
     out += f" ({best})" if best is not None and not meta.get("matched_steps") else ""
-    return out + (" cap" if _stopped(meta) == "cap" else "")
+    stopped = _stopped(meta)
+    return out + (f" {stopped}" if stopped in ("cap", "collapsed") else "")
 
 
 def training_rows(networks) -> list[dict]:
     """One row per (architecture, condition, variant): the networks trained, the optimiser
-    steps each took to its plateau (mean, min, max), the best step, how many stopped at the
-    step cap before a plateau (``at_cap``; a twin trains its network's steps, never counted)
-    and how many on it (``plateau``), how many never predicted a validation pixel within 1 px
-    (``collapsed``: a learning rate too high), each network's steps and best step (``each``),
+    steps each took to its plateau (mean, min, max), the best step, how each stopped
+    (:func:`_stopped`; a twin trains its network's steps, never counted): at the step cap
+    before a plateau (``at_cap``), on it (``plateau``) or without ever predicting a
+    validation pixel within 1 px (``collapsed``: a learning rate too high, not a plateau),
+    each network's steps and best step (``each``),
     the best validation accuracy and the seconds of training, from each network's record."""
     from ..probe.training import load_matcher
 
@@ -347,9 +364,6 @@ def training_rows(networks) -> list[dict]:
     rows = []
     for (arch, condition, variant), metas in groups.items():
         steps = [int(m["steps"]) for m in metas]
-        capped = sum(
-            1 for m in metas if not m.get("matched_steps") and int(m["steps"]) >= int(m["cap"])
-        ) if all("cap" in m for m in metas) else 0
         best = [max((a for _, a in m.get("validation") or []), default=math.nan) for m in metas]
         rows.append(
             {
@@ -361,10 +375,9 @@ def training_rows(networks) -> list[dict]:
                 "steps_min": min(steps),
                 "steps_max": max(steps),
                 "best_step_mean": float(np.mean([m.get("best_step") or 0 for m in metas])),
-                "at_cap": capped,
+                "at_cap": sum(1 for m in metas if _stopped(m) == "cap"),
                 "plateau": sum(1 for m in metas if _stopped(m) == "plateau"),
-                "collapsed": sum(1 for m, b in zip(metas, best, strict=True)
-                                 if not m.get("matched_steps") and b == 0),
+                "collapsed": sum(1 for m in metas if _stopped(m) == "collapsed"),
                 "each": ", ".join(_each(m) for m in sorted(
                     metas, key=lambda m: (int(m.get("fold", 0)), int(m.get("seed", 0))))),
                 "validation_accuracy": float(np.nanmean(best)) if np.isfinite(best).any()
