@@ -45,3 +45,26 @@ def test_a_workflow_job_reads_its_stores_without_dask_and_gets_the_same_numbers(
     assert job["sum"] == free["sum"] == float(values.sum())
     assert job["first"] == float(values[0, 1])
     assert _read(store, "1")["dask"]  # asked for
+
+
+def test_reading_the_workflow_imports_no_renderer_network_or_denoiser():
+    """Every stereovar module the Snakefile and its rules import, at the top or inside an
+    input function, imported together: none pulls in PyTorch, Mitsuba, Dr.Jit, Blender, the
+    denoiser, OpenCV or dask (each dry run and each `stereovar run` reads the workflow)."""
+    import re
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[1]
+    modules = set()
+    for path in [repo / "Snakefile", *sorted((repo / "workflow").rglob("*.smk"))]:
+        text = path.read_text()
+        modules |= set(re.findall(r"^\s*from (stereovar[\w.]*) import", text, re.M))
+        modules |= set(re.findall(r"^\s*import (stereovar[\w.]*)", text, re.M))
+    assert "stereovar.probe.folds" in modules  # an input function's own import is seen
+    heavy = ("torch", "mitsuba", "drjit", "bpy", "pyoidn", "cv2", "dask")
+    code = "import sys\n" + "".join(f"import {m}\n" for m in sorted(modules)) + (
+        f"print(sorted(m for m in {heavy!r} if sys.modules.get(m) is not None))")
+    env = {k: v for k, v in os.environ.items() if k != "STEREOVAR_DASK"}  # as a user's shell
+    out = subprocess.run([sys.executable, "-c", code], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    assert json.loads(out.replace("'", '"')) == []

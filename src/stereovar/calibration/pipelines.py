@@ -128,9 +128,12 @@ def integer_roundtrip(frames, *, bits: int, transfer: str = "srgb", scale: float
 
     full = float(2 ** int(bits) - 1)
     v = np.clip(np.asarray(frames, dtype=np.float64) / scale, 0.0, 1.0)
-    srgb = transfer == "srgb"
-    code = np.rint(full * (linear_to_srgb(v) if srgb else v)) / full
-    return ((srgb_to_linear(code) if srgb else code) * scale).astype(np.float32)
+    if transfer != "srgb":
+        return (np.rint(full * v) / full * scale).astype(np.float32)
+    code = np.rint(full * linear_to_srgb(v)).astype(np.intp)
+    # decoded once per code value (the same numbers as decoding every pixel's code)
+    decoded = srgb_to_linear(np.arange(int(full) + 1) / full) * scale
+    return decoded[code].astype(np.float32)
 
 
 def encoded_frames(frames, encoding: dict | None):
