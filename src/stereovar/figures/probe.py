@@ -50,8 +50,9 @@ def _accuracy_panel(ax, rows, colours) -> None:
     ax.set_ylabel("accuracy (|d - d_GT| < 1 px)")
     ax.grid(axis="y", alpha=0.3)
     if conditions:
-        ax.legend(title="trained on (x: its twin)", fontsize=7, title_fontsize=7,
-                  loc="lower left")
+        # beside the panel: inside it, the legend would cover the points of some inputs
+        ax.legend(title="trained on\n(x: its twin)", fontsize=7, title_fontsize=7,
+                  loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
 
 
 def _power_panel(ax, rows) -> None:
