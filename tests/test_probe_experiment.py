@@ -8,7 +8,7 @@ import pytest
 
 from stereovar.errors import ConfigError
 from stereovar.probe import experiment
-from stereovar.probe.conditions import planted_factor, probe_conditions
+from stereovar.probe.conditions import check_probe, planted_factor, probe_conditions
 from stereovar.probe.experiment import scene_law, split_validation, training_frames
 from stereovar.probe.inputs import network_input, noise_scale
 
@@ -128,8 +128,20 @@ def test_an_architectures_planted_series_and_the_judged_mitigations():
     assert trains["planted_x4"] == ["mccnn"]
     assert conditions["denoise"].variants == ("main", "twin")
     assert conditions["sensor_only"].variants == ("main",)  # not judged: the control alone
-    cfg["probe"]["mitigations"] = ["sensor_only"]
-    assert probe_conditions(cfg)[1].variants == ("main", "twin")
+    # a judged seed-mean mitigation trains on what it ships, from none's renders, with its
+    # twin; the control it is stays as it was
+    cfg["probe"]["mitigations"] = ["sensor_only", "equalise"]
+    conditions = {c.name: c for c in probe_conditions(cfg)}
+    assert conditions["sensor_only"].variants == ("main",)
+    assert "equalise" not in conditions  # only its shipped condition trains
+    for name in ("sensor_only", "equalise"):
+        shipped = conditions[f"{name}_shipped"]
+        assert (shipped.shipped, shipped.run.name, shipped.variants) == (
+            name, "none", ("main", "twin"))
+    with pytest.raises(ConfigError, match=r"needs 8 renders per view.*there are 6") as info:
+        check_probe(cfg, 6)
+    assert "\n" not in str(info.value) and "probe.mitigations" in str(info.value)
+    check_probe(cfg, 8)
     cfg["probe"]["architectures"] = ["mccnn"]  # a series of an architecture not trained
     assert "planted_x8" not in {c.name for c in probe_conditions(cfg)}
     cfg["probe"]["mitigations"] = ["none"]
@@ -219,3 +231,39 @@ def test_the_training_table_counts_each_network_once_by_how_it_stopped(monkeypat
                             "f0/s2: 150 (150) collapsed, f0/s3: 400 (400) collapsed")
     twin = rows["twin"]
     assert (twin["plateau"], twin["at_cap"], twin["collapsed"]) == (0, 0, 0)
+
+
+def test_shipped_images_each_come_from_their_own_group_of_seeds(tmp_path):
+    """A shipped condition's images (jobs.probe._condition_data): one per disjoint pair of
+    renders, each built from its own pair's seed mean. Renders whose pair g reads g + 1
+    everywhere, through sensor_only at a camera of negligible noise: image g reads g + 1."""
+    import xarray as xr
+
+    from stereovar.io.renders import render_dataset
+    from stereovar.io.store import write_dataset
+    from stereovar.jobs.probe import _condition_data
+
+    n, h, w = 8, 6, 10
+    renders = np.repeat(np.arange(1, n // 2 + 1, dtype=np.float32), 2)[:, None, None, None]
+    renders = np.broadcast_to(renders, (n, h, w, 3)).copy()
+    stores = {}
+    for view in ("left", "right"):
+        path = tmp_path / f"{view}.zarr"
+        write_dataset(render_dataset(renders, view=view, seeds=list(range(n)),
+                                     sampler_seeds=list(range(n)), attrs={}), path)
+        stores[f"{view}_s"] = [str(path)]  # a view's render stores
+    gt = tmp_path / "gt.zarr"
+    zeros = np.zeros((2, h, w))
+    write_dataset(xr.Dataset(
+        {"disparity": (("view", "y", "x"), zeros), "valid": (("view", "y", "x"), zeros > -1),
+         "glass": (("view", "y", "x"), zeros > 0)},
+        coords={"view": ["left", "right"], "y": np.arange(h), "x": np.arange(w)},
+        attrs={"disparity_sign": 1}), gt)
+    stores["gt_s"] = str(gt)
+    camera = {"gain": 1e9, "read_noise": 0.0}  # photon noise ~1e-4.5 of the signal
+    left, right, _, _, law = _condition_data(
+        stores, "s", factor=None, planted=None, seed_key=0,
+        shipped={"transform": "sensor_only", "options": camera})
+    assert left.shape == right.shape == (n // 2, h, w, 3) and law is None
+    for g in range(n // 2):
+        assert np.allclose(left[g], g + 1, rtol=1e-3) and np.allclose(right[g], g + 1, rtol=1e-3)

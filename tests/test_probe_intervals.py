@@ -330,6 +330,27 @@ def test_mitigations_are_judged_against_none_and_a_seed_mean_one_is_not_testable
     assert [m["condition"] for m in probe_verdict(plain)["mitigations"]] == ["denoise"]
 
 
+def test_a_seed_mean_mitigation_is_judged_on_what_it_ships():
+    """A judged seed-mean mitigation trains as ``sensor_only_shipped`` (independent images of
+    2 seeds each): its row gets the rule's status with the note, and the one-seed-mean
+    condition of the same name no row. Planted: none relies by 0.08, the shipped images by
+    0.08 (still uses) or by 0 (removes, or not determined where the margin is too wide)."""
+    for shipped_did, expected in ((0.08, {"still uses"}),
+                                  (0.0, {"removes", "not determined"})):
+        dids = {"none": 0.08, CONTROL: 0.0, "sensor_only_shipped": shipped_did}
+        rows = probe_rows(signal_table(np.random.default_rng(13), dids, seeds=6,
+                                       architectures=("costvolume",), control_twin=True))
+        shuffled = {r["tested"]: r for r in rows if r["test_input"] == "shuffled"}
+        v = probe_verdict(rows)
+        (row,) = v["mitigations"]  # sensor_only itself: judged through its shipped images
+        assert (row["condition"], row["mitigation"]) == ("sensor_only_shipped", "sensor_only")
+        assert row["did"] == shuffled["sensor_only_shipped"]["did"]
+        assert row["status"] == mitigation_status(shuffled["sensor_only_shipped"],
+                                                  shuffled["none"], v["mde"])["status"]
+        assert row["status"] in expected and "reason" not in row
+        assert "what it ships" in row["note"] and row["note"] in v["paragraph"]
+
+
 def test_mitigation_status_rules():
     def row(did, se, df=1e6):
         half = 1.959964 * se

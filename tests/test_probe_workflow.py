@@ -27,8 +27,8 @@ TINY_PROBE = {
     "resolution": {"width": 96, "height": 40},
     "render": {
         "spp": 2,
-        "n_seeds": 4,
-        "seeds_per_job": 4,
+        "n_seeds": 8,  # a judged seed-mean mitigation ships 4 images of 2 seeds each
+        "seeds_per_job": 8,
         "spp_sweep": {"scene": "scene_000", "spp": [2]},
     },
     "analysis": {"bootstrap": {"tile": 8}},
@@ -36,7 +36,7 @@ TINY_PROBE = {
     "probe": {
         "planted": [],
         "planted_series": {"costvolume": [2]},  # the architecture's own dose-response
-        # judged: the control trains with its own twin; it ships one seed mean: not testable
+        # judged on what it ships (sensor_only_shipped, with its twin); the control stays
         "mitigations": ["sensor_only"],
         "architectures": ["costvolume"],  # MC-CNN: the audit's probe, test_audit_workflow.py
         "folds": 2,
@@ -48,9 +48,9 @@ TINY_PROBE = {
                        "check_every": 3, "min_steps": 0, "patience": 1},
     },
 }
-CONDITIONS = ("none", "sensor_only", "planted_x2")
-VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main", "twin"),
-            "planted_x2": ("main", "twin")}
+CONDITIONS = ("none", "sensor_only", "sensor_only_shipped", "planted_x2")
+VARIANTS = {"none": ("main", "twin"), "sensor_only": ("main",),
+            "sensor_only_shipped": ("main", "twin"), "planted_x2": ("main", "twin")}
 ARCHS = ("costvolume",)
 INPUTS = ("normal", "shuffled", "camera", "camera_shuffled", "clean", "conflict")
 
@@ -89,8 +89,11 @@ def test_every_network_is_saved_with_its_config_and_reloads(probe_run):
                         assert meta["factor"] == (2.0 if condition == "planted_x2" else None)
                         held_out = TINY_PROBE["scenes"][fold]
                         assert held_out not in meta["scenes"]
-                        # one validation frame (the last seed) of the one training scene
-                        assert (meta["frames"], meta["validation_frames"]) == (3, 1)
+                        # one validation frame (the last image) of the one training scene:
+                        # 8 renders, or 4 shipped images of 2 seeds each
+                        shipped = condition == "sensor_only_shipped"
+                        assert (meta["frames"], meta["validation_frames"]) == (
+                            (3, 1) if shipped else (7, 1))
                         cap = TINY_PROBE["probe"]["training" if arch == "mccnn" else arch]
                         assert 1 <= meta["steps"] <= cap["steps"]
     planted = json.loads((root / layout.probe_planted("mitsuba")).read_text())
@@ -102,7 +105,7 @@ def test_tiles_match_the_saved_network_on_the_normal_input(probe_run):
     """Rescore one held-out scene with its saved network and compare with the tile table."""
     root, _ = probe_run
     fold, scene = 0, "scene_000"
-    stores = layout.render_store("mitsuba", scene, "left", 2, "0-3")
+    stores = layout.render_store("mitsuba", scene, "left", 2, "0-7")
     left = view_stack([root / stores])[0]
     right = view_stack([root / stores.replace("/left/", "/right/")])[0]
     gt = open_dataset(root / layout.traced_ground_truth(scene)).sel(view="left").load()
@@ -198,16 +201,17 @@ def test_the_verdict_states_the_shuffle_did_with_its_interval(probe_run):
     assert verdict["claim"]["answer"] == ("yes" if verdict["uses_cue"] else "no")
     assert set(verdict["architectures"]) == set(ARCHS)
     assert verdict["architectures"]["costvolume"]["did"] == pytest.approx(shuffle["did"])
-    # the mitigation row (probe.mitigations: sensor_only against its own twin, judged against
-    # none) and the planted dose-response of the architecture's own series
+    # the mitigation row (probe.mitigations: sensor_only on what it ships, against its own
+    # twin, judged against none) and the planted dose-response of the architecture's series
     cv = verdict["architectures"]["costvolume"]
     (mitigation,) = cv["mitigations"]
     sensor = next(r for r in table if (r["architecture"], r["tested"], r["test_input"],
-                                       r["region"]) == ("costvolume", "sensor_only", "shuffled",
-                                                        verdict["region"]))
-    assert mitigation["condition"] == "sensor_only"
+                                       r["region"]) == ("costvolume", "sensor_only_shipped",
+                                                        "shuffled", verdict["region"]))
+    assert (mitigation["condition"], mitigation["mitigation"]) == ("sensor_only_shipped",
+                                                                   "sensor_only")
     assert mitigation["did"] == pytest.approx(sensor["did"])
-    assert mitigation["status"] == "not testable" and "seed mean" in mitigation["reason"]
+    assert mitigation["status"] != "not testable" and "what it ships" in mitigation["note"]
     assert [p["factor"] for p in cv["power"]] == [2.0]
     assert cv["detected_from_factor"] == (2.0 if cv["power"][0]["detected"] else None)
     assert "sensor_only" in cv["paragraph"] and "x2" in cv["paragraph"]
@@ -290,5 +294,12 @@ def test_too_few_renders_stop_the_probe_in_one_line_before_any_job(probe_run):
     assert proc.returncode != 0
     lines = [line for line in proc.stderr.splitlines() if line.startswith("stereovar:")]
     assert len(lines) == 1 and "at least 4 renders per view" in lines[0], proc.stderr[-2000:]
+    # enough for the probe, too few for 4 shipped images of 2 seeds of the judged sensor_only
+    six = {"render": {"n_seeds": 6, "seeds_per_job": 6}}
+    proc = snakemake(root, "-n", "probe", check=False, config=six)
+    assert proc.returncode != 0
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("stereovar:")]
+    assert len(lines) == 1 and "needs 8 renders per view" in lines[0], proc.stderr[-2000:]
+    assert "probe.mitigations" in lines[0] and "there are 6" in lines[0]
     (root / "override.yaml").unlink()
     # (the main experiment plans at N = 2 without a probe job: tests/test_workflow.py)

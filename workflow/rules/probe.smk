@@ -53,6 +53,7 @@ rule probe_train:
         seeds=[int(PROBE["seed"]) + j for j in PROBE_SEEDS],
         training=lambda wc: PROBE[architecture(wc.arch).config_key],
         factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
+        shipped=lambda wc: probe_shipped(wc.condition),
         strata=PROBE["strata"],
         planted_seed=PROBE["seed"],
         validation_rows=PROBE["validation_rows"],
@@ -96,6 +97,7 @@ rule probe_test:
         tested=lambda wc: wc.condition,
         arch=lambda wc: wc.arch,
         factor=lambda wc: PROBE_CONDITIONS[wc.condition].factor,
+        shipped=lambda wc: probe_shipped(wc.condition),
         planted_seed=PROBE["seed"],
         test={
             "test_frames": PROBE["test_frames"],

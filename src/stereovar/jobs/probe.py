@@ -66,13 +66,28 @@ def planted_job(stores: dict, out, *, scenes, factors) -> dict:
     return record
 
 
-def _condition_data(stores, scene, *, factor, planted, seed_key):
-    """The renders of one scene under a condition: the stores' own, or for a planted cue the
-    planted frames around their seed means."""
+def _condition_data(stores, scene, *, factor, planted, seed_key, shipped=None):
+    """The renders of one scene under a condition: the stores' own; for a planted cue the
+    planted frames around their seed means; for a seed-mean mitigation trained on what it
+    ships (``shipped``: its ``transform`` and ``options``), one image per disjoint group of
+    :data:`~stereovar.probe.conditions.SHIPPED_GROUP` renders, each transformed with its own
+    group's seed mean (:func:`stereovar.calibration.stacks.shipped_stack`)."""
     from ..probe.experiment import planted_stacks
     from ..seeding import derive_seed
 
     left, right, truths, sign = _scene(stores, scene)
+    if shipped:
+        from ..calibration.stacks import shipped_stack
+        from ..probe.conditions import SHIPPED_GROUP
+
+        name = shipped["transform"]
+        seed = derive_seed("probe-shipped", seed_key, scene, name)
+        left, right = (
+            shipped_stack(name, stack, view=view, seed=derive_seed(seed, view),
+                          options=shipped.get("options"), size=SHIPPED_GROUP)
+            for view, stack in (("left", left), ("right", right))
+        )
+        return left, right, truths, sign, None
     if factor is None:
         return left, right, truths, sign, None
     law = planted["scenes"][scene]["law"]
@@ -106,6 +121,7 @@ def train_job(
     planted_seed: int = 0,
     validation_rows: int | None = 64,
     device: str = "cpu",
+    shipped: dict | None = None,
 ) -> list[dict]:
     """Train the networks of ``arch`` for ``condition`` on ``scenes`` (the fold's training
     scenes): for each of ``variants`` (the network, ``main``, and its cue-blind ``twin``) one
@@ -118,7 +134,8 @@ def train_job(
 
     ``stores`` maps ``left_{scene}`` and ``right_{scene}`` to render-store paths and
     ``gt_{scene}`` to the scene's ground-truth store; a planted condition (``factor``) reads
-    ``none``'s renders and the planted settings ``planted`` (:func:`planted_job`)."""
+    ``none``'s renders and the planted settings ``planted`` (:func:`planted_job`), a shipped
+    one (``shipped``) ``none``'s renders and its transform's options (:func:`_condition_data`)."""
     from ..probe.architectures import architecture
     from ..probe.conditions import TWIN
     from ..probe.experiment import split_validation, training_frames, validation_band
@@ -134,7 +151,8 @@ def train_job(
     settings = entry.settings(training)
     record = _read_planted(planted)
     data = [
-        _condition_data(stores, scene, factor=factor, planted=record, seed_key=planted_seed)
+        _condition_data(stores, scene, factor=factor, planted=record, seed_key=planted_seed,
+                        shipped=shipped)
         for scene in scenes
     ]
     jobs = [(variant, seed) for variant in variants for seed in seeds]
@@ -246,11 +264,13 @@ def test_job(
     disparity_margin: int = 4,
     threads: int = 1,
     device: str = "cpu",
+    shipped: dict | None = None,
 ) -> int:
     """Score every network in ``networks`` (the tested condition's, its twins and the
     control's, of one architecture and fold) on every test input of the fold's held-out
     ``scenes`` under ``tested``, a batch of inputs per network; the per-tile sums go to
-    ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`). Torch runs ``threads`` threads."""
+    ``out`` (:data:`stereovar.probe.metrics.TILE_COLUMNS`). Torch runs ``threads`` threads;
+    ``factor``, ``planted`` and ``shipped`` as for :func:`train_job`."""
     import torch
 
     from ..io.tables import write_tables
@@ -271,7 +291,8 @@ def test_job(
     record = _read_planted(planted)
     data = {
         scene: _condition_data(
-            stores, scene, factor=factor, planted=record, seed_key=int(planted_seed) + 1
+            stores, scene, factor=factor, planted=record, seed_key=int(planted_seed) + 1,
+            shipped=shipped,
         )
         for scene in scenes
     }

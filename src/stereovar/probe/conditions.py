@@ -6,7 +6,12 @@ control ``sensor_only`` (seed mean plus camera noise, no Monte Carlo structure) 
 mitigation (``spp_xK`` renders every probe scene at K x SPP); or the **planted** positive
 control ``planted_x{f}``: the renders' seed mean with camera-law noise whose variance carries a
 cross-view pattern of ``f`` times the strength the renders show (the calibration's planted
-design, :mod:`stereovar.probe.planted`), so its answer is known.
+design, :mod:`stereovar.probe.planted`), so its answer is known. A judged mitigation that
+builds its images from the seed mean (``sensor_only``, ``equalise``) is trained as **shipped**
+(``{name}_shipped``): from ``none``'s renders, one image per disjoint group of
+:data:`SHIPPED_GROUP` seeds, each with its own group's seed mean
+(:func:`stereovar.calibration.stacks.shipped_stack`), so the images are independent and the
+shuffle reaches the Monte Carlo noise their seed means keep.
 
 Every condition but the control trains a **cue-blind twin** beside its network: the same
 renders, seeds, crops and offsets, with the right view's residual shuffled within intensity
@@ -38,6 +43,9 @@ __all__ = [
     "probe_conditions",
     "probe_mitigations",
     "probe_runs",
+    "shippable",
+    "shipped_mitigation",
+    "shipped_name",
     "ships_one_seed_mean",
 ]
 
@@ -53,9 +61,17 @@ cost-volume network (:mod:`~stereovar.probe.costvolume`)."""
 
 DEFAULT_MITIGATIONS = ("denoise",)
 """The mitigation the default probe judges: the denoiser, which teams ship and which leaves
-a Monte Carlo-specific cue in the data (docs/mitigations.md); ``sensor_only``, which the
-dose-response names as the remedy, builds its images from one seed mean, which the probe's
-shuffle cannot reach (:func:`ships_one_seed_mean`)."""
+a Monte Carlo-specific cue in the data (docs/mitigations.md). ``sensor_only``, which the
+dose-response names as the remedy, builds its images from a seed mean: judged, it trains as
+shipped (:func:`shipped_name`), which needs :data:`SHIPPED_GROUP` times the probe's
+renders per view."""
+
+SHIPPED_SUFFIX = "_shipped"
+"""Suffix of the condition that trains a seed-mean mitigation on what it ships."""
+
+SHIPPED_GROUP = 2
+"""Seeds per shipped image: each group's seed mean carries :math:`\\sigma^2/2` of Monte
+Carlo noise, :math:`N/2` times what an image built from all :math:`N` seeds ships."""
 
 _PLANTED = re.compile(r"^planted_x(?P<factor>[0-9]+(?:\.[0-9]+)?)$")
 
@@ -76,14 +92,16 @@ class ProbeCondition:
     """One training condition: its ``name``, the :class:`~stereovar.mitigations.MitigationRun`
     whose renders it reads (``none``'s for a planted cue), the planted ``factor`` (None for a
     mitigation), whether it trains a cue-blind ``twin`` (every condition but the control,
-    and the control too where ``probe.mitigations`` judges it) and the ``architectures`` that
-    train it (None: every one of ``probe.architectures``)."""
+    and the control too where ``probe.mitigations`` judges it), the ``architectures`` that
+    train it (None: every one of ``probe.architectures``) and, for a seed-mean mitigation
+    trained on what it ships (reading ``none``'s renders), its transform ``shipped``."""
 
     name: str
     run: MitigationRun
     factor: float | None = None
     twinned: bool | None = None
     architectures: tuple[str, ...] | None = None
+    shipped: str | None = None
 
     @property
     def twin(self) -> bool:
@@ -130,7 +148,8 @@ def probe_runs(config: dict) -> list[MitigationRun]:
     """
     probe = config.get("probe", {})
     listed = probe.get("conditions") or default_conditions(config)
-    names = list(dict.fromkeys([NONE, CONTROL, *listed, *probe_mitigations(config)]))
+    judged = [m for m in probe_mitigations(config) if not shippable(m)]  # else: shipped
+    names = list(dict.fromkeys([NONE, CONTROL, *listed, *judged]))
     render = config["render"]
     source = render["renderer"]
     runs = []
@@ -175,21 +194,28 @@ def probe_conditions(config: dict) -> list[ProbeCondition]:
     ...                  "mitigations": ["sensor_only"]}}
     >>> [(c.name, c.factor, c.variants, c.architectures) for c in probe_conditions(cfg)]
     ... # doctest: +NORMALIZE_WHITESPACE
-    [('none', None, ('main', 'twin'), None), ('sensor_only', None, ('main', 'twin'), None),
+    [('none', None, ('main', 'twin'), None), ('sensor_only', None, ('main',), None),
+     ('sensor_only_shipped', None, ('main', 'twin'), None),
      ('planted_x1', 1.0, ('main', 'twin'), None),
      ('planted_x4', 4.0, ('main', 'twin'), ('costvolume',))]
 
-    With ``probe.mitigations: []`` the control trains without a twin:
+    ``sensor_only`` builds its images from the seed mean: judged, it trains as shipped
+    (``sensor_only_shipped``, from ``none``'s renders), and the control stays as it is.
 
-    >>> cfg["probe"]["mitigations"] = []
-    >>> probe_conditions(cfg)[1].variants
-    ('main',)
+    A mitigation that does not read the seed mean trains as the workflow makes it, with its
+    twin; the control then trains without one:
+
+    >>> cfg["probe"]["mitigations"] = ["denoise"]
+    >>> [(c.name, c.variants) for c in probe_conditions(cfg)][:3]
+    [('none', ('main', 'twin')), ('sensor_only', ('main',)), ('denoise', ('main', 'twin'))]
     """
     runs = probe_runs(config)
-    judged = set(probe_mitigations(config))
-    out = [ProbeCondition(run.name, run, twinned=run.name != CONTROL or run.name in judged)
+    judged = probe_mitigations(config)
+    twinned = {m for m in judged if not shippable(m)}
+    out = [ProbeCondition(run.name, run, twinned=run.name != CONTROL or run.name in twinned)
            for run in runs]
     none = runs[0]
+    out += [ProbeCondition(shipped_name(m), none, shipped=m) for m in judged if shippable(m)]
     probe = config.get("probe", {})
     everyone = [float(f) for f in probe.get("planted") or []]
     series = {str(a): [float(f) for f in fs] for a, fs in
@@ -247,6 +273,15 @@ def check_probe(config: dict, n_seeds: int) -> None:
         from .experiment import check_renders
 
         check_renders(n_seeds, "render.n_seeds (renders per view)")
+    shipped = [m for m in probe_mitigations(config) if shippable(m)]
+    if shipped and int(n_seeds) // SHIPPED_GROUP < MIN_RENDERS:
+        raise ConfigError(
+            f"config key 'probe.mitigations': judging {', '.join(shipped)} (built from the "
+            f"seed mean) needs {SHIPPED_GROUP * MIN_RENDERS} renders per view, "
+            f"{MIN_RENDERS} shipped images of {SHIPPED_GROUP} seeds each, and there are "
+            f"{int(n_seeds)}; raise render.n_seeds (audit: give more seeds) or remove "
+            f"{', '.join(shipped)} from probe.mitigations"
+        )
     device = str(config.get("probe", {}).get("device", "cpu"))
     if device.startswith("cuda"):
         import torch
@@ -279,6 +314,45 @@ def ships_one_seed_mean(name: str) -> bool:
     if not all(p in TRANSFORMS.names() for p in parts):
         return False  # none, a seed policy, spp_xK, a planted cue
     return any({"seed_mean", "seed_var"} & set(t.reads) for t in transform_chain(name))
+
+
+def shippable(name: str) -> bool:
+    """Whether mitigation ``name`` builds its images from the seed mean and reads nothing
+    but the renders (no albedo or normal pass), so the probe can build what it ships from
+    ``none``'s renders in its own jobs (:func:`shipped_name`).
+
+    Examples
+    --------
+    >>> shippable("sensor_only"), shippable("equalise"), shippable("denoise")
+    (True, True, False)
+    """
+    from ..transforms import transform_chain
+
+    return ships_one_seed_mean(name) and not any(
+        t.optional_reads for t in transform_chain(name))
+
+
+def shipped_name(name: str) -> str:
+    """The condition that trains mitigation ``name`` on what it ships.
+
+    Examples
+    --------
+    >>> shipped_name("sensor_only")
+    'sensor_only_shipped'
+    """
+    return f"{name}{SHIPPED_SUFFIX}"
+
+
+def shipped_mitigation(name: str) -> str | None:
+    """The mitigation a shipped condition trains on, None for any other condition.
+
+    Examples
+    --------
+    >>> shipped_mitigation("sensor_only_shipped"), shipped_mitigation("sensor_only")
+    ('sensor_only', None)
+    """
+    name = str(name)
+    return name[: -len(SHIPPED_SUFFIX)] if name.endswith(SHIPPED_SUFFIX) else None
 
 
 def planted_factor(name: str) -> float | None:

@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 
 from ..layout import NONE
-from .conditions import ships_one_seed_mean
+from .conditions import SHIPPED_GROUP, shipped_mitigation, shipped_name, ships_one_seed_mean
 from .metrics import CONTROL, INTERVAL_METHOD, PRIMARY_ARCHITECTURE, planted_factor, t_quantile
 
 __all__ = ["mitigation_status", "probe_verdict"]
@@ -58,6 +58,15 @@ SEED_MEAN_REASON = (
 )
 """Why such a mitigation's DiD does not test it
 (:func:`~stereovar.probe.conditions.ships_one_seed_mean`)."""
+
+SHIPPED_NOTE = (
+    f"trained on what it ships, one image per {SHIPPED_GROUP} seeds from each group's own "
+    f"seed mean: its seed means keep sigma^2/{SHIPPED_GROUP} of Monte Carlo noise, N/"
+    f"{SHIPPED_GROUP} times an image of all N seeds, so 'removes' holds a fortiori at N and "
+    "'still uses' is an upper bound"
+)
+"""How a seed-mean mitigation is judged
+(:func:`~stereovar.probe.conditions.shipped_name`), on the page beside its status."""
 
 TWIN_CONTROL = "cue-blind twin"
 """The primary control: the same renders with the right residual drawn again each step."""
@@ -248,19 +257,26 @@ def _architecture_verdict(rows, architecture, region, control) -> dict:
         )
         parts.append(f"Planted cue (DiD per strength factor): {points}; {said}.")
     mitigations = []
-    for tested in dict.fromkeys(r["tested"] for r in rows if r["architecture"] == architecture):
+    conditions = list(dict.fromkeys(r["tested"] for r in rows
+                                    if r["architecture"] == architecture))
+    for tested in conditions:
         if tested == NONE or math.isfinite(planted_factor(tested)):
             continue
+        if shipped_name(tested) in conditions:
+            continue  # judged on what it ships (its shipped condition's row)
         row = _find(rows, architecture, tested, "shuffled", region)
         if row is None or (tested == control and not _finite(row["did"])):
             continue  # the control without a twin (probe.mitigations does not judge it)
         cmp = mitigation_status(row, shuffle, mde)
-        if ships_one_seed_mean(tested):
+        mitigation = shipped_mitigation(tested) or tested
+        if shipped_mitigation(tested):
+            cmp.update(note=SHIPPED_NOTE)
+        elif ships_one_seed_mean(tested):
             cmp.update(status=NOT_TESTABLE, reason=SEED_MEAN_REASON)
         mitigations.append({
-            "condition": tested, "did": row["did"], "did_low": row["did_low"],
-            "did_high": row["did_high"], "uses_cue": _above(row, "did"),
-            "removes": cmp["status"] == "removes", **cmp,
+            "condition": tested, "mitigation": mitigation, "did": row["did"],
+            "did_low": row["did_low"], "did_high": row["did_high"],
+            "uses_cue": _above(row, "did"), "removes": cmp["status"] == "removes", **cmp,
         })
     out["mitigations"] = mitigations
     if mitigations:
@@ -270,7 +286,9 @@ def _architecture_verdict(rows, architecture, region, control) -> dict:
             + "; ".join(
                 f"{m['condition']} {_fmt(m['did'], m['did_low'], m['did_high'])}, "
                 f"{_fmt(m['difference'], m['difference_low'], m['difference_high'])}: "
-                f"{m['status']}" + (f" ({m['reason']})" if m.get("reason") else "")
+                f"{m['status']}"
+                + (f" ({m['reason'] if m.get('reason') else m['note']})"
+                   if m.get("reason") or m.get("note") else "")
                 for m in mitigations
             )
             + "."

@@ -5,7 +5,8 @@
 # variant (the network and its cue-blind twin), fold and training seed; one test job per
 # condition, architecture and fold scores the condition's networks, their twins and the
 # control's on the fold's held-out scenes under the condition. A planted condition reads the
-# renders of `none` with a planted cue of known strength (probe/planted.json).
+# renders of `none` with a planted cue of known strength (probe/planted.json); a shipped one
+# (a judged seed-mean mitigation) reads them too and builds what the mitigation ships.
 from stereovar.probe.conditions import CONTROL as PROBE_CONTROL
 from stereovar.probe.conditions import MAIN as PROBE_MAIN
 from stereovar.probe.architectures import architecture
@@ -68,6 +69,16 @@ def probe_condition_stores(name, scenes):
     if condition.planted:
         stores["planted"] = PROBE_PLANTED
     return stores
+
+
+def probe_shipped(condition):
+    """A shipped condition's transform and its options as the transform rule passes them
+    (its images are built in the probe's jobs from ``none``'s renders), else None."""
+    name = PROBE_CONDITIONS[condition].shipped
+    if name is None:
+        return None
+    options = mitigation_inputs.transform_options(name, config["controls"]["sensor"])
+    return {"transform": name, "options": options}
 
 
 def probe_checked():
