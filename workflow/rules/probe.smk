@@ -71,8 +71,8 @@ rule probe_train:
         "../scripts/probe_train.py"
 
 
-# The control's networks of one architecture and fold: no twin (unless probe.mitigations
-# judges the control as a mitigation; probe_train then trains it with its twin).
+# The control's networks of one architecture and fold, without a twin (judged, sensor_only
+# trains as sensor_only_shipped through probe_train).
 if PROBE_CONTROL_UNTWINNED:
 
     use rule probe_train as probe_train_control with:

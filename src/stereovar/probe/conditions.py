@@ -91,8 +91,8 @@ def planted_name(factor: float) -> str:
 class ProbeCondition:
     """One training condition: its ``name``, the :class:`~stereovar.mitigations.MitigationRun`
     whose renders it reads (``none``'s for a planted cue), the planted ``factor`` (None for a
-    mitigation), whether it trains a cue-blind ``twin`` (every condition but the control,
-    and the control too where ``probe.mitigations`` judges it), the ``architectures`` that
+    mitigation), whether it trains a cue-blind ``twin`` (every condition but the control: a
+    judged ``sensor_only`` trains as shipped instead), the ``architectures`` that
     train it (None: every one of ``probe.architectures``) and, for a seed-mean mitigation
     trained on what it ships (reading ``none``'s renders), its transform ``shipped``."""
 
@@ -244,8 +244,9 @@ def probe_conditions(config: dict) -> list[ProbeCondition]:
 
 def probe_mitigations(config: dict) -> list[str]:
     """``probe.mitigations``: the mitigations whose networks the verdict judges against
-    ``none`` (each trains with its own cue-blind twin; the control ``sensor_only`` too when
-    listed), :data:`DEFAULT_MITIGATIONS` when the key is absent.
+    ``none`` (each trains with its own cue-blind twin; one built from the seed mean, the
+    control ``sensor_only`` too, as shipped: :func:`shipped_name`), :data:`DEFAULT_MITIGATIONS`
+    when the key is absent.
 
     Examples
     --------

@@ -29,7 +29,8 @@ PROBE_VERDICT = layout.probe_verdict(PROBE_SOURCE)
 PROBE_PLANTED = layout.probe_planted(PROBE_SOURCE)
 PROBE_ANY_PLANTED = any(c.planted for c in PROBE_CONDITIONS.values())
 PROBE_TWINNED = [name for name, c in PROBE_CONDITIONS.items() if c.twin]
-# the control trains without a twin unless probe.mitigations judges it
+# the control trains without a twin (judged, it trains as sensor_only_shipped); the
+# condition keeps the general case of a twinned control
 PROBE_CONTROL_UNTWINNED = PROBE_CONTROL in PROBE_CONDITIONS and PROBE_CONTROL not in PROBE_TWINNED
 # wildcard patterns: the conditions, those with a twin, the architectures
 PROBE_CONDITION_PATTERN = "|".join(map(re.escape, PROBE_CONDITIONS)) or "none"
